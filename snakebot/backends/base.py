@@ -1,0 +1,197 @@
+"""The backend contract: what the runner needs from a twin or a real servo chain.
+
+Everything here is SI (radians, seconds, newton-metres); servo ticks never cross this boundary.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+from types import TracebackType
+from typing import Literal
+
+import numpy as np
+
+from snakebot.errors import BackendStateError
+
+StopPolicy = Literal["hold", "limp"]
+
+
+@dataclass(frozen=True)
+class JointState:
+    """One snapshot of every joint, head to tail.
+
+    ``position_rad``, ``velocity_rad_s`` and ``effort_nm`` have shape (N,); ``time_s`` is robot
+    time (simulated on the twin, monotonic wall clock on hardware).
+    """
+
+    time_s: float
+    position_rad: np.ndarray
+    velocity_rad_s: np.ndarray
+    effort_nm: np.ndarray
+
+
+@dataclass(frozen=True)
+class BodyState:
+    """Whole-body quantities only a twin (or a motion-capture rig) can measure.
+
+    ``com_m`` is the centre of mass (3,) in the world frame, ``head_quat`` the head link's
+    orientation (w, x, y, z).
+    """
+
+    com_m: np.ndarray
+    head_quat: np.ndarray
+
+
+@dataclass(frozen=True)
+class JointCommand:
+    """Goal positions for every joint, head to tail, shape (N,), radians."""
+
+    position_rad: np.ndarray
+
+
+@dataclass(frozen=True)
+class ServoGains:
+    """Position-loop gains in the servo's own register units (Position P/I/D Gain).
+
+    The same numbers drive the hardware registers and, through the servo model, the twin's PD.
+    """
+
+    position_p: int
+    position_i: int = 0
+    position_d: int = 0
+
+
+@dataclass
+class CycleStats:
+    """Timing bookkeeping a real-time backend keeps for the runner's summary."""
+
+    overruns: int = 0
+    worst_lateness_s: float = 0.0
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+class Backend(abc.ABC):
+    """A chain of N position-controlled joints that time passes for.
+
+    Lifecycle: ``connect`` once, then any number of read/send/advance calls, then ``close``
+    (idempotent). Use it as a context manager so ``close`` always runs and the servos end safe.
+    """
+
+    joint_count: int
+    stop_policy: StopPolicy = "hold"
+
+    def __init__(self) -> None:
+        self._connected = False
+        self._closed = False
+        self.stats = CycleStats()
+        self.torque_enabled = False
+
+    # -- lifecycle -------------------------------------------------------------------------
+    def connect(self) -> None:
+        """Open the backend (build the model / open the port); fails if already connected."""
+        if self._connected:
+            raise BackendStateError(f"{type(self).__name__} is already connected")
+        if self._closed:
+            raise BackendStateError(f"{type(self).__name__} was closed; create a new one")
+        self._connect()
+        self._connected = True
+
+    def close(self) -> None:
+        """Leave the joints safe (ramp, then hold or limp per ``stop_policy``) and release."""
+        if not self._connected or self._closed:
+            self._closed = True
+            return
+        try:
+            self._close()
+        finally:
+            self._closed = True
+            self._connected = False
+
+    @property
+    def connected(self) -> bool:
+        """True between a successful ``connect`` and ``close``."""
+        return self._connected
+
+    def _require_connected(self) -> None:
+        if not self._connected:
+            state = "closed" if self._closed else "not connected"
+            raise BackendStateError(f"{type(self).__name__} is {state}: call connect() first")
+
+    def __enter__(self) -> Backend:
+        self.connect()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # -- the cycle ---------------------------------------------------------------------------
+    def read_state(self) -> JointState:
+        """Measured joint positions, velocities and efforts now."""
+        self._require_connected()
+        return self._read_state()
+
+    def send_command(self, command: JointCommand) -> None:
+        """Set goal positions (rad, shape (N,)); takes effect as time advances."""
+        self._require_connected()
+        position = np.asarray(command.position_rad, dtype=float)
+        if position.shape != (self.joint_count,):
+            raise ValueError(
+                f"command has shape {position.shape}, expected ({self.joint_count},) joint angles"
+            )
+        self._send_command(position)
+
+    def set_gains(self, gains: ServoGains) -> None:
+        """Apply position-loop gains (servo register units) to every joint."""
+        self._require_connected()
+        self._set_gains(gains)
+
+    def set_torque(self, enabled: bool) -> None:
+        """Enable or disable the joints' torque (disabled joints go limp)."""
+        self._require_connected()
+        self._set_torque(enabled)
+        self.torque_enabled = enabled
+
+    def advance(self, dt_s: float) -> None:
+        """Let ``dt_s`` seconds of robot time pass (the twin steps; hardware sleeps)."""
+        self._require_connected()
+        if not dt_s > 0:
+            raise ValueError(f"advance needs a positive time step, got {dt_s!r} s")
+        self._advance(dt_s)
+
+    def body_state(self) -> BodyState | None:
+        """Whole-body state where the backend can measure it (the twin); None on hardware."""
+        self._require_connected()
+        return None
+
+    @property
+    def time_s(self) -> float:
+        """Robot time now, in seconds."""
+        return self.read_state().time_s
+
+    # -- what an implementation provides ------------------------------------------------------
+    @abc.abstractmethod
+    def _connect(self) -> None: ...
+
+    @abc.abstractmethod
+    def _close(self) -> None: ...
+
+    @abc.abstractmethod
+    def _read_state(self) -> JointState: ...
+
+    @abc.abstractmethod
+    def _send_command(self, position_rad: np.ndarray) -> None: ...
+
+    @abc.abstractmethod
+    def _set_gains(self, gains: ServoGains) -> None: ...
+
+    @abc.abstractmethod
+    def _set_torque(self, enabled: bool) -> None: ...
+
+    @abc.abstractmethod
+    def _advance(self, dt_s: float) -> None: ...

@@ -1,0 +1,139 @@
+"""The MuJoCo twin as a Backend: same commands and states as the servo chain, physics inside."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.pacing import Pacer
+from snakebot.backends.twin.model_builder import (
+    GroundFriction,
+    build_model,
+    joint_name,
+    link_name,
+)
+from snakebot.backends.twin.servo_model import servo_dynamics
+from snakebot.config.schema import RobotConfig
+from snakebot.errors import SimulationDivergedError
+
+_BAD_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQACC,
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+)
+
+
+class TwinBackend(Backend):
+    """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
+
+    ``friction`` overrides the robot's ground model (``--friction``); ``timestep_s`` overrides
+    ``twin.timestep_s``. Control periods passed to ``advance`` must be whole numbers of steps.
+    """
+
+    def __init__(
+        self,
+        robot: RobotConfig,
+        *,
+        friction: GroundFriction | None = None,
+        timestep_s: float | None = None,
+        realtime: bool = False,
+    ) -> None:
+        super().__init__()
+        self.robot = robot
+        self.joint_count = robot.joint_count
+        self.stop_policy = robot.safety.stop_policy
+        self._friction = friction
+        self._timestep_override = timestep_s
+        self._realtime = realtime
+        self._gains = robot.gains
+        self.model: mujoco.MjModel
+        self.data: mujoco.MjData
+        self._pacer: Pacer | None = None
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def _connect(self) -> None:
+        self.model, _ = build_model(
+            self.robot, friction=self._friction, timestep_s=self._timestep_override
+        )
+        self.data = mujoco.MjData(self.model)
+        joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]
+        self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
+        self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
+        self._head_id = self.model.body(link_name(0)).id
+        self._apply_gains(self._gains, torque=True)
+        self.data.ctrl[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+        self.torque_enabled = True
+        self._pacer = Pacer(self.stats) if self._realtime else None
+
+    def _close(self) -> None:
+        self.set_torque(self.stop_policy == "hold")
+
+    # -- the cycle ---------------------------------------------------------------------------
+    def _read_state(self) -> JointState:
+        data = self.data
+        velocity = data.qvel[self._dof_index].copy()
+        effort = data.actuator_force.copy() - self.model.dof_damping[self._dof_index] * velocity
+        return JointState(
+            time_s=float(data.time),
+            position_rad=data.qpos[self._qpos_index].copy(),
+            velocity_rad_s=velocity,
+            effort_nm=effort,
+        )
+
+    def _send_command(self, position_rad: np.ndarray) -> None:
+        self.data.ctrl[:] = position_rad
+
+    def _set_gains(self, gains: ServoGains) -> None:
+        self._gains = gains
+        self._apply_gains(gains, torque=self.torque_enabled)
+
+    def _set_torque(self, enabled: bool) -> None:
+        self._apply_gains(self._gains, torque=enabled)
+
+    def _apply_gains(self, gains: ServoGains, *, torque: bool) -> None:
+        servo = servo_dynamics(self.robot.servo.physics, gains)
+        kp = servo.stiffness_nm_per_rad if torque else 0.0
+        kv = servo.actuator_kv(self.model.opt.timestep) if torque else 0.0
+        self.model.actuator_gainprm[:, 0] = kp
+        self.model.actuator_biasprm[:, 1] = -kp
+        self.model.actuator_biasprm[:, 2] = -kv
+        # With torque off the H-bridge is open: no back-EMF braking, only gear friction remains.
+        damping = (
+            servo.joint_damping_nms if torque else self.robot.servo.physics.viscous_damping_nms
+        )
+        self.model.dof_damping[self._dof_index] = damping
+
+    def _advance(self, dt_s: float) -> None:
+        steps = self.steps_for(dt_s)
+        warnings_before = sum(self.data.warning[w].number for w in _BAD_WARNINGS)
+        mujoco.mj_step(self.model, self.data, steps)
+        warnings_after = sum(self.data.warning[w].number for w in _BAD_WARNINGS)
+        if warnings_after != warnings_before or not np.isfinite(self.data.qacc).all():
+            raise SimulationDivergedError(
+                float(self.data.time), "MuJoCo reported bad accelerations (state was reset)"
+            )
+        if self._pacer is not None:
+            self._pacer.wait(dt_s)
+
+    def steps_for(self, dt_s: float) -> int:
+        """Physics steps in a control period; it must be a whole number of timesteps."""
+        timestep = float(self.model.opt.timestep)
+        steps = round(dt_s / timestep)
+        if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
+            raise ValueError(
+                f"control period {dt_s} s is not a whole number of {timestep} s physics steps; "
+                f"pick a rate that divides {1 / timestep:g} Hz"
+            )
+        return steps
+
+    def body_state(self) -> BodyState:
+        """Centre of mass of the whole snake and the head's orientation."""
+        self._require_connected()
+        return BodyState(
+            com_m=self.data.subtree_com[self._head_id].copy(),
+            head_quat=self.data.xquat[self._head_id].copy(),
+        )

@@ -1,0 +1,178 @@
+"""Build the twin's MuJoCo model from a robot config with ``mujoco.MjSpec``.
+
+Modules are capsules laid head (at the origin, facing +x) to tail (towards -x). Capsules are the
+one MuJoCo shape whose floor contact frame follows the body, so a capsule-floor ``pair`` with
+friction (axial, lateral) gives friction along and across each module (locomotion.md §4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+
+from snakebot.backends.twin.servo_model import ServoDynamics, servo_dynamics
+from snakebot.config.schema import RobotConfig
+from snakebot.errors import ConfigError
+
+SCENE_PATH = Path(__file__).resolve().parents[3] / "sim" / "scene.xml"
+# Links collide with each other (bit 2) but reach the floor only through explicit pairs: a second,
+# isotropic floor contact would cancel the anisotropy (locomotion.md §4.4, gotcha 3).
+_LINK_CONTYPE = 2
+_SPIN_ROLL_FRICTION = (0.005, 0.0001, 0.0001)
+_AXIS_VECTORS = {"yaw": (0.0, 0.0, 1.0), "pitch": (0.0, 1.0, 0.0)}
+
+
+@dataclass(frozen=True)
+class GroundFriction:
+    """Coulomb friction of every module on the floor, along and across the module."""
+
+    axial: float
+    lateral: float
+
+    @property
+    def roll_resistant(self) -> bool:
+        """Directional friction stands for wheels (or scales), which keep a module upright."""
+        return self.axial < self.lateral
+
+    def pair_friction(self, radius_m: float) -> list[float]:
+        """MuJoCo pair friction: axial, lateral, spin, then rolling about the two tangents.
+
+        A capsule pushed sideways rolls about its own axis (locomotion.md §4.2). Wheels on a rigid
+        axle cannot, so a roll-resistant ground adds rolling friction (condim 6) well above the
+        lateral friction force's moment, lateral * radius; well above, because the elliptic cone
+        shares one budget between sliding and rolling.
+        """
+        roll = 4.0 * self.lateral * radius_m if self.roll_resistant else _SPIN_ROLL_FRICTION[1]
+        return [self.axial, self.lateral, _SPIN_ROLL_FRICTION[0], roll, roll]
+
+    @classmethod
+    def parse(cls, text: str, option: str = "--friction") -> GroundFriction:
+        """Parse ``AXIAL,LATERAL`` (two non-negative numbers)."""
+        parts = text.split(",")
+        try:
+            axial, lateral = (float(p) for p in parts)
+        except ValueError:
+            raise ConfigError(
+                option, "", f"expected AXIAL,LATERAL (two numbers, e.g. 0.02,1.0), got {text!r}"
+            ) from None
+        if not (axial >= 0 and lateral >= 0 and math.isfinite(axial + lateral)):
+            raise ConfigError(option, "", f"friction coefficients must be >= 0, got {text!r}")
+        return cls(axial, lateral)
+
+
+def ground_friction(robot: RobotConfig, override: GroundFriction | None = None) -> GroundFriction:
+    """The robot's own ground model, unless ``override`` (``--friction``) replaces it."""
+    if override is not None:
+        return override
+    twin = robot.twin
+    if twin.ground == "isotropic":
+        return GroundFriction(twin.lateral_friction, twin.lateral_friction)
+    return GroundFriction(twin.axial_friction, twin.lateral_friction)
+
+
+def link_name(index: int) -> str:
+    """Name of module ``index`` (0 = head)."""
+    return f"link{index}"
+
+
+def joint_name(index: int) -> str:
+    """Name of joint ``index`` (0 = between head and the next module)."""
+    return f"joint{index}"
+
+
+def build_spec(
+    robot: RobotConfig,
+    *,
+    friction: GroundFriction | None = None,
+    timestep_s: float | None = None,
+    scene_path: Path = SCENE_PATH,
+) -> mujoco.MjSpec:
+    """An ``MjSpec`` of ``robot`` in the scene; compile it, or ``to_xml()`` it for a viewer."""
+    spec = mujoco.MjSpec.from_file(str(scene_path))
+    spec.modelname = robot.name
+    spec.compiler.degree = False
+    spec.option.timestep = timestep_s if timestep_s is not None else robot.twin.timestep_s
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    dynamics = servo_dynamics(robot.servo.physics, robot.gains)
+    length, radius = robot.link.length_m, robot.link.radius_m
+    ground = ground_friction(robot, friction)
+
+    parent = spec.worldbody
+    for index in range(robot.link_count):
+        body = parent.add_body(name=link_name(index))
+        if index == 0:
+            body.pos = [0.0, 0.0, radius + 1e-3]
+            body.add_freejoint(name="root")
+        else:
+            body.pos = [-length, 0.0, 0.0]
+            _add_joint(body, robot, index - 1, dynamics)
+        body.add_geom(
+            name=f"{link_name(index)}_geom",
+            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+            fromto=[-radius, 0, 0, -(length - radius), 0, 0],
+            size=[radius, 0, 0],
+            mass=robot.link.mass_kg,
+            contype=_LINK_CONTYPE,
+            conaffinity=_LINK_CONTYPE,
+            rgba=[0.85, 0.45, 0.1, 1] if index == 0 else [0.15, 0.15, 0.17, 1],
+        )
+        spec.add_pair(
+            name=f"floor_{link_name(index)}",
+            geomname1="floor",
+            geomname2=f"{link_name(index)}_geom",
+            condim=6 if ground.roll_resistant else 3,
+            friction=ground.pair_friction(radius),
+        )
+        parent = body
+    head = spec.body(link_name(0))
+    head.add_camera(
+        name="track",
+        mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM,
+        pos=[-robot.body_length_m / 2, -1.6 * robot.body_length_m, 1.1 * robot.body_length_m],
+        xyaxes=[1, 0, 0, 0, 0.57, 0.82],
+    )
+    return spec
+
+
+def _add_joint(body: mujoco.MjsBody, robot: RobotConfig, index: int, servo: ServoDynamics) -> None:
+    joint_cfg = robot.joints[index]
+    body.add_joint(
+        name=joint_name(index),
+        type=mujoco.mjtJoint.mjJNT_HINGE,
+        axis=list(_AXIS_VECTORS[joint_cfg.axis]),
+        range=[joint_cfg.lower_rad, joint_cfg.upper_rad],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        damping=servo.joint_damping_nms,
+        armature=servo.armature_kgm2,
+        frictionloss=servo.friction_loss_nm,
+    )
+
+
+def add_actuators(spec: mujoco.MjSpec, robot: RobotConfig) -> None:
+    """One position servo per joint: kp and kv from the gains, force clipped at stall torque."""
+    servo = servo_dynamics(robot.servo.physics, robot.gains)
+    kv = servo.actuator_kv(spec.option.timestep)
+    for index, joint_cfg in enumerate(robot.joints):
+        actuator = spec.add_actuator(name=f"servo{joint_cfg.servo_id}", target=joint_name(index))
+        actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        actuator.set_to_position(kp=servo.stiffness_nm_per_rad, kv=kv)
+        actuator.ctrlrange = [joint_cfg.lower_rad, joint_cfg.upper_rad]
+        actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        actuator.forcerange = [-servo.torque_limit_nm, servo.torque_limit_nm]
+        actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+
+
+def build_model(
+    robot: RobotConfig,
+    *,
+    friction: GroundFriction | None = None,
+    timestep_s: float | None = None,
+) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
+    """Compile the twin of ``robot``; returns the model and the spec it came from."""
+    spec = build_spec(robot, friction=friction, timestep_s=timestep_s)
+    add_actuators(spec, robot)
+    return spec.compile(), spec

@@ -1,0 +1,74 @@
+"""A Dynamixel in position mode as MuJoCo sees it: stiffness, damping, torque limit, armature.
+
+A Dynamixel position loop is a voltage P(I)D controller (Rhoban/bam, ``bam/actuator.py``):
+duty = clip(error_gain * P * err, ±1), torque = (kt/R) * (duty * V - kt * qdot) - friction.
+For small errors that is a PD with stiffness K = tau_stall(V) * error_gain * P, a torque clip
+at tau_stall(V), and back-EMF damping tau_stall / omega_no_load (the torque-speed line), so the
+datasheet's stall torque and no-load speed are both honoured. See docs/twin.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from snakebot.backends.base import ServoGains
+from snakebot.config.schema import ServoPhysics
+
+# X-series firmware: KPP = P/128 and the output is in PWM units out of 2 * PWM Limit, which is
+# bam's error_gain = (ticks/rad) / (256 * pwm_limit) per unit of P (arXiv 2410.08650, bam).
+_P_DIVISOR = 256.0
+# KPD = D/16 against KPP = P/128: the D register weighs 8x a P unit, per tick per loop period.
+_D_TO_P_WEIGHT = 128.0 / 16.0
+
+
+@dataclass(frozen=True)
+class ServoDynamics:
+    """MuJoCo parameters for one joint: position actuator kp/kv, joint damping, limits."""
+
+    stiffness_nm_per_rad: float
+    gain_damping_nms: float
+    back_emf_damping_nms: float
+    torque_limit_nm: float
+    no_load_speed_rad_s: float
+    armature_kgm2: float
+    friction_loss_nm: float
+
+    @property
+    def joint_damping_nms(self) -> float:
+        """Damping outside the servo's voltage clip: back-EMF plus viscous gear friction."""
+        return self.back_emf_damping_nms
+
+    def actuator_kv(self, timestep_s: float) -> float:
+        """Velocity gain of the position actuator, including the stable-PD look-ahead term.
+
+        Stable PD (Tan, Liu & Turk 2011) applies -Kp (q + h qdot - q_goal) - Kd qdot: the
+        look-ahead is an extra damping h*Kp, which MuJoCo's implicitfast integrator then treats
+        implicitly (the (M + Kd h)^-1 half of SPD). That keeps high gains stable at h = 5 ms.
+        """
+        return self.gain_damping_nms + timestep_s * self.stiffness_nm_per_rad
+
+
+def servo_dynamics(physics: ServoPhysics, gains: ServoGains) -> ServoDynamics:
+    """Derive the twin's joint parameters from datasheet physics and the servo's gain registers.
+
+    The I gain has no counterpart here; the twin's loop is PD (docs/twin.md says why).
+    """
+    voltage_ratio = physics.supply_voltage_v / physics.nominal_voltage_v
+    stall_torque = physics.stall_torque_nm * voltage_ratio
+    no_load_speed = physics.no_load_speed_rad_s * voltage_ratio
+    error_gain = (physics.ticks_per_rev / (2 * math.pi)) / (_P_DIVISOR * physics.pwm_limit)
+    stiffness = stall_torque * error_gain * gains.position_p
+    gain_damping = (
+        stall_torque * error_gain * _D_TO_P_WEIGHT * gains.position_d * physics.d_gain_loop_period_s
+    )
+    back_emf = physics.stall_torque_nm / physics.no_load_speed_rad_s + physics.viscous_damping_nms
+    return ServoDynamics(
+        stiffness_nm_per_rad=stiffness,
+        gain_damping_nms=gain_damping,
+        back_emf_damping_nms=back_emf,
+        torque_limit_nm=stall_torque,
+        no_load_speed_rad_s=no_load_speed,
+        armature_kgm2=physics.armature_kgm2,
+        friction_loss_nm=physics.friction_loss_nm,
+    )

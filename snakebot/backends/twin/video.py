@@ -1,0 +1,70 @@
+"""Offscreen video of the twin with ``mujoco.Renderer`` (works headless with MUJOCO_GL=egl)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import mujoco
+
+from snakebot.backends.twin.backend import TwinBackend
+from snakebot.errors import MissingDependencyError
+
+
+def _default_gl() -> None:
+    # On a headless Linux box GLFW has no display to open; EGL (Mesa) renders offscreen.
+    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY") and os.name == "posix":
+        os.environ["MUJOCO_GL"] = "egl"
+
+
+class VideoRecorder:
+    """Renders every k-th control cycle from the tracking camera and encodes an MP4."""
+
+    def __init__(
+        self,
+        backend: TwinBackend,
+        path: Path,
+        rate_hz: float,
+        *,
+        fps: int = 25,
+        width: int = 640,
+        height: int = 480,
+    ) -> None:
+        try:
+            import imageio.v2 as imageio
+        except ImportError as exc:
+            raise MissingDependencyError(
+                "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
+            ) from exc
+        _default_gl()
+        self.backend = backend
+        self.path = path
+        self.every = max(1, round(rate_hz / fps))
+        self.frames = 0
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._writer: Any = imageio.get_writer(
+            str(path), fps=rate_hz / self.every, macro_block_size=8
+        )
+        self._renderer = mujoco.Renderer(backend.model, height, width)
+
+    def __call__(self, cycle: int, gait_time_s: float) -> None:
+        """Render a frame on every k-th cycle."""
+        if cycle % self.every:
+            return
+        self._renderer.update_scene(self.backend.data, camera="track")
+        self._writer.append_data(self._renderer.render())
+        self.frames += 1
+
+    def __enter__(self) -> VideoRecorder:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self._writer.close()
+        self._renderer.close()

@@ -1,0 +1,37 @@
+"""Argument types and options shared by several commands."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def add_robot_option(parser: argparse.ArgumentParser, default: str | None = "snake8") -> None:
+    """``--robot NAME|FILE``."""
+    parser.add_argument(
+        "--robot",
+        default=default,
+        required=default is None,
+        help="robot name from firmware_configs/robots/ or a path to a robot .toml"
+        + (f" (default {default})" if default else ""),
+    )
+
+
+def print_json(payload: object) -> None:
+    """One JSON object on stdout."""
+    json.dump(payload, sys.stdout, indent=None, allow_nan=False, default=str)
+    sys.stdout.write("\n")
+    sys.stdout.flush()

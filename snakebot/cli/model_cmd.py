@@ -1,0 +1,37 @@
+"""``snakebot model``: write the twin's MJCF for MuJoCo's own viewer or other tools."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from snakebot.backends.twin.model_builder import GroundFriction, add_actuators, build_spec
+from snakebot.cli.common import add_robot_option
+from snakebot.config import load_robot
+from snakebot.errors import ConfigError
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register the ``model`` command."""
+    parser = subparsers.add_parser("model", help="export the twin's MuJoCo model (MJCF)")
+    add_robot_option(parser)
+    parser.add_argument("--out", required=True, type=Path, help="MJCF file to write")
+    parser.add_argument("--friction", help="AXIAL,LATERAL ground friction (overrides the robot's)")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build the model exactly as the twin does and write it as XML."""
+    robot = load_robot(args.robot)
+    friction = GroundFriction.parse(args.friction) if args.friction else None
+    spec = build_spec(robot, friction=friction)
+    add_actuators(spec, robot)
+    spec.compile()
+    try:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(spec.to_xml())
+    except OSError as exc:
+        raise ConfigError(args.out, "", f"cannot write: {exc.strerror}") from exc
+    print(f"wrote {args.out} ({robot.name}: {robot.joint_count} joints)")
+    return 0

@@ -1,0 +1,151 @@
+"""Robot and servo settings as frozen dataclasses; SI units and radians throughout."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from snakebot.backends.base import ServoGains, StopPolicy
+
+Axis = Literal["yaw", "pitch"]
+GroundModel = Literal["anisotropic", "isotropic"]
+
+
+@dataclass(frozen=True)
+class ServoPhysics:
+    """Electromechanical facts of one servo model (datasheet values, see the servo file).
+
+    ``stall_torque_nm`` and ``no_load_speed_rad_s`` are at ``nominal_voltage_v``; the twin scales
+    them to ``supply_voltage_v``.
+    """
+
+    stall_torque_nm: float
+    no_load_speed_rad_s: float
+    nominal_voltage_v: float
+    supply_voltage_v: float
+    armature_kgm2: float
+    friction_loss_nm: float
+    viscous_damping_nms: float
+    ticks_per_rev: int
+    pwm_limit: int
+    d_gain_loop_period_s: float
+
+
+@dataclass(frozen=True)
+class ServoModel:
+    """A servo model: its name, model number, physics and default position gains."""
+
+    name: str
+    model_number: int
+    physics: ServoPhysics
+    default_gains: ServoGains
+    source: Path
+
+
+@dataclass(frozen=True)
+class BusConfig:
+    """Where the hardware chain is: serial port, baud rate and protocol version."""
+
+    port: str
+    baud: int
+    protocol: float
+
+
+@dataclass(frozen=True)
+class JointConfig:
+    """One joint, counted from the head: its servo ID, bending axis, calibration and limits."""
+
+    servo_id: int
+    axis: Axis
+    zero_offset_rad: float
+    direction: int
+    lower_rad: float
+    upper_rad: float
+
+
+@dataclass(frozen=True)
+class LinkConfig:
+    """Geometry of every module: joint-to-joint pitch, capsule radius, mass."""
+
+    length_m: float
+    radius_m: float
+    mass_kg: float
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Envelope the safety layer enforces between gait and backend."""
+
+    ramp_s: float
+    max_speed_fraction: float
+    stop_policy: StopPolicy
+
+
+@dataclass(frozen=True)
+class TwinConfig:
+    """MuJoCo twin options: timestep and ground friction along/across each link."""
+
+    timestep_s: float
+    ground: GroundModel
+    axial_friction: float
+    lateral_friction: float
+
+
+@dataclass(frozen=True)
+class RobotConfig:
+    """A whole robot: the servo chain head to tail plus what the twin needs to mirror it."""
+
+    name: str
+    source: Path
+    servo: ServoModel
+    bus: BusConfig
+    joints: tuple[JointConfig, ...]
+    link: LinkConfig
+    gains: ServoGains
+    safety: SafetyConfig
+    twin: TwinConfig
+
+    @property
+    def joint_count(self) -> int:
+        """Number of joints (servos), N."""
+        return len(self.joints)
+
+    @property
+    def link_count(self) -> int:
+        """Number of rigid modules: one more than the joints."""
+        return len(self.joints) + 1
+
+    @property
+    def body_length_m(self) -> float:
+        """Head-to-tail length when straight."""
+        return self.link_count * self.link.length_m
+
+    @property
+    def total_mass_kg(self) -> float:
+        """Mass of all modules."""
+        return self.link_count * self.link.mass_kg
+
+    @property
+    def servo_ids(self) -> tuple[int, ...]:
+        """Servo IDs head to tail."""
+        return tuple(j.servo_id for j in self.joints)
+
+    @property
+    def lower_rad(self) -> np.ndarray:
+        """Lower joint limits, shape (N,)."""
+        return np.array([j.lower_rad for j in self.joints])
+
+    @property
+    def upper_rad(self) -> np.ndarray:
+        """Upper joint limits, shape (N,)."""
+        return np.array([j.upper_rad for j in self.joints])
+
+    @property
+    def max_speed_rad_s(self) -> float:
+        """Joint speed the safety layer allows: a fraction of the servo's no-load speed."""
+        physics = self.servo.physics
+        no_load = physics.no_load_speed_rad_s * physics.supply_voltage_v / physics.nominal_voltage_v
+        return self.safety.max_speed_fraction * no_load

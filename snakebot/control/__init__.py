@@ -1,0 +1,1 @@
+"""Control: the safety layer, run metrics and the fixed-rate runner."""

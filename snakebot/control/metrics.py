@@ -1,0 +1,92 @@
+"""Summary metrics of a run, accumulated per cycle in O(1) memory."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from snakebot.backends.base import JointState
+
+GRAVITY_M_S2 = 9.81
+
+
+@dataclass
+class RunMetrics:
+    """Accumulates tracking error, commands, positive joint work and the COM path."""
+
+    joint_count: int
+    body_length_m: float
+    mass_kg: float
+    cycles: int = 0
+    start_time_s: float | None = None
+    end_time_s: float = 0.0
+    start_com: np.ndarray | None = None
+    end_com: np.ndarray | None = None
+    _squared_error_sum: float = 0.0
+    _max_abs_command: float = 0.0
+    _positive_work_j: float = 0.0
+    extra: dict[str, object] = field(default_factory=dict)
+
+    def start(self, time_s: float, com: np.ndarray | None) -> None:
+        """Mark the beginning of the scored window."""
+        self.start_time_s = time_s
+        self.start_com = None if com is None else com.copy()
+        self.end_com = self.start_com
+
+    def add(
+        self, command: np.ndarray, state: JointState, com: np.ndarray | None, dt_s: float
+    ) -> None:
+        """Account one control cycle."""
+        error = command - state.position_rad
+        self._squared_error_sum += float(error @ error)
+        self._max_abs_command = max(self._max_abs_command, float(np.abs(command).max()))
+        power = state.effort_nm * state.velocity_rad_s
+        self._positive_work_j += float(power[power > 0].sum()) * dt_s
+        self.cycles += 1
+        self.end_time_s = state.time_s
+        if com is not None:
+            self.end_com = com
+
+    def summary(self, period_s: float | None) -> dict[str, object]:
+        """The run's summary, JSON-ready; distance-based keys are None without a COM."""
+        start = self.start_time_s if self.start_time_s is not None else 0.0
+        duration = max(self.end_time_s - start, 0.0)
+        gait_cycles = round(duration / period_s, 6) if period_s else None
+        tracking = math.sqrt(self._squared_error_sum / max(self.cycles * self.joint_count, 1))
+        out: dict[str, object] = {
+            "duration_s": round(duration, 6),
+            "joints": self.joint_count,
+            "body_length_m": self.body_length_m,
+            "control_cycles": self.cycles,
+            "cycles": gait_cycles,
+            "tracking_rms_rad": tracking,
+            "max_abs_command_rad": self._max_abs_command,
+            "positive_work_j": self._positive_work_j,
+        }
+        if self.start_com is None or self.end_com is None:
+            out.update(
+                distance_m=None,
+                displacement_m=None,
+                speed_mps=None,
+                heading_deg=None,
+                body_lengths_per_cycle=None,
+                cost_of_transport=None,
+            )
+            return out
+        dx, dy = (self.end_com[:2] - self.start_com[:2]).tolist()
+        distance = math.hypot(dx, dy)
+        out.update(
+            distance_m=distance,
+            displacement_m=[dx, dy],
+            speed_mps=distance / duration if duration > 0 else 0.0,
+            heading_deg=math.degrees(math.atan2(dy, dx)) if distance > 0 else 0.0,
+            body_lengths_per_cycle=(distance / self.body_length_m / gait_cycles)
+            if gait_cycles
+            else None,
+            cost_of_transport=(self._positive_work_j / (self.mass_kg * GRAVITY_M_S2 * distance))
+            if distance > 1e-9
+            else None,
+        )
+        return out

@@ -1,0 +1,77 @@
+"""The safety layer between gait and backend: limits, joint speed, and amplitude ramps.
+
+Whatever a gait asks for, what leaves here is finite, within the joint limits and no faster than
+the servo can move; a gait that returns NaN stops the run instead of reaching a servo.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from snakebot.config.schema import RobotConfig
+from snakebot.errors import SafetyLimitError
+
+
+def smooth_ramp(fraction: float) -> float:
+    """A 0..1 ramp with zero slope at both ends (smoothstep), so ramps add no velocity jumps."""
+    x = min(max(fraction, 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+class SafetyLayer:
+    """Clips, slew-limits and ramps joint targets (rad, shape (N,)) for one run.
+
+    ``rest_rad`` is the pose amplitudes ramp from and to (straight, clipped into the limits).
+    """
+
+    def __init__(
+        self,
+        lower_rad: np.ndarray,
+        upper_rad: np.ndarray,
+        max_speed_rad_s: float,
+        ramp_s: float,
+        rest_rad: np.ndarray | None = None,
+    ) -> None:
+        self.lower_rad = np.asarray(lower_rad, dtype=float)
+        self.upper_rad = np.asarray(upper_rad, dtype=float)
+        if self.lower_rad.shape != self.upper_rad.shape or np.any(self.lower_rad > self.upper_rad):
+            raise ValueError("lower_rad and upper_rad must have one shape and lower <= upper")
+        if not max_speed_rad_s > 0:
+            raise ValueError(f"max_speed_rad_s must be positive, got {max_speed_rad_s}")
+        self.max_speed_rad_s = float(max_speed_rad_s)
+        self.ramp_s = float(ramp_s)
+        rest = np.zeros_like(self.lower_rad) if rest_rad is None else np.asarray(rest_rad, float)
+        self.rest_rad = np.clip(rest, self.lower_rad, self.upper_rad)
+        self._last: np.ndarray | None = None
+
+    @classmethod
+    def for_robot(cls, robot: RobotConfig) -> SafetyLayer:
+        """The envelope a robot config asks for."""
+        return cls(robot.lower_rad, robot.upper_rad, robot.max_speed_rad_s, robot.safety.ramp_s)
+
+    def reset(self, measured_rad: np.ndarray) -> None:
+        """Start from the measured pose, so the first command never jumps."""
+        self._last = np.clip(np.asarray(measured_rad, float), self.lower_rad, self.upper_rad)
+
+    def ramp_in(self, elapsed_s: float) -> float:
+        """Amplitude factor ``elapsed_s`` into a run."""
+        return 1.0 if self.ramp_s <= 0 else smooth_ramp(elapsed_s / self.ramp_s)
+
+    def filter(self, target_rad: np.ndarray, dt_s: float, amplitude: float = 1.0) -> np.ndarray:
+        """The command to send this cycle: ramped towards rest, clipped, slew-limited."""
+        target = np.asarray(target_rad, dtype=float)
+        if target.shape != self.lower_rad.shape:
+            raise SafetyLimitError(
+                f"gait returned shape {target.shape}, expected {self.lower_rad.shape}"
+            )
+        if not np.isfinite(target).all():
+            bad = np.flatnonzero(~np.isfinite(target)).tolist()
+            raise SafetyLimitError(f"gait returned non-finite targets for joints {bad}; stopping")
+        blended = self.rest_rad + amplitude * (target - self.rest_rad)
+        command = np.clip(blended, self.lower_rad, self.upper_rad)
+        if self._last is not None:
+            max_step = self.max_speed_rad_s * dt_s
+            command = self._last + np.clip(command - self._last, -max_step, max_step)
+            np.clip(command, self.lower_rad, self.upper_rad, out=command)
+        self._last = command
+        return command  # type: ignore[no-any-return]

@@ -1,0 +1,78 @@
+"""One error hierarchy for snakebot; the CLI maps each class to an exit status in one place."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+
+class SnakebotError(Exception):
+    """Root of every error snakebot raises on purpose; its message says what to do."""
+
+
+class ConfigError(SnakebotError, ValueError):
+    """A robot, servo or gait file (or a command-line value) is invalid.
+
+    ``source`` is the file or option, ``key`` the dotted key path in it (``joints[3].servo_id``).
+    """
+
+    def __init__(self, source: str | Path, key: str, message: str) -> None:
+        self.source = str(source)
+        self.key = key
+        self.reason = message
+        where = f"{self.source}: {key}" if key else self.source
+        super().__init__(f"{where}: {message}")
+
+
+class GaitError(SnakebotError, ValueError):
+    """A gait was asked for with an unknown name or invalid parameters."""
+
+
+class SafetyLimitError(SnakebotError):
+    """A command or state left the envelope the safety layer guarantees."""
+
+
+class BackendError(SnakebotError):
+    """A backend was used wrongly (not connected, connected twice) or failed."""
+
+
+class BackendStateError(BackendError):
+    """A backend call came in the wrong lifecycle state (before connect, after close, twice)."""
+
+
+class SimulationDivergedError(BackendError):
+    """MuJoCo reported an unstable simulation (bad acceleration, NaN state)."""
+
+    def __init__(self, time_s: float, detail: str) -> None:
+        self.time_s = time_s
+        self.detail = detail
+        super().__init__(
+            f"simulation diverged at t={time_s:.4f} s: {detail}. Lower the gains, the control "
+            "rate or the timestep (twin.timestep_s), or add armature."
+        )
+
+
+class BusError(BackendError, ConnectionError):
+    """A Dynamixel bus transaction failed; carries the port, servo IDs and the SDK's own text."""
+
+    def __init__(self, port: str, servo_ids: Sequence[int], message: str) -> None:
+        self.port = port
+        self.servo_ids = tuple(servo_ids)
+        ids = ",".join(str(i) for i in self.servo_ids) or "-"
+        super().__init__(f"{port} [servo {ids}]: {message}")
+
+
+class ServoFaultError(BackendError):
+    """A servo latched a hardware error (overload, overheating, ...); only a reboot clears it."""
+
+    def __init__(self, servo_id: int, flags: Sequence[str], message: str = "") -> None:
+        self.servo_id = servo_id
+        self.flags = tuple(flags)
+        text = f"servo {servo_id} reports hardware error: {', '.join(self.flags) or 'unknown'}"
+        if message:
+            text += f". {message}"
+        super().__init__(text)
+
+
+class MissingDependencyError(SnakebotError, ImportError):
+    """An optional dependency is not installed; the message carries the install command."""

@@ -1,0 +1,41 @@
+"""Gaits: joint-angle targets (rad) over time (s) for head-to-tail indexed snake joints."""
+
+from snakebot.gaits.base import Gait
+from snakebot.gaits.compound import CompoundGait
+from snakebot.gaits.dft import DftGait, DftShiftGait, dft_coefficients_from_pose, scale_into_limits
+from snakebot.gaits.expr import parse_number
+from snakebot.gaits.gait_file import load_gait_file, save_gait_file
+from snakebot.gaits.keyframes import KeyframeGait
+from snakebot.gaits.registry import (
+    GaitSpec,
+    ParamSpec,
+    gait_names,
+    get_spec,
+    make_gait,
+    parse_set_options,
+    resolve_params,
+)
+from snakebot.gaits.serpenoid import SerpenoidGait
+from snakebot.gaits.simple import SimpleGait
+
+__all__ = [
+    "CompoundGait",
+    "DftGait",
+    "DftShiftGait",
+    "Gait",
+    "GaitSpec",
+    "KeyframeGait",
+    "ParamSpec",
+    "SerpenoidGait",
+    "SimpleGait",
+    "dft_coefficients_from_pose",
+    "gait_names",
+    "get_spec",
+    "load_gait_file",
+    "make_gait",
+    "parse_number",
+    "parse_set_options",
+    "resolve_params",
+    "save_gait_file",
+    "scale_into_limits",
+]

@@ -1,0 +1,70 @@
+"""The gait interface: joint targets (rad) as a pure function of time (s), plus a feedback hook."""
+
+from __future__ import annotations
+
+import abc
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from snakebot.errors import GaitError
+
+FloatArray = npt.NDArray[np.float64]
+
+
+class Gait(abc.ABC):
+    """A joint-space gait for an N-joint snake, joints indexed head (0) to tail (N-1)."""
+
+    joint_count: int
+
+    @property
+    def period_s(self) -> float | None:
+        """One gait cycle in s, or None when the gait is static or not periodic."""
+        return None
+
+    @abc.abstractmethod
+    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
+        """Joint targets in rad: scalar time -> shape (N,), times of shape (T,) -> shape (T, N)."""
+
+    def command(self, time_s: float, measured_rad: FloatArray | None = None) -> FloatArray:
+        """Targets (N,) in rad for one control cycle; feedback gaits may use the measured pose."""
+        return self.targets(time_s)
+
+    def reset(self) -> None:
+        """Forget any internal state so the next command starts the gait afresh."""
+        return None
+
+
+def as_times(gait: str, time_s: float | npt.ArrayLike) -> tuple[FloatArray, bool]:
+    """Times as a 1-D float array (T,) in s, and whether the caller passed a scalar."""
+    try:
+        t = np.asarray(time_s, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise GaitError(f"{gait}: time_s must be a number or 1-D array of s ({exc})") from exc
+    if t.ndim > 1:
+        raise GaitError(f"{gait}: time_s must be a scalar or a 1-D array (T,), got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise GaitError(f"{gait}: time_s must be finite, got {time_s!r}")
+    return np.atleast_1d(t), t.ndim == 0
+
+
+def shaped(values: FloatArray, scalar: bool) -> FloatArray:
+    """Return (T, N) targets as they are, or row 0 (N,) when the caller passed a scalar time."""
+    return values[0].copy() if scalar else values
+
+
+def check_joint_count(gait: str, joint_count: object) -> int:
+    """Validate N (a positive int) so every gait fails the same way on a bad joint count."""
+    if isinstance(joint_count, bool) or not isinstance(joint_count, int | np.integer):
+        raise GaitError(f"{gait}: joint_count must be a positive integer, got {joint_count!r}")
+    if joint_count < 1:
+        raise GaitError(f"{gait}: joint_count must be at least 1, got {joint_count}")
+    return int(joint_count)
+
+
+def check_finite(gait: str, **values: float) -> None:
+    """Reject NaN or infinite scalar parameters, naming the first offending one."""
+    for name, value in values.items():
+        if not math.isfinite(value):
+            raise GaitError(f"{gait}.{name}: expected a finite number, got {value!r}")

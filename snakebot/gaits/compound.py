@@ -1,0 +1,191 @@
+"""CMU compound serpenoid (gait equation) and its presets for yaw (even) / pitch (odd) snakes."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from snakebot.gaits.base import FloatArray, Gait, as_times, check_finite, check_joint_count, shaped
+from snakebot.gaits.spec import FLAG_UNIT, GaitSpec, ParamSpec, ParamValues
+
+
+@dataclass(frozen=True)
+class CompoundGait(Gait):
+    """Tesch et al. (2009) gait equation with angles in rad, rad/joint, rad/s.
+
+    Even joints n: offset_even + amplitude_even*sin(spatial_freq_even*n - temporal_freq_even*t);
+    odd joints: offset_odd + amplitude_odd*sin(spatial_freq_odd*n - temporal_freq_odd*t + shift).
+    The rear half is n >= N//2: half_flip negates phase_shift there, offset_split the offsets.
+    No (-1)^floor(n/2) hardware flip: joint directions belong to the robot config.
+    """
+
+    joint_count: int
+    amplitude_even: float = 0.6
+    amplitude_odd: float = 0.6
+    offset_even: float = 0.0
+    offset_odd: float = 0.0
+    spatial_freq_even: float = 0.5
+    spatial_freq_odd: float = 0.5
+    temporal_freq_even: float = math.pi
+    temporal_freq_odd: float = math.pi
+    phase_shift: float = math.pi / 4
+    half_flip: bool = False
+    offset_split: bool = False
+    name: str = "compound"
+
+    def __post_init__(self) -> None:
+        check_joint_count(self.name, self.joint_count)
+        check_finite(
+            self.name,
+            amplitude_even=self.amplitude_even,
+            amplitude_odd=self.amplitude_odd,
+            offset_even=self.offset_even,
+            offset_odd=self.offset_odd,
+            spatial_freq_even=self.spatial_freq_even,
+            spatial_freq_odd=self.spatial_freq_odd,
+            temporal_freq_even=self.temporal_freq_even,
+            temporal_freq_odd=self.temporal_freq_odd,
+            phase_shift=self.phase_shift,
+        )
+
+    @property
+    def period_s(self) -> float | None:
+        """2*pi/|temporal_freq_even| in s, else from the odd frequency, None if both are 0."""
+        for omega in (self.temporal_freq_even, self.temporal_freq_odd):
+            if omega != 0.0:
+                return 2.0 * math.pi / abs(omega)
+        return None
+
+    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
+        """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
+        t, scalar = as_times(self.name, time_s)
+        n = np.arange(self.joint_count, dtype=np.float64)
+        rear = n >= self.joint_count // 2
+        shift = np.where(self.half_flip & rear, -self.phase_shift, self.phase_shift)
+        side = np.where(self.offset_split & rear, -1.0, 1.0)
+        tt = t[:, None]
+        even = side * self.offset_even + self.amplitude_even * np.sin(
+            self.spatial_freq_even * n - self.temporal_freq_even * tt
+        )
+        odd = side * self.offset_odd + self.amplitude_odd * np.sin(
+            self.spatial_freq_odd * n - self.temporal_freq_odd * tt + shift
+        )
+        return shaped(np.where(n % 2 == 0, even, odd), scalar)
+
+
+_FIELDS = (
+    ("amplitude_even", "rad", "amplitude of the even (yaw) wave"),
+    ("amplitude_odd", "rad", "amplitude of the odd (pitch) wave"),
+    ("offset_even", "rad", "constant bias of the even joints (turning)"),
+    ("offset_odd", "rad", "constant bias of the odd joints"),
+    ("spatial_freq_even", "rad/joint", "phase step per joint index, even wave"),
+    ("spatial_freq_odd", "rad/joint", "phase step per joint index, odd wave"),
+    ("temporal_freq_even", "rad/s", "even wave frequency; > 0 sends it head -> tail"),
+    ("temporal_freq_odd", "rad/s", "odd wave frequency; > 0 sends it head -> tail"),
+    ("phase_shift", "rad", "odd wave lead over the even wave; its sign sets the direction"),
+    ("half_flip", FLAG_UNIT, "1: negate phase_shift for joints n >= N//2 (turn in place)"),
+    ("offset_split", FLAG_UNIT, "1: negate the offsets for joints n >= N//2"),
+)
+
+_PI = math.pi
+_SIDEWINDING = {
+    "amplitude_even": 0.6,
+    "amplitude_odd": 0.6,
+    "spatial_freq_even": 0.5,
+    "spatial_freq_odd": 0.5,
+    "temporal_freq_even": _PI,
+    "temporal_freq_odd": _PI,
+    "phase_shift": _PI / 4,
+}
+_BASE = {name: 0.0 for name, _, _ in _FIELDS} | _SIDEWINDING
+
+PRESETS: dict[str, tuple[str, dict[str, float]]] = {
+    "compound": (
+        "CMU gait equation (Tesch et al. 2009) on even (yaw) / odd (pitch) joints; defaults "
+        "are the sidewinding set.",
+        {},
+    ),
+    "sidewinding": (
+        "Sidewinding: yaw and pitch waves pi/4 apart, moves sideways without anisotropic "
+        "friction. A 0.6, spatial 0.5 rad/joint, phase_shift pi/4 as CMU's reusnake set, at "
+        "0.5 Hz; locomotion.md measured 0.45 BL/cycle with this gait on a 16-module MuJoCo "
+        "snake on isotropic ground. -pi/4 goes the other way.",
+        {},
+    ),
+    "lateral_undulation": (
+        "Lateral undulation: yaw wave only, pitch joints still. A 0.6 rad, 0.7 rad/joint "
+        "(1.4 rad between yaw neighbours, about 1.3 waves on 12 joints, near Miller's 1.4; "
+        "CMU's 4 rad/module with their axis flip also gives 1.4 rad), 0.5 Hz. Needs wheels or "
+        "anisotropic friction.",
+        {
+            "amplitude_odd": 0.0,
+            "spatial_freq_even": 0.7,
+            "spatial_freq_odd": 0.7,
+            "phase_shift": 0.0,
+        },
+    ),
+    "rolling": (
+        "Rolling: an arc (spatial 0) turned about the body axis by yaw and pitch waves pi/2 "
+        "apart (snakelib rolling); A 0.3 at 0.5 Hz rolled 0.08 BL/cycle sideways in MuJoCo "
+        "(locomotion.md).",
+        {
+            "amplitude_even": 0.3,
+            "amplitude_odd": 0.3,
+            "spatial_freq_even": 0.0,
+            "spatial_freq_odd": 0.0,
+            "phase_shift": _PI / 2,
+        },
+    ),
+    "linear_progression": (
+        "Linear progression: pitch (odd) wave only, A 0.5, pi/4 rad/joint, 0.5 Hz (CMU ReU/SEA "
+        "set). Temporal freq is negative as in snakelib: the wave runs tail -> head and the "
+        "body inches head first. Yaw offset 0.3 split front/rear (snakelib beta) bends the body "
+        "into a shallow S for stability.",
+        {
+            "amplitude_even": 0.0,
+            "amplitude_odd": 0.5,
+            "offset_even": 0.3,
+            "spatial_freq_even": _PI / 4,
+            "spatial_freq_odd": _PI / 4,
+            "temporal_freq_even": -_PI,
+            "temporal_freq_odd": -_PI,
+            "phase_shift": 0.0,
+            "offset_split": 1.0,
+        },
+    ),
+    "turn_in_place": (
+        "Turn in place: sidewinding whose phase_shift flips sign on the rear half, so the halves "
+        "sidewind in opposite directions; CMU ReU set (A 0.4, 0.5 rad/joint, 3.5 rad/s = 0.56 Hz).",
+        {
+            "amplitude_even": 0.4,
+            "amplitude_odd": 0.4,
+            "temporal_freq_even": 3.5,
+            "temporal_freq_odd": 3.5,
+            "half_flip": 1.0,
+        },
+    ),
+}
+
+
+def _factory(name: str) -> GaitSpec:
+    summary, overrides = PRESETS[name]
+    defaults = _BASE | overrides
+    params = tuple(ParamSpec(key, unit, defaults[key], doc) for key, unit, doc in _FIELDS)
+
+    def build(joint_count: int, p: ParamValues, _lower: FloatArray, _upper: FloatArray) -> Gait:
+        numbers = {key: p.number(key) for key, unit, _ in _FIELDS if unit != FLAG_UNIT}
+        return CompoundGait(
+            joint_count,
+            half_flip=p.flag("half_flip"),
+            offset_split=p.flag("offset_split"),
+            name=name,
+            **numbers,
+        )
+
+    return GaitSpec(name=name, summary=summary, params=params, factory=build)
+
+
+SPECS = tuple(_factory(name) for name in PRESETS)

@@ -1,0 +1,135 @@
+"""Every gait by name: specs for --help, make_gait() for the runner, --set parsing for the CLI."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from snakebot.errors import GaitError
+from snakebot.gaits import compound, dft, keyframes, serpenoid, simple
+from snakebot.gaits.base import FloatArray, Gait, check_joint_count
+from snakebot.gaits.spec import (
+    GaitSpec,
+    ParamSpec,
+    ParamValue,
+    ParamValues,
+    coerce_value,
+    convert_value,
+    expectation,
+)
+
+__all__ = [
+    "GaitSpec",
+    "ParamSpec",
+    "gait_names",
+    "get_spec",
+    "make_gait",
+    "parse_set_options",
+    "resolve_params",
+]
+
+DEFAULT_LIMIT_RAD = math.pi / 2
+
+_SPECS: dict[str, GaitSpec] = {
+    spec.name: spec
+    for spec in (serpenoid.SPEC, *compound.SPECS, *dft.SPECS, simple.SPEC, keyframes.SPEC)
+}
+
+
+def gait_names() -> list[str]:
+    """Names of all registered gaits, sorted."""
+    return sorted(_SPECS)
+
+
+def get_spec(name: str) -> GaitSpec:
+    """The spec of gait name; GaitError listing the known gaits otherwise."""
+    spec = _SPECS.get(name) if isinstance(name, str) else None
+    if spec is None:
+        close = difflib.get_close_matches(str(name), gait_names(), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise GaitError(f"unknown gait {name!r}{hint}; known gaits: {', '.join(gait_names())}")
+    return spec
+
+
+def resolve_params(name: str, params: Mapping[str, object] | None = None) -> dict[str, ParamValue]:
+    """Defaults of gait name overlaid with params, each converted to its declared type."""
+    spec = get_spec(name)
+    given = dict(params or {})
+    for key in given:
+        if not isinstance(key, str):
+            raise GaitError(f"{name}: parameter names must be strings, got {key!r}")
+        spec.param(key)
+    return {
+        p.name: coerce_value(name, p, given[p.name]) if p.name in given else p.default
+        for p in spec.params
+    }
+
+
+def make_gait(
+    name: str,
+    joint_count: int,
+    params: Mapping[str, object] | None = None,
+    *,
+    lower_rad: npt.ArrayLike | None = None,
+    upper_rad: npt.ArrayLike | None = None,
+) -> Gait:
+    """Build gait name for N joints; limits (N,) in rad default to +-pi/2 (dft gaits use them)."""
+    spec = get_spec(name)
+    n = check_joint_count(name, joint_count)
+    values = ParamValues(name, resolve_params(name, params))
+    lower = _limit(name, "lower_rad", lower_rad, n, -DEFAULT_LIMIT_RAD)
+    upper = _limit(name, "upper_rad", upper_rad, n, DEFAULT_LIMIT_RAD)
+    if np.any(lower > upper):
+        raise GaitError(f"{name}: expected lower_rad <= upper_rad for every joint")
+    return spec.factory(n, values, lower, upper)
+
+
+def parse_set_options(name: str, items: Sequence[str]) -> dict[str, object]:
+    """Parse --set "key=value" strings for gait name into typed values (numbers may be "pi/4")."""
+    spec = get_spec(name)
+    parsed: dict[str, object] = {}
+    for item in items:
+        key, sep, raw = str(item).partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise GaitError(
+                f"--set {item}: expected key=value, e.g. {_example(spec.params[0])}; "
+                f"valid keys for {name}: {', '.join(spec.param_names)}"
+            )
+        try:
+            param = spec.param(key)
+        except GaitError as exc:
+            raise GaitError(f"--set {item}: {exc}") from None
+        try:
+            parsed[key] = convert_value(param, raw)
+        except (TypeError, ValueError) as exc:
+            raise GaitError(f"--set {item}: {expectation(name, param)} ({exc})") from None
+    return parsed
+
+
+def _example(param: ParamSpec) -> str:
+    default = param.default
+    if isinstance(default, tuple):
+        return f"{param.name}={','.join(f'{v:g}' for v in default) or '0.1,0.2'}"
+    return f"{param.name}={default:g}" if isinstance(default, float) else f"{param.name}={default}"
+
+
+def _limit(
+    name: str, key: str, values: npt.ArrayLike | None, joint_count: int, default: float
+) -> FloatArray:
+    if values is None:
+        return np.full(joint_count, default)
+    try:
+        limit = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise GaitError(f"{name}: {key} must be {joint_count} numbers in rad ({exc})") from exc
+    if limit.shape != (joint_count,) or not np.all(np.isfinite(limit)):
+        raise GaitError(
+            f"{name}: {key} must be {joint_count} finite numbers in rad (one per joint), "
+            f"got shape {limit.shape}"
+        )
+    return limit

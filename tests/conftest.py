@@ -1,0 +1,31 @@
+"""Shared fixtures: robot configs written to a temporary folder so tests can break them."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+CONFIGS = REPO / "firmware_configs"
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+
+@pytest.fixture
+def config_dir(tmp_path: Path) -> Path:
+    """A writable copy of firmware_configs/."""
+    target = tmp_path / "firmware_configs"
+    shutil.copytree(CONFIGS, target)
+    return target
+
+
+def edit_robot(config_dir: Path, name: str, old: str, new: str) -> Path:
+    """Replace text in a copied robot file and return its path."""
+    path = config_dir / "robots" / f"{name}.toml"
+    text = path.read_text()
+    assert old in text, f"{old!r} not in {path}"
+    path.write_text(text.replace(old, new, 1))
+    return path

@@ -1,0 +1,71 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from snakebot.config import load_robot
+from snakebot.control.safety import SafetyLayer, smooth_ramp
+from snakebot.errors import SafetyLimitError
+
+N = 6
+LOWER = np.array([-1.5, -1.0, -0.5, -1.5, -0.2, -1.0])
+UPPER = np.array([1.5, 1.0, 0.5, 0.3, 0.2, 1.2])
+VMAX = 5.0
+
+finite = st.floats(-1e6, 1e6, allow_nan=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    targets=st.lists(arrays(float, N, elements=finite), min_size=1, max_size=20),
+    start=arrays(float, N, elements=st.floats(-3, 3)),
+    dt=st.floats(1e-4, 0.05),
+    amplitude=st.floats(0, 1),
+)
+def test_no_command_leaves_limits_or_speed(
+    targets: list[np.ndarray], start: np.ndarray, dt: float, amplitude: float
+) -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
+    layer.reset(start)
+    previous = np.clip(start, LOWER, UPPER)
+    for target in targets:
+        command = layer.filter(target, dt, amplitude)
+        assert np.all(command >= LOWER) and np.all(command <= UPPER)
+        assert np.all(np.abs(command - previous) <= VMAX * dt + 1e-9)
+        previous = command
+
+
+def test_in_range_target_passes_unchanged_when_slow() -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
+    layer.reset(np.zeros(N))
+    target = np.full(N, 0.01)
+    np.testing.assert_allclose(layer.filter(target, 0.01), target)
+
+
+def test_amplitude_ramps_towards_rest_pose() -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=2.0)
+    assert layer.ramp_in(0.0) == 0.0
+    assert layer.ramp_in(1.0) == pytest.approx(0.5)
+    assert layer.ramp_in(2.5) == 1.0
+    layer.reset(np.zeros(N))
+    np.testing.assert_allclose(layer.filter(np.full(N, 0.1), 0.01, amplitude=0.5), 0.05)
+    assert smooth_ramp(0.25) < 0.25  # gentle start
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_non_finite_gait_output_stops_the_run(bad: float) -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
+    target = np.zeros(N)
+    target[3] = bad
+    with pytest.raises(SafetyLimitError, match=r"joints \[3\]"):
+        layer.filter(target, 0.01)
+
+
+def test_speed_limit_comes_from_the_servo() -> None:
+    robot = load_robot("snake8")
+    layer = SafetyLayer.for_robot(robot)
+    # 0.9 of the XL430-W250's 57 rpm no-load speed
+    assert layer.max_speed_rad_s == pytest.approx(0.9 * 57 * 2 * np.pi / 60, rel=1e-3)

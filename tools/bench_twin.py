@@ -1,0 +1,137 @@
+"""Benchmark: simulated steps per second of `snakebot run --backend sim` vs bare mj_step loops.
+
+For 8, 16 and 32 servos, each round runs, back to back in one process and in shuffled order:
+  snakebot       the runner path of `snakebot run` (gait -> safety -> TwinBackend, metrics)
+  snakebot+log   the same with the per-cycle CSV telemetry log
+  bare_step      the exported MJCF, numpy ctrl every 10 ms, one mj_step() call per physics step
+  bare_nstep     the same, one mj_step(m, d, nstep) call per control period
+Ratios are taken within each round, then the median over rounds is reported.
+
+    python tools/bench_twin.py [--rounds 7] [--seconds 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import random
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from snakebot.backends.twin import TwinBackend, build_spec
+from snakebot.backends.twin.model_builder import add_actuators
+from snakebot.config import RobotConfig, load_robot
+from snakebot.control.metrics import RunMetrics
+from snakebot.control.runner import RunPlan, run_gait
+from snakebot.control.safety import SafetyLayer
+from snakebot.gaits import make_gait
+from snakebot.telemetry import CsvTelemetryWriter
+
+RATE_HZ = 100.0
+
+
+def robot_with(joints: int) -> RobotConfig:
+    base = load_robot("snake8")
+    chain = tuple(dataclasses.replace(base.joints[0], servo_id=i + 1) for i in range(joints))
+    return dataclasses.replace(base, joints=chain)
+
+
+def run_snakebot(robot: RobotConfig, seconds: float, log_dir: Path | None) -> float:
+    backend = TwinBackend(robot)
+    gait = make_gait("serpenoid", robot.joint_count)
+    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+    plan = RunPlan(duration_s=seconds, rate_hz=RATE_HZ, ramp_out=False)
+    with backend:
+        log = CsvTelemetryWriter(log_dir / "bench.csv", robot.joint_count) if log_dir else None
+        start = time.perf_counter()
+        run_gait(backend, gait, SafetyLayer.for_robot(robot), plan, metrics, log=log)
+        wall = time.perf_counter() - start
+        if log:
+            log.close()
+        steps = round(seconds / backend.model.opt.timestep)
+    return steps / wall
+
+
+def run_bare(xml_path: Path, joints: int, seconds: float, nstep_call: bool) -> float:
+    model = mujoco.MjModel.from_xml_path(str(xml_path))
+    data = mujoco.MjData(model)
+    per_cycle = round(1.0 / RATE_HZ / model.opt.timestep)
+    cycles = round(seconds * RATE_HZ)
+    phase = 0.7 * np.arange(joints)
+    start = time.perf_counter()
+    for k in range(cycles):
+        data.ctrl[:] = 0.4 * np.sin(np.pi * k / RATE_HZ - phase)
+        if nstep_call:
+            mujoco.mj_step(model, data, per_cycle)
+        else:
+            for _ in range(per_cycle):
+                mujoco.mj_step(model, data)
+    wall = time.perf_counter() - start
+    return cycles * per_cycle / wall
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--seconds", type=float, default=5.0, help="simulated seconds per block")
+    parser.add_argument("--sizes", default="8,16,32")
+    args = parser.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+    variants = ["snakebot", "snakebot+log", "bare_step", "bare_nstep"]
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp_path = Path(tmp)
+        robots, xml = {}, {}
+        for n in sizes:
+            robots[n] = robot_with(n)
+            spec = build_spec(robots[n])
+            add_actuators(spec, robots[n])
+            spec.compile()
+            xml[n] = tmp_path / f"snake{n}.xml"
+            xml[n].write_text(spec.to_xml())
+        results: dict[tuple[int, str], list[float]] = {(n, v): [] for n in sizes for v in variants}
+        ratios: dict[tuple[int, str], list[float]] = {
+            (n, v): [] for n in sizes for v in ("step", "nstep", "log_step")
+        }
+        for _ in range(args.rounds):
+            for n in sizes:
+                order = variants[:]
+                random.shuffle(order)
+                got: dict[str, float] = {}
+                for variant in order:
+                    if variant == "snakebot":
+                        got[variant] = run_snakebot(robots[n], args.seconds, None)
+                    elif variant == "snakebot+log":
+                        got[variant] = run_snakebot(robots[n], args.seconds, tmp_path)
+                    else:
+                        got[variant] = run_bare(
+                            xml[n], n, args.seconds, nstep_call=variant == "bare_nstep"
+                        )
+                    results[(n, variant)].append(got[variant])
+                ratios[(n, "step")].append(got["snakebot"] / got["bare_step"])
+                ratios[(n, "nstep")].append(got["snakebot"] / got["bare_nstep"])
+                ratios[(n, "log_step")].append(got["snakebot+log"] / got["bare_step"])
+
+    print(f"{args.rounds} rounds, {args.seconds:g} s simulated per block, control {RATE_HZ:g} Hz\n")
+    print(
+        "| servos | "
+        + " | ".join(f"{v} steps/s" for v in variants)
+        + " | snakebot / bare_step | snakebot / bare_nstep | snakebot+log / bare_step |"
+    )
+    print("|---" * (len(variants) + 4) + "|")
+    for n in sizes:
+        cells = [f"{statistics.median(results[(n, v)]):,.0f}" for v in variants]
+        cells += [
+            f"{statistics.median(ratios[(n, k)]):.2f} "
+            f"({min(ratios[(n, k)]):.2f}-{max(ratios[(n, k)]):.2f})"
+            for k in ("step", "nstep", "log_step")
+        ]
+        print(f"| {n} | " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
