@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snakebot.backends.base import JointState
+from snakebot.backends.base import BodyState, JointState
 
 GRAVITY_M_S2 = 9.81
 
@@ -27,16 +27,19 @@ class RunMetrics:
     _squared_error_sum: float = 0.0
     _max_abs_command: float = 0.0
     _positive_work_j: float = 0.0
+    _turn_rad: float = 0.0
+    _last_yaw: float | None = None
     extra: dict[str, object] = field(default_factory=dict)
 
-    def start(self, time_s: float, com: np.ndarray | None) -> None:
+    def start(self, time_s: float, body: BodyState | None) -> None:
         """Mark the beginning of the scored window."""
         self.start_time_s = time_s
-        self.start_com = None if com is None else com.copy()
+        self.start_com = None if body is None else body.com_m.copy()
         self.end_com = self.start_com
+        self._last_yaw = None if body is None else head_yaw_rad(body.head_quat)
 
     def add(
-        self, command: np.ndarray, state: JointState, com: np.ndarray | None, dt_s: float
+        self, command: np.ndarray, state: JointState, body: BodyState | None, dt_s: float
     ) -> None:
         """Account one control cycle."""
         error = command - state.position_rad
@@ -46,8 +49,12 @@ class RunMetrics:
         self._positive_work_j += float(power[power > 0].sum()) * dt_s
         self.cycles += 1
         self.end_time_s = state.time_s
-        if com is not None:
-            self.end_com = com
+        if body is not None:
+            self.end_com = body.com_m
+            yaw = head_yaw_rad(body.head_quat)
+            if self._last_yaw is not None:
+                self._turn_rad += math.remainder(yaw - self._last_yaw, 2 * math.pi)
+            self._last_yaw = yaw
 
     def summary(self, period_s: float | None) -> dict[str, object]:
         """The run's summary, JSON-ready; distance-based keys are None without a COM."""
@@ -73,6 +80,7 @@ class RunMetrics:
                 heading_deg=None,
                 body_lengths_per_cycle=None,
                 cost_of_transport=None,
+                turn_deg=None,
             )
             return out
         dx, dy = (self.end_com[:2] - self.start_com[:2]).tolist()
@@ -81,6 +89,7 @@ class RunMetrics:
             distance_m=distance,
             displacement_m=[dx, dy],
             speed_mps=distance / duration if duration > 0 else 0.0,
+            turn_deg=math.degrees(self._turn_rad),
             heading_deg=math.degrees(math.atan2(dy, dx)) if distance > 0 else 0.0,
             body_lengths_per_cycle=(distance / self.body_length_m / gait_cycles)
             if gait_cycles
@@ -90,3 +99,9 @@ class RunMetrics:
             else None,
         )
         return out
+
+
+def head_yaw_rad(quat: np.ndarray) -> float:
+    """Heading of the head module's forward (+x) axis in the world's horizontal plane."""
+    w, x, y, z = (float(v) for v in quat)
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

@@ -67,7 +67,7 @@ def run_gait(
     safety.reset(state.position_rad)
     gait.reset()
     body = backend.body_state()
-    metrics.start(state.time_s, None if body is None else body.com_m)
+    metrics.start(state.time_s, body)
     cycle = 0
     interrupted = False
 
@@ -81,7 +81,7 @@ def run_gait(
         body = backend.body_state()
         com = None if body is None else body.com_m
         if scored:
-            metrics.add(command, state, com, dt)
+            metrics.add(command, state, body, dt)
         if log is not None:
             log.write(
                 state.time_s,

@@ -17,12 +17,16 @@ from snakebot.backends.twin.model_builder import (
 )
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
-from snakebot.errors import SimulationDivergedError
+from snakebot.errors import ConfigError, SimulationDivergedError
 
-_BAD_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQACC,
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
+# MuJoCo answers instability by resetting the state and counting a warning, not with NaN.
+_BAD_WARNINGS = np.array(
+    [
+        mujoco.mjtWarning.mjWARN_BADQACC,
+        mujoco.mjtWarning.mjWARN_BADQPOS,
+        mujoco.mjtWarning.mjWARN_BADQVEL,
+    ],
+    dtype=int,
 )
 
 
@@ -52,6 +56,7 @@ class TwinBackend(Backend):
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
         self._pacer: Pacer | None = None
+        self._steps_per_period: dict[float, int] = {}
 
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
@@ -94,25 +99,35 @@ class TwinBackend(Backend):
     def _set_torque(self, enabled: bool) -> None:
         self._apply_gains(self._gains, torque=enabled)
 
-    def _apply_gains(self, gains: ServoGains, *, torque: bool) -> None:
+    def _apply_gains(self, gains: ServoGains, *, torque: bool | np.ndarray) -> None:
+        """Write kp/kv and joint damping; ``torque`` is one flag or one per joint."""
+        mask = np.broadcast_to(np.asarray(torque, dtype=bool), (self.joint_count,))
         servo = servo_dynamics(self.robot.servo.physics, gains)
-        kp = servo.stiffness_nm_per_rad if torque else 0.0
-        kv = servo.actuator_kv(self.model.opt.timestep) if torque else 0.0
+        kp = np.where(mask, servo.stiffness_nm_per_rad, 0.0)
+        kv = np.where(mask, servo.actuator_kv(self.model.opt.timestep), 0.0)
         self.model.actuator_gainprm[:, 0] = kp
         self.model.actuator_biasprm[:, 1] = -kp
         self.model.actuator_biasprm[:, 2] = -kv
         # With torque off the H-bridge is open: no back-EMF braking, only gear friction remains.
-        damping = (
-            servo.joint_damping_nms if torque else self.robot.servo.physics.viscous_damping_nms
-        )
-        self.model.dof_damping[self._dof_index] = damping
+        limp = self.robot.servo.physics.viscous_damping_nms
+        self.model.dof_damping[self._dof_index] = np.where(mask, servo.joint_damping_nms, limp)
+
+    def set_joint_torque(self, enabled: np.ndarray) -> None:
+        """Torque on or off per joint (shape (N,) of bool), e.g. from emulated Torque Enable."""
+        self._require_connected()
+        self._apply_gains(self._gains, torque=enabled)
+        self.torque_enabled = bool(np.all(enabled))
+
+    def send_command_unchecked(self, position_rad: np.ndarray) -> None:
+        """Set goals (rad, (N,)) without the shape check: the emulator bridge's hot path."""
+        self.data.ctrl[:] = position_rad
 
     def _advance(self, dt_s: float) -> None:
-        steps = self.steps_for(dt_s)
-        warnings_before = sum(self.data.warning[w].number for w in _BAD_WARNINGS)
+        steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
+        warnings = self.data.warning.number
+        before = int(warnings[_BAD_WARNINGS].sum())
         mujoco.mj_step(self.model, self.data, steps)
-        warnings_after = sum(self.data.warning[w].number for w in _BAD_WARNINGS)
-        if warnings_after != warnings_before or not np.isfinite(self.data.qacc).all():
+        if int(warnings[_BAD_WARNINGS].sum()) != before:
             raise SimulationDivergedError(
                 float(self.data.time), "MuJoCo reported bad accelerations (state was reset)"
             )
@@ -124,10 +139,13 @@ class TwinBackend(Backend):
         timestep = float(self.model.opt.timestep)
         steps = round(dt_s / timestep)
         if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
-            raise ValueError(
-                f"control period {dt_s} s is not a whole number of {timestep} s physics steps; "
-                f"pick a rate that divides {1 / timestep:g} Hz"
+            raise ConfigError(
+                "--rate",
+                "",
+                f"control period {dt_s:g} s is not a whole number of {timestep:g} s physics "
+                f"steps; pick a rate that divides {1 / timestep:g} Hz (e.g. 50, 100, 250)",
             )
+        self._steps_per_period[dt_s] = steps
         return steps
 
     def body_state(self) -> BodyState:

@@ -1,0 +1,56 @@
+"""A byte-level Dynamixel Protocol 2.0 bus emulator that serves the unmodified ROBOTIS SDK.
+
+Core (no transport): `VirtualServo` (control table + firmware rules + motion model) and
+`EmulatedChain` (servos on one bus, bytes in, timed bytes out, fault injection). Ways in:
+`dxlemu://<name>` URLs for pyserial (`register_chain`, and `snakebot.emulation.port.
+EmulatedPortHandler` for the SDK) and a pseudo-terminal (`snakebot.emulation.pty_server.PtyServer`).
+Those two import the SDK and termios respectively, so they are not imported here.
+"""
+
+from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
+from snakebot.emulation.errors import EmulationError
+from snakebot.emulation.faults import Faults
+from snakebot.emulation.firmware import ZERO_TICKS, HardwareError
+from snakebot.emulation.motion import (
+    ChainPhysics,
+    ExternalMotion,
+    MotionModel,
+    MotorState,
+    OperatingMode,
+    ProfileMotion,
+    ServoCommand,
+)
+from snakebot.emulation.registry import (
+    chain_url,
+    install_url_handler,
+    lookup_chain,
+    register_chain,
+    registered,
+    unregister_chain,
+)
+from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.wire import BusReply
+
+__all__ = [
+    "ZERO_TICKS",
+    "BusReply",
+    "ChainPhysics",
+    "EmulatedChain",
+    "EmulationError",
+    "ExternalMotion",
+    "Faults",
+    "HardwareError",
+    "MotionModel",
+    "MotorState",
+    "OperatingMode",
+    "ProfileMotion",
+    "ServoCommand",
+    "VirtualServo",
+    "chain_url",
+    "install_url_handler",
+    "lookup_chain",
+    "make_chain_for_ids",
+    "register_chain",
+    "registered",
+    "unregister_chain",
+]

@@ -1,0 +1,206 @@
+"""`EmulatedChain`: servos on one half-duplex bus; instruction bytes in, timed status bytes out.
+
+Transport-free: a transport feeds what the host wrote (`receive`) and delivers each `BusReply` at
+its time; `advance` lets virtual time pass for the servos' motion and watchdogs. Faults are set
+per servo (or per ID, for every servo carrying it) through the methods below.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterable
+
+from snakebot.emulation.errors import EmulationError
+from snakebot.emulation.faults import FaultBook, Faults
+from snakebot.emulation.firmware import HardwareError
+from snakebot.emulation.instructions import Slot, execute
+from snakebot.emulation.motion import ChainPhysics, MotionModel
+from snakebot.emulation.protocol import ParserStats, StreamParser
+from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
+from snakebot.servo_tables import ServoTable, table_for_model
+
+Target = int | VirtualServo
+
+
+class EmulatedChain:
+    """Several `VirtualServo`s sharing one bus at line rate `baud` (bit/s).
+
+    A servo whose Baud Rate register gives another rate, or whose Protocol Type is 1.0, hears
+    nothing. Servos may share an ID: all of them execute what is sent to it and their replies
+    collide on the wire. `physics`, when given, moves all servos at once (give them
+    `ExternalMotion`). Thread-safe: every public method holds `lock`; hold it yourself to touch
+    servos while a transport thread (PtyServer) serves the chain.
+    """
+
+    def __init__(
+        self,
+        servos: Iterable[VirtualServo] = (),
+        *,
+        baud: int = 57600,
+        seed: int = 0,
+        stale_after_s: float = 0.02,
+        physics: ChainPhysics | None = None,
+    ) -> None:
+        self._servos = list(servos)
+        self.physics = physics
+        self.baud = baud
+        self.now_s = 0.0
+        self.faults = FaultBook(seed)
+        self.lock = threading.RLock()
+        self._parser = StreamParser(stale_after_s=stale_after_s)
+
+    # ------------------------------------------------------------------ servos
+    @property
+    def servos(self) -> tuple[VirtualServo, ...]:
+        """Every servo on the bus, in the order they were added."""
+        return tuple(self._servos)
+
+    def add(self, servo: VirtualServo) -> VirtualServo:
+        """Connect a servo to the bus and return it."""
+        with self.lock:
+            self._servos.append(servo)
+        return servo
+
+    def remove(self, servo: VirtualServo) -> None:
+        """Disconnect a servo (and forget its faults)."""
+        with self.lock:
+            self._servos.remove(servo)
+            self.faults.clear(servo)
+
+    def servos_with_id(self, servo_id: int) -> list[VirtualServo]:
+        """Every servo whose ID register holds `servo_id`."""
+        return [s for s in self._servos if s.servo_id == servo_id]
+
+    def servo(self, servo_id: int) -> VirtualServo:
+        """The (first) servo with `servo_id`; EmulationError naming the IDs present if none."""
+        found = self.servos_with_id(servo_id)
+        if not found:
+            ids = sorted({s.servo_id for s in self._servos})
+            raise EmulationError(f"no emulated servo with ID {servo_id}; IDs on the bus: {ids}")
+        return found[0]
+
+    @property
+    def parser_stats(self) -> ParserStats:
+        """What the bus receiver dropped so far (garbage, bad CRCs, stale partial packets)."""
+        return self._parser.stats
+
+    # ------------------------------------------------------------------ time and traffic
+    def advance(self, dt_s: float) -> None:
+        """Let `dt_s` seconds of bus time pass: `physics` (if any), then every servo's own step."""
+        if dt_s <= 0.0:
+            return
+        with self.lock:
+            self.now_s += dt_s
+            if self.physics is not None:
+                self.physics.advance(self._servos, dt_s)
+            for servo in self._servos:
+                servo.step(dt_s)
+
+    def byte_time_s(self) -> float:
+        """Seconds per byte at the line rate."""
+        return byte_time_s(self.baud)
+
+    def receive(self, data: bytes | bytearray) -> list[BusReply]:
+        """Take bytes the host sent (ending now) and return the replies, timed from now.
+
+        Complete packets are executed in order; each later packet's replies follow the earlier
+        ones. Garbage and damaged packets are dropped silently, as a servo's receiver does.
+        """
+        with self.lock:
+            replies: list[BusReply] = []
+            offset = 0.0
+            for packet in self._parser.feed(data, self.now_s):
+                hearing = [
+                    s
+                    for s in self._servos
+                    if s.baud == self.baud and s.speaks_protocol_2 and self.faults.hears(s)
+                ]
+                timed = self._timed(execute(packet, hearing), offset)
+                replies += timed
+                offset = max([offset, *(r.end_s(self.baud) for r in timed)])
+            return merge_collisions(replies, self.baud)
+
+    def _timed(self, slots: list[Slot], offset: float) -> list[BusReply]:
+        """Place each slot after the previous one; apply drop, corruption and delay faults."""
+        cursor, per_byte = offset, self.byte_time_s()
+        out: list[BusReply] = []
+        for slot in slots:
+            slot_end = cursor
+            for servo, data in slot.replies:
+                start = cursor + servo.processing_time_s + self.faults.delay_s(servo)
+                start += 0.0 if slot.segment else servo.return_delay_s
+                slot_end = max(slot_end, start + len(data) * per_byte)
+                delivered = self.faults.filter_reply(servo, data)
+                if delivered is not None:
+                    out.append(BusReply(start, delivered))
+            cursor = slot_end
+        return out
+
+    # ------------------------------------------------------------------ fault injection
+    def _targets(self, target: Target) -> list[VirtualServo]:
+        if isinstance(target, VirtualServo):
+            return [target]
+        found = self.servos_with_id(target)
+        if not found:
+            self.servo(target)
+        return found
+
+    def silence(self, target: Target, silent: bool = True) -> None:
+        """Take servos off the bus (they hear and answer nothing), or put them back."""
+        with self.lock:
+            for servo in self._targets(target):
+                self.faults.update(servo, silent=silent)
+
+    def drop_replies(self, target: Target, *, next_n: int = 0, probability: float = 0.0) -> None:
+        """Lose the next `next_n` replies, then each with `probability`; instructions still run."""
+        with self.lock:
+            for servo in self._targets(target):
+                self.faults.update(servo, drop_next=next_n, drop_probability=probability)
+
+    def corrupt_replies(self, target: Target, *, next_n: int = 0, probability: float = 0.0) -> None:
+        """Flip one byte after the header in the next `next_n` replies, then with `probability`."""
+        with self.lock:
+            for servo in self._targets(target):
+                self.faults.update(servo, corrupt_next=next_n, corrupt_probability=probability)
+
+    def delay_replies(self, target: Target, delay_s: float) -> None:
+        """Answer `delay_s` seconds late (beyond the SDK's ~34 ms timeout the reply is missed)."""
+        with self.lock:
+            for servo in self._targets(target):
+                self.faults.update(servo, delay_s=delay_s)
+
+    def latch_hardware_error(self, target: Target, bits: int = HardwareError.OVERLOAD) -> None:
+        """Latch Hardware Error Status bits, as the firmware does on overload, overheating, ..."""
+        with self.lock:
+            for servo in self._targets(target):
+                servo.latch_error(bits)
+
+    def faults_of(self, servo: VirtualServo) -> Faults:
+        """The fault settings of one servo."""
+        return self.faults.get(servo)
+
+    def clear_faults(self, target: Target | None = None) -> None:
+        """Remove injected bus faults (not latched hardware errors: those need a reboot)."""
+        with self.lock:
+            servos = self._servos if target is None else self._targets(target)
+            for servo in servos:
+                self.faults.clear(servo)
+
+
+def make_chain_for_ids(
+    model: str | int | ServoTable,
+    ids: Iterable[int],
+    baud: int = 57600,
+    *,
+    motion: MotionModel | None = None,
+    seed: int = 0,
+) -> EmulatedChain:
+    """A chain of identical servos with the given IDs, all configured for and listening at `baud`.
+
+    `motion` is shared by every servo when given (an external physics bridge); otherwise each gets
+    its own kinematic `ProfileMotion`.
+    """
+    table = model if isinstance(model, ServoTable) else table_for_model(model)
+    servos = [VirtualServo(table, servo_id, baud=baud, motion=motion) for servo_id in ids]
+    return EmulatedChain(servos, baud=baud, seed=seed)

@@ -1,0 +1,116 @@
+"""Hardware in the loop without hardware: emulated servos whose shafts are the twin's joints.
+
+Goal Position and Torque Enable, read from each virtual servo's control table, drive the MuJoCo
+twin of the same robot; Present Position/Velocity/Load come back from the twin. Time is the
+chain's: a pty server advances the chain by wall-clock time, so the twin runs in real time.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from snakebot.backends.twin.backend import TwinBackend
+from snakebot.config.schema import RobotConfig
+from snakebot.control.metrics import RunMetrics
+from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
+from snakebot.emulation.motion import MotorState
+from snakebot.emulation.servo import VirtualServo
+
+
+class TwinMotion:
+    """A `MotionModel` shared by every servo of the chain, backed by one `TwinBackend`.
+
+    The first servo's step of each chain advance applies all goals, steps the twin by the elapsed
+    time (whole physics steps; the remainder carries over) and writes every servo's state.
+    """
+
+    def __init__(self, robot: RobotConfig, twin: TwinBackend) -> None:
+        self.robot = robot
+        self.twin = twin
+        self.metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+        self._index = {joint.servo_id: i for i, joint in enumerate(robot.joints)}
+        self._direction = np.array([j.direction for j in robot.joints], dtype=float)
+        self._zero = np.array([j.zero_offset_rad for j in robot.joints])
+        self._goal = np.zeros(robot.joint_count)
+        self._torque = np.zeros(robot.joint_count, dtype=bool)
+        self._pending_s = 0.0
+        self._leader: VirtualServo | None = None
+        self._servos: dict[int, VirtualServo] = {}
+        self.steps = 0
+
+    def attach(self, chain: EmulatedChain) -> None:
+        """Remember the chain's servos (by joint) and start the scored window."""
+        self._servos = {
+            self._index[s.servo_id]: s for s in chain.servos if s.servo_id in self._index
+        }
+        self._leader = chain.servos[0]
+        self.twin.set_torque(False)
+        self.metrics.start(self.twin.read_state().time_s, self.twin.body_state())
+        self._publish()
+
+    def step(self, servo: VirtualServo, dt_s: float) -> None:
+        """Advance the twin once per chain advance (on the first servo's step)."""
+        if servo is not self._leader:
+            return
+        self._read_goals()
+        self._pending_s += dt_s
+        timestep = float(self.twin.model.opt.timestep)
+        steps = math.floor(self._pending_s / timestep + 1e-9)
+        if steps < 1:
+            return
+        self._pending_s -= steps * timestep
+        self.twin.advance(steps * timestep)
+        self.steps += 1
+        state = self.twin.read_state()
+        self.metrics.add(self._goal, state, self.twin.body_state(), steps * timestep)
+        self._publish()
+
+    def _read_goals(self) -> None:
+        for index, servo in self._servos.items():
+            command = servo.command()
+            # The servo's frame: motor = direction * (joint + zero offset); see DynamixelBackend.
+            self._goal[index] = (
+                self._direction[index] * command.goal_position_rad - self._zero[index]
+            )
+            self._torque[index] = command.torque_enabled
+        self.twin.set_joint_torque(self._torque)
+        goal = np.clip(self._goal, self.robot.lower_rad, self.robot.upper_rad)
+        self.twin.send_command_unchecked(goal)
+
+    def _publish(self) -> None:
+        state = self.twin.read_state()
+        stall = self.robot.servo.physics.stall_torque_nm
+        for index, servo in self._servos.items():
+            direction = self._direction[index]
+            old = servo.state
+            effort = float(np.clip(direction * state.effort_nm[index] / stall, -1.0, 1.0))
+            servo.state = MotorState(
+                position_rad=float(direction * (state.position_rad[index] + self._zero[index])),
+                velocity_rad_s=float(direction * state.velocity_rad_s[index]),
+                effort=effort,
+                current_a=effort * servo.table.specs.stall_current_a,
+                input_voltage_v=old.input_voltage_v,
+                temperature_c=old.temperature_c,
+            )
+
+    def summary(self) -> dict[str, object]:
+        """The twin's run summary, with the same keys as ``snakebot run --json``."""
+        out = self.metrics.summary(None)
+        elapsed = float(out["duration_s"])  # type: ignore[arg-type]
+        out["rate_hz"] = None
+        out["achieved_rate_hz"] = self.steps / elapsed if elapsed > 0 else 0.0
+        out["overruns"] = 0
+        out["interrupted"] = False
+        return out
+
+
+def make_twin_chain(robot: RobotConfig, baud: int) -> tuple[EmulatedChain, TwinMotion]:
+    """The robot's servo chain at ``baud``, every servo backed by one connected twin."""
+    twin = TwinBackend(robot)
+    twin.connect()
+    motion = TwinMotion(robot, twin)
+    chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud, motion=motion)
+    motion.attach(chain)
+    return chain, motion

@@ -1,0 +1,181 @@
+"""Serve an `EmulatedChain` on a POSIX pseudo-terminal, so any program can open it as a serial port.
+
+The chain follows wall-clock time and replies are written after their Return Delay Time and wire
+time, in real time. The line rate follows the baud the client sets on the port (when the kernel
+reports a standard rate), so a client at the wrong baud gets silence, as on a real bus.
+"""
+
+from __future__ import annotations
+
+import heapq
+import os
+import select
+import termios
+import threading
+import time
+import tty
+from collections.abc import Callable
+from types import TracebackType
+
+from snakebot.emulation.chain import EmulatedChain
+from snakebot.emulation.errors import EmulationError
+
+Trace = Callable[[str, bytes], None]
+_RATES = {
+    getattr(termios, f"B{rate}"): rate
+    for rate in (
+        9600,
+        19200,
+        38400,
+        57600,
+        115200,
+        230400,
+        460800,
+        500000,
+        576000,
+        921600,
+        1000000,
+        1152000,
+        2000000,
+        2500000,
+        3000000,
+        3500000,
+        4000000,
+    )
+    if hasattr(termios, f"B{rate}")
+}
+
+
+class PtyServer:
+    """A pseudo-terminal whose far end is `chain`; open `device_path` like a USB serial adapter.
+
+    `serve_forever()` blocks; `start()` serves on a daemon thread; `stop()` ends either and closes
+    the terminal. `trace(direction, data)` sees "rx" (from the host) and "tx" (to the host) bytes.
+    """
+
+    def __init__(
+        self,
+        chain: EmulatedChain,
+        *,
+        follow_port_baud: bool = True,
+        tick_s: float = 0.002,
+        trace: Trace | None = None,
+    ) -> None:
+        if os.name != "posix":
+            raise EmulationError("pseudo-terminals need a POSIX system; use dxlemu:// instead")
+        self.chain = chain
+        self.follow_port_baud = follow_port_baud
+        self.tick_s = tick_s
+        self.trace = trace
+        self._master, self._slave = os.openpty()
+        tty.setraw(self._slave)
+        self.device_path = os.ttyname(self._slave)
+        self._wake_read, self._wake_write = os.pipe()
+        self._stopping = threading.Event()
+        self._done = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._serving_thread: threading.Thread | None = None
+        self._close_when_done = False
+        self._outbox: list[tuple[float, int, bytes]] = []
+        self._sequence = 0
+        self._closed = False
+
+    def __enter__(self) -> PtyServer:
+        return self.start()
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.stop()
+
+    def start(self) -> PtyServer:
+        """Serve on a background thread and return self."""
+        if self._closed:
+            raise EmulationError("this PtyServer was stopped; make a new one")
+        if self._thread is None:
+            self._thread = threading.Thread(
+                target=self.serve_forever, name=f"pty-server {self.device_path}", daemon=True
+            )
+            self._serving_thread = self._thread
+            self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop serving and close the terminal (idempotent; safe from a signal handler)."""
+        if self._closed or self._stopping.is_set():
+            return
+        self._stopping.set()
+        os.write(self._wake_write, b"x")
+        if self._serving_thread is threading.current_thread():
+            self._close_when_done = True  # called from inside serve_forever: it closes on exit
+            return
+        if self._serving_thread is not None:
+            self._done.wait(timeout=5.0)
+        self._close()
+
+    def serve_forever(self) -> None:
+        """Answer the host until `stop()` is called."""
+        if self._closed:
+            raise EmulationError("this PtyServer was stopped; make a new one")
+        if self._serving_thread is None:
+            self._serving_thread = threading.current_thread()
+        last = time.monotonic()
+        try:
+            while not self._stopping.is_set():
+                now = time.monotonic()
+                self.chain.advance(now - last)
+                last = now
+                self._flush_due(now)
+                wait = self.tick_s
+                if self._outbox:
+                    wait = max(0.0, min(wait, self._outbox[0][0] - now))
+                readable, _, _ = select.select([self._master, self._wake_read], [], [], wait)
+                if self._master in readable:
+                    self._on_bytes()
+        finally:
+            self._done.set()
+            if self._close_when_done:
+                self._close()
+
+    def _close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            for fd in (self._master, self._slave, self._wake_read, self._wake_write):
+                os.close(fd)
+
+    def _line_baud(self) -> int | None:
+        try:
+            speed = termios.tcgetattr(self._slave)[5]
+        except termios.error:
+            return None
+        return _RATES.get(speed)
+
+    def _on_bytes(self) -> None:
+        try:
+            data = os.read(self._master, 4096)
+        except OSError:
+            return
+        arrived = time.monotonic()
+        if self.trace is not None:
+            self.trace("rx", data)
+        baud = self._line_baud() if self.follow_port_baud else None
+        with self.chain.lock:
+            if baud is not None:
+                self.chain.baud = baud
+            for reply in self.chain.receive(data):
+                self._sequence += 1
+                due = arrived + reply.end_s(self.chain.baud)
+                heapq.heappush(self._outbox, (due, self._sequence, reply.data))
+
+    def _flush_due(self, now: float) -> None:
+        while self._outbox and self._outbox[0][0] <= now:
+            data = heapq.heappop(self._outbox)[2]
+            if self.trace is not None:
+                self.trace("tx", data)
+            try:
+                os.write(self._master, data)
+            except OSError:
+                return

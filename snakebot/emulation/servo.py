@@ -1,0 +1,276 @@
+"""`VirtualServo`: an X-series servo's control table with the firmware's rules and a motion model.
+
+Register semantics follow the e-Manual control-table pages (reference/dynamixel.md §2.2-2.4): EEPROM
+locked while torque is on, read-only items, ranges and limits, Drive Mode reverse, Homing Offset,
+Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import replace
+
+from snakebot.emulation import firmware
+from snakebot.emulation.errors import EmulationError
+from snakebot.emulation.firmware import HardwareError
+from snakebot.emulation.memory import ControlTableMemory
+from snakebot.emulation.motion import MotionModel, MotorState, ProfileMotion, ServoCommand
+from snakebot.emulation.protocol import ALERT_BIT, MAX_ID, StatusError
+from snakebot.servo_tables import ServoTable, table_for_model
+
+CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
+OVERLOAD_AFTER_S = 1.0
+_serial_numbers = itertools.count(1)
+
+
+class VirtualServo:
+    """One emulated servo: control-table memory, firmware rules and an SI motor state.
+
+    `baud` is the servo's configured rate in bit/s (it must be one of the model's Baud Rate
+    values). `processing_time_s` is added to the Return Delay Time before replying; by default it
+    is 20-36 µs and differs between units, so servos sharing an ID garble each other's replies as
+    real ones do (set it equal on two servos for perfectly overlapping replies).
+    """
+
+    def __init__(
+        self,
+        model: str | int | ServoTable = "XL430-W250",
+        servo_id: int = 1,
+        *,
+        baud: int = 57600,
+        motion: MotionModel | None = None,
+        processing_time_s: float | None = None,
+        temperature_c: float = 30.0,
+    ) -> None:
+        self.table = model if isinstance(model, ServoTable) else table_for_model(model)
+        if not 0 <= servo_id <= MAX_ID:
+            raise EmulationError(f"servo ID {servo_id} is outside 0..{MAX_ID}")
+        self.memory = ControlTableMemory(self.table)
+        self.motion: MotionModel = motion if motion is not None else ProfileMotion()
+        self.serial_number = next(_serial_numbers)
+        if processing_time_s is None:
+            processing_time_s = 20e-6 + 4e-6 * (self.serial_number % 5)
+        self.processing_time_s = processing_time_s
+        self.state = MotorState(
+            input_voltage_v=self.table.specs.nominal_voltage_v, temperature_c=temperature_c
+        )
+        self.uptime_s = 0.0
+        self._since_packet_s = 0.0
+        self._overload_s = 0.0
+        self._watchdog_tripped = False
+        self._registered: bytes | None = None
+        self._registered_address = 0
+        self._command: tuple[int, ServoCommand] | None = None
+        self.memory.load_defaults()
+        self.memory.set("id", servo_id)
+        self.memory.set("baud_rate", self.table.baud_index(baud))
+        self._boot()
+
+    # ----------------------------------------------------------------- facts the bus needs
+    @property
+    def servo_id(self) -> int:
+        """ID(7)."""
+        return self.memory.get("id")
+
+    @property
+    def baud(self) -> int:
+        """The rate the servo listens at, in bit/s, from Baud Rate(8)."""
+        return self.table.baud_rates.get(self.memory.get("baud_rate"), 0)
+
+    @property
+    def return_delay_s(self) -> float:
+        """Return Delay Time(9) in seconds (2 µs per unit)."""
+        return self.memory.get("return_delay_time") * 2e-6
+
+    @property
+    def status_return_level(self) -> int:
+        """Status Return Level(68): 0 ping only, 1 ping and reads, 2 everything."""
+        return self.memory.get("status_return_level")
+
+    @property
+    def secondary_id(self) -> int | None:
+        """Secondary(Shadow) ID(12), or None when disabled (253 and up)."""
+        value = self.memory.get("secondary_shadow_id")
+        return value if value < 253 else None
+
+    @property
+    def speaks_protocol_2(self) -> bool:
+        """Whether Protocol Type(13) selects Protocol 2.0 (1 switches the servo to 1.0)."""
+        return self.memory.get("protocol_type") != 1
+
+    @property
+    def torque_enabled(self) -> bool:
+        """Torque Enable(64)."""
+        return self.memory.get("torque_enable") == 1
+
+    @property
+    def hardware_error(self) -> HardwareError:
+        """Latched Hardware Error Status(70) bits."""
+        return HardwareError(self.memory.get("hardware_error_status"))
+
+    @property
+    def watchdog_tripped(self) -> bool:
+        """Whether the Bus Watchdog has fired and not been cleared by writing 0."""
+        return self._watchdog_tripped
+
+    def peek(self, key: str) -> int:
+        """Read item `key` as the bus would see it now (signed where the item is)."""
+        firmware.refresh_present(self)
+        return self.memory.get(key)
+
+    def poke(self, key: str, value: int) -> None:
+        """Set item `key` directly, bypassing every rule (test setup and fault injection)."""
+        self.memory.set(key, value)
+
+    def status_error(self, error: int = 0) -> int:
+        """A status packet's error byte: `error`, plus the Alert bit while a HW error is latched."""
+        return error | (ALERT_BIT if self.memory.get("hardware_error_status") else 0)
+
+    def ping_params(self) -> bytes:
+        """Ping reply parameters: model number (LE) and firmware version."""
+        return self.table.model_number.to_bytes(2, "little") + bytes(
+            [self.memory.get("firmware_version")]
+        )
+
+    # ----------------------------------------------------------------- instructions
+    def note_packet(self) -> None:
+        """Record that an instruction packet for this servo arrived (feeds the Bus Watchdog)."""
+        self._since_packet_s = 0.0
+
+    def read(self, address: int, length: int) -> tuple[int, bytes]:
+        """Serve a READ: (error number, data)."""
+        firmware.refresh_present(self)
+        return self.memory.read(address, length)
+
+    def write(self, address: int, data: bytes) -> int:
+        """Serve a WRITE; returns the error number (0 on success) and changes nothing on error."""
+        plan = self.memory.plan_write(address, data)
+        error = plan.error or firmware.check_write(self, plan)
+        if error:
+            return error
+        self.memory.store(plan)
+        self._after_write(plan.values)
+        return 0
+
+    def reg_write(self, address: int, data: bytes) -> int:
+        """Serve a REG WRITE: check now, apply on ACTION; sets Registered Instruction(69)."""
+        plan = self.memory.plan_write(address, data)
+        error = plan.error or firmware.check_write(self, plan)
+        if not error:
+            self._registered, self._registered_address = bytes(data), address
+            self.memory.set("registered_instruction", 1)
+        return error
+
+    def action(self) -> int:
+        """Serve an ACTION: apply the registered write (Instruction Error if there is none)."""
+        if self._registered is None:
+            return StatusError.INSTRUCTION
+        data, self._registered = self._registered, None
+        self.memory.set("registered_instruction", 0)
+        return self.write(self._registered_address, data)
+
+    def reboot(self) -> None:
+        """REBOOT: RAM back to defaults, torque off, errors cleared, multi-turn count lost."""
+        self._boot()
+
+    def factory_reset(self, option: int) -> int:
+        """FACTORY RESET: 0xFF all, 0x01 all but ID, 0x02 all but ID and baud; then reboot."""
+        keep = {0xFF: (), 0x01: ("id",), 0x02: ("id", "baud_rate")}.get(option)
+        if keep is None:
+            return StatusError.DATA_RANGE
+        self.memory.load_defaults(keep)
+        self._registered = None
+        self._boot()
+        return 0
+
+    def clear(self, params: bytes) -> int:
+        """CLEAR multi-turn: fold Present Position into one turn (Result Fail while moving)."""
+        if params != CLEAR_MULTI_TURN:
+            return StatusError.DATA_RANGE
+        if self.peek("moving"):
+            return StatusError.RESULT_FAIL
+        self.state = replace(self.state, position_rad=firmware.wrap_turn(self.state.position_rad))
+        return 0
+
+    def latch_error(self, bits: int) -> None:
+        """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off."""
+        latched = self.memory.get("hardware_error_status") | bits
+        self.memory.set("hardware_error_status", latched)
+        if bits & self.memory.get("shutdown"):
+            self.memory.set("torque_enable", 0)
+
+    # ----------------------------------------------------------------- time
+    def step(self, dt_s: float) -> None:
+        """Let `dt_s` seconds pass: motion, Bus Watchdog and fault detection."""
+        if dt_s <= 0.0:
+            return
+        self.uptime_s += dt_s
+        # The watchdog only runs while torque is on (e-Manual bus watchdog).
+        self._since_packet_s = self._since_packet_s + dt_s if self.torque_enabled else 0.0
+        self.motion.step(self, dt_s)
+        watchdog = self.memory.get("bus_watchdog")
+        if (
+            self.torque_enabled
+            and not self._watchdog_tripped
+            and watchdog > 0
+            and self._since_packet_s > watchdog * 0.02
+        ):
+            self._trip_watchdog()
+        self._detect_faults(dt_s)
+
+    def command(self) -> ServoCommand:
+        """The control table's current request in SI, in the motor's frame (see motion.py)."""
+        if self._command is not None and self._command[0] == self.memory.version:
+            return self._command[1]
+        command = firmware.command(self)
+        self._command = (self.memory.version, command)
+        return command
+
+    # ----------------------------------------------------------------- internals
+    def _boot(self) -> None:
+        eeprom_end = self.table.specs.eeprom_end
+        eeprom = [r.key for r in self.memory.items.values() if r.address < eeprom_end]
+        self.memory.load_defaults(keep=eeprom)
+        self.memory.set("model_number", self.table.model_number)
+        self.memory.set("firmware_version", self.table.specs.firmware_version)
+        self.state = replace(
+            self.state, position_rad=firmware.wrap_turn(self.state.position_rad), velocity_rad_s=0.0
+        )
+        self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
+        firmware.reset_goal_limits(self.memory)
+        self.uptime_s = 0.0
+        self._since_packet_s = 0.0
+        self._overload_s = 0.0
+        self._watchdog_tripped = False
+        self._registered = None
+        if self.memory.has("startup_configuration"):
+            self.memory.set("torque_enable", self.memory.get("startup_configuration") & 0x01)
+        firmware.refresh_present(self)
+
+    def _after_write(self, values: dict[str, int]) -> None:
+        firmware.apply_side_effects(self, values)
+        if values.get("bus_watchdog") == 0:
+            self._watchdog_tripped = False
+        if "bus_watchdog" in values:
+            self._since_packet_s = 0.0
+
+    def _trip_watchdog(self) -> None:
+        """Bus Watchdog fired: stop where it is; reads -1 until 0 is written (e-Manual §2.4)."""
+        self._watchdog_tripped = True
+        self.memory.set("bus_watchdog", -1)
+        self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
+        self.memory.set("goal_velocity", 0)
+        self.state = replace(self.state, velocity_rad_s=0.0)
+
+    def _detect_faults(self, dt_s: float) -> None:
+        get, state, found = self.memory.get, self.state, 0
+        volts = state.input_voltage_v * 10.0
+        if not get("min_voltage_limit") <= volts <= get("max_voltage_limit"):
+            found |= HardwareError.INPUT_VOLTAGE
+        if state.temperature_c > get("temperature_limit"):
+            found |= HardwareError.OVERHEATING
+        self._overload_s = self._overload_s + dt_s if abs(state.effort) >= 1.0 else 0.0
+        if self._overload_s > OVERLOAD_AFTER_S:
+            found |= HardwareError.OVERLOAD
+        if found & ~get("hardware_error_status"):
+            self.latch_error(found)

@@ -1,0 +1,178 @@
+"""Control-table facts as data: one `Register` per item, one `ServoTable` per servo model."""
+
+from __future__ import annotations
+
+import difflib
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from snakebot.errors import SnakebotError
+
+ACCESS_MODES = ("R", "RW")
+
+
+class UnknownRegisterError(SnakebotError, KeyError):
+    """A register name or key is not in a model's control table; the message lists close names."""
+
+    def __init__(self, model: str, key: str, candidates: list[str]) -> None:
+        self.model = model
+        self.key = key
+        close = difflib.get_close_matches(key, candidates, n=4, cutoff=0.5)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        self.message = f"{model} has no register {key!r}{hint}"
+        super().__init__(self.message)
+
+    def __str__(self) -> str:
+        return self.message
+
+
+class UnknownModelError(SnakebotError, LookupError):
+    """A servo model name or model number has no control-table data."""
+
+
+class RegisterValueError(SnakebotError, ValueError):
+    """A value does not fit the register size it is encoded into."""
+
+
+def register_key(name: str) -> str:
+    """Return the snake_case key of an SDK item name ("Goal Position" -> "goal_position")."""
+    return re.sub(r"[^0-9a-z]+", "_", name.lower()).strip("_")
+
+
+def decode_signed(raw: int, size: int) -> int:
+    """Interpret the unsigned `raw` value of `size` bytes as two's complement."""
+    bits = 8 * size
+    raw &= (1 << bits) - 1
+    return raw - (1 << bits) if raw >> (bits - 1) else raw
+
+
+def encode_value(value: int, size: int) -> bytes:
+    """Encode `value` little-endian in `size` bytes, negatives as two's complement.
+
+    Raises RegisterValueError when the value fits neither the signed nor the unsigned range.
+    """
+    bits = 8 * size
+    if not -(1 << (bits - 1)) <= value < (1 << bits):
+        raise RegisterValueError(f"{value} does not fit in {size} byte(s)")
+    return (value & ((1 << bits) - 1)).to_bytes(size, "little")
+
+
+@dataclass(frozen=True)
+class Register:
+    """One control-table item: where it lives, who may write it, its range and its SI unit."""
+
+    name: str
+    key: str
+    address: int
+    size: int
+    access: str
+    eeprom: bool
+    minimum: int
+    maximum: int
+    default: int
+    unit: str
+    scale: float
+    signed: bool
+
+    def decode(self, data: bytes | bytearray) -> int:
+        """Decode the item's little-endian bytes into its integer value (signed where it is)."""
+        raw = int.from_bytes(bytes(data[: self.size]), "little")
+        return decode_signed(raw, self.size) if self.signed else raw
+
+    def encode(self, value: int) -> bytes:
+        """Encode an integer value into the item's little-endian bytes."""
+        return encode_value(value, self.size)
+
+    def to_si(self, value: int) -> float:
+        """Convert a register value into SI (`unit`), e.g. ticks to radians."""
+        return value * self.scale
+
+    def from_si(self, value: float) -> int:
+        """Convert an SI value into the nearest register value (not clamped to the range)."""
+        return round(value / self.scale)
+
+    @property
+    def writable(self) -> bool:
+        """Whether the item accepts writes at all (EEPROM items only with torque off)."""
+        return self.access == "RW"
+
+
+@dataclass(frozen=True)
+class ServoSpecs:
+    """Model facts beyond the register list that a driver or an emulator needs.
+
+    `baud_rates` maps the Baud Rate register value to bit/s; `indirect_banks` holds
+    (first Indirect Address, first Indirect Data, count) per bank.
+    """
+
+    firmware_version: int = 46
+    eeprom_end: int = 64
+    resolution: int = 4096
+    operating_modes: tuple[int, ...] = (3,)
+    baud_rates: Mapping[int, int] = field(default_factory=lambda: MappingProxyType({}))
+    indirect_banks: tuple[tuple[int, int, int], ...] = ()
+    nominal_voltage_v: float = 12.0
+    no_load_speed_rad_s: float = 5.0
+    stall_torque_nm: float = 1.0
+    stall_current_a: float = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class ServoTable:
+    """The control table of one servo model; look items up by key, SDK name or address.
+
+    Compared and hashed by identity (`table_for_model` returns one instance per model), so a
+    table can key a dict or a cache.
+    """
+
+    model: str
+    model_number: int
+    protocol: float
+    registers: Mapping[str, Register]
+    specs: ServoSpecs = field(default_factory=ServoSpecs)
+    _by_address: Mapping[int, Register] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        by_address: dict[int, Register] = {}
+        for register in self.registers.values():
+            by_address.setdefault(register.address, register)
+        object.__setattr__(self, "registers", MappingProxyType(dict(self.registers)))
+        object.__setattr__(self, "_by_address", MappingProxyType(by_address))
+
+    def __getitem__(self, key: str) -> Register:
+        """Return the register for a key ("goal_position") or SDK name ("Goal Position")."""
+        register = self.registers.get(key) or self.registers.get(register_key(key))
+        if register is None:
+            raise UnknownRegisterError(self.model, key, list(self.registers))
+        return register
+
+    def __contains__(self, key: object) -> bool:
+        if not isinstance(key, str):
+            return False
+        return key in self.registers or register_key(key) in self.registers
+
+    def by_address(self, address: int) -> Register | None:
+        """Return the register starting at `address` (the first listed, for aliases), or None."""
+        return self._by_address.get(address)
+
+    @property
+    def size(self) -> int:
+        """Bytes of control-table memory the model needs, up to its last item."""
+        ends = [r.address + r.size for r in self.registers.values()]
+        ends += [data + count for _, data, count in self.specs.indirect_banks]
+        return max(ends)
+
+    @property
+    def baud_rates(self) -> Mapping[int, int]:
+        """Baud Rate register value -> bit/s."""
+        return self.specs.baud_rates
+
+    def baud_index(self, baud: int) -> int:
+        """Return the Baud Rate register value for `baud` bit/s (RegisterValueError if none)."""
+        for index, rate in self.specs.baud_rates.items():
+            if rate == baud:
+                return index
+        rates = ", ".join(str(r) for r in self.specs.baud_rates.values())
+        raise RegisterValueError(f"{self.model} does not support {baud} bit/s; supported: {rates}")
