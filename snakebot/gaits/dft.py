@@ -37,7 +37,7 @@ def scale_into_limits(
     pose_rad: FloatArray, lower_rad: FloatArray, upper_rad: FloatArray
 ) -> FloatArray:
     """Scale each pose (..., N) uniformly about 0 just enough to fit [lower, upper] (N,) in rad."""
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         room = np.where(
             pose_rad > 0.0,
             upper_rad / pose_rad,
