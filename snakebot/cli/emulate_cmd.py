@@ -1,17 +1,31 @@
-"""``snakebot emulate``: a virtual servo chain on a pseudo-terminal, with optional twin physics."""
+"""``snakebot emulate``: a virtual servo chain on a pseudo-terminal, with optional twin physics.
+
+Servos start with factory settings (Return Delay Time 500 µs, Status Return Level 2, default gains
+and limits) at the robot's IDs and baud rate, or, with ``--fresh N``, not at all: each line
+``plug`` on stdin (or SIGUSR1) then connects the next factory-fresh servo (ID 1 at 57600), the
+way a user adds servos one at a time. ``power`` on stdin power-cycles every servo. With
+``--state-file`` every servo's EEPROM is kept on disk across runs (emulated power cycles).
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
+import queue
 import signal
 import sys
 import threading
+from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from snakebot.cli.common import add_robot_option, print_json
-from snakebot.config import load_robot
+from snakebot.config import RobotConfig, load_robot
 from snakebot.errors import ConfigError
+
+if TYPE_CHECKING:
+    from snakebot.emulation.bench import ServoBench
+    from snakebot.emulation.physics import TwinMotion
 
 
 def add_parser(subparsers: Any) -> None:
@@ -20,7 +34,9 @@ def add_parser(subparsers: Any) -> None:
         "emulate",
         help="serve an emulated Dynamixel chain on a pseudo-terminal",
         description="Create a pseudo-terminal that answers like the robot's servo chain (Protocol "
-        "2.0, byte for byte). Prints the device path first; serves until Ctrl-C or SIGTERM.",
+        "2.0, byte for byte). Prints the device path first; serves until Ctrl-C or SIGTERM. "
+        "Stdin commands: 'plug' (also SIGUSR1) connects the next --fresh servo, 'power' "
+        "power-cycles every servo.",
     )
     add_robot_option(parser)
     parser.add_argument("--baud", type=int, help="line rate (default: the robot's bus.baud)")
@@ -31,62 +47,156 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--pty", action="store_true", required=True, help="serve on a pty")
     parser.add_argument("--json", action="store_true", help='print {"port": ...} and JSON summary')
+    parser.add_argument("--fresh", type=int, default=0, metavar="N",
+                        help="start with no servo connected; N factory-fresh ones (ID 1, 57600) "
+                        "wait to be plugged in")
+    parser.add_argument("--attached", type=int, default=0, metavar="K",
+                        help="with --fresh: plug in K at start (K >= 2 share ID 1 and collide)")
+    parser.add_argument("--state-file", type=Path,
+                        help="keep every servo's EEPROM in this JSON file across runs")
+    parser.add_argument("--scramble", type=int, metavar="SEED",
+                        help="start the robot's servos with wrong settings (ignored when the "
+                        "state file exists)")
     parser.set_defaults(handler=run)
 
 
+def _bench(
+    robot: RobotConfig, args: argparse.Namespace, baud: int
+) -> tuple[ServoBench, TwinMotion | None]:
+    from snakebot.emulation.bench import ServoBench, robot_servos, scramble
+    from snakebot.emulation.chain import EmulatedChain
+
+    if not 0 <= args.attached <= args.fresh:
+        raise ConfigError("--attached", "", f"expected 0..{args.fresh} (the --fresh count)")
+    if args.fresh and (args.physics or args.scramble is not None):
+        raise ConfigError("--fresh", "", "--fresh starts with no robot chain: drop --physics "
+                          "and --scramble")
+    motion = None
+    if args.fresh:
+        chain = EmulatedChain(baud=57600)
+    elif args.physics:
+        from snakebot.emulation.physics import make_twin_chain
+
+        chain, motion = make_twin_chain(robot, baud)
+        for serial, servo in enumerate(chain.servos, start=1):
+            servo.serial_number = serial
+    else:
+        try:
+            servos = robot_servos(robot.servo.name, robot.servo_ids, baud)
+        except ValueError as exc:
+            raise ConfigError("--baud", "", str(exc)) from exc
+        chain = EmulatedChain(servos, baud=baud)
+    restoring = args.state_file is not None and args.state_file.exists()
+    if args.scramble is not None and not restoring:
+        scramble(chain, args.scramble)
+    bench = ServoBench(chain, robot.servo.name, fresh=args.fresh, state_path=args.state_file)
+    for _ in range(args.attached):
+        bench.plug()
+    if motion is not None and restoring:
+        motion.attach(chain)  # IDs may have changed
+    bench.save()
+    return bench, motion
+
+
+def _read_commands(commands: queue.Queue[str]) -> None:
+    for line in sys.stdin:
+        commands.put(line.strip().lower() or "plug")
+
+
 def run(args: argparse.Namespace) -> int:
-    """Serve until SIGINT or SIGTERM, then stop cleanly."""
-    from snakebot.emulation import make_chain_for_ids
+    """Serve until SIGINT or SIGTERM, then stop cleanly (saving the state file)."""
+    from snakebot.emulation.errors import EmulationError
     from snakebot.emulation.pty_server import PtyServer
 
     robot = load_robot(args.robot)
     baud = args.baud or robot.bus.baud
-    motion = None
-    if args.physics:
-        from snakebot.emulation.physics import make_twin_chain
-
-        chain, motion = make_twin_chain(robot, baud)
-    else:
-        try:
-            chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud)
-        except ValueError as exc:
-            raise ConfigError("--baud", "", str(exc)) from exc
+    try:
+        bench, motion = _bench(robot, args, baud)
+    except EmulationError as exc:
+        raise ConfigError(args.state_file or "--fresh", "", str(exc)) from exc
     stop = threading.Event()
+    commands: queue.Queue[str] = queue.Queue()
+    plugs: list[str] = []  # appended by SIGUSR1: a list append takes no lock a handler could block
 
     def on_signal(signum: int, frame: FrameType | None) -> None:
         stop.set()
 
-    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
-    server = PtyServer(chain)
+    def on_plug(signum: int, frame: FrameType | None) -> None:
+        plugs.append("plug")
+
+    handlers: dict[signal.Signals, Any] = {signal.SIGINT: on_signal, signal.SIGTERM: on_signal}
+    if os.name == "posix":
+        handlers[signal.SIGUSR1] = on_plug
+    previous = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
+    server = PtyServer(bench.chain)
+    threading.Thread(target=_read_commands, args=(commands,), daemon=True).start()
     try:
         server.start()
-        if args.json:
-            print_json({"port": server.device_path, "baud": baud, "servo_ids": robot.servo_ids})
-        else:
-            print(server.device_path, flush=True)
-            print(
-                f"{robot.name}: {robot.joint_count} x {robot.servo.name} (IDs "
-                f"{robot.servo_ids[0]}..{robot.servo_ids[-1]}) at {baud} baud"
-                + (", twin physics" if motion else "")
-                + "; Ctrl-C to stop",
-                file=sys.stderr,
-                flush=True,
-            )
-        while not stop.wait(0.2):
-            pass
+        _announce(args, robot, server.device_path, baud, bench, motion)
+        while not stop.wait(0.1):
+            while plugs:
+                _command(args, bench, plugs.pop())
+            while not commands.empty():
+                _command(args, bench, commands.get())
+            bench.save()
     finally:
         server.stop()
+        bench.save()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         if motion is not None:
             motion.twin.close()
     if motion is not None:
-        summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary()}
-        if args.json:
-            print_json(summary)
-        else:
-            print(
-                f"twin: moved {summary['distance_m']:.3f} m at heading "
-                f"{summary['heading_deg']:.1f} deg in {summary['duration_s']:.1f} s"
-            )
+        _summary(args, robot, motion)
     return 0
+
+
+def _announce(args: argparse.Namespace, robot: RobotConfig, port: str, baud: int,
+              bench: ServoBench, motion: TwinMotion | None) -> None:
+    servos = bench.chain.servos
+    ids = sorted({s.servo_id for s in servos})
+    if args.json:
+        print_json({"port": port, "baud": baud, "servo_ids": ids, "waiting": bench.waiting})
+        return
+    print(port, flush=True)
+    what = (f"{len(servos)} x {robot.servo.name} connected, {bench.waiting} fresh waiting "
+            "('plug' on stdin or SIGUSR1 connects one)") if args.fresh else (
+        f"{robot.name}: {len(servos)} x {robot.servo.name} (IDs {ids[0]}..{ids[-1]}) at {baud} "
+        "baud" + (", twin physics" if motion else ""))
+    print(f"{what}; Ctrl-C to stop", file=sys.stderr, flush=True)
+
+
+def _command(args: argparse.Namespace, bench: ServoBench, command: str) -> None:
+    from snakebot.emulation.errors import EmulationError
+
+    if command == "plug":
+        try:
+            servo = bench.plug()
+        except EmulationError as exc:
+            print(f"emulate: {exc}", file=sys.stderr, flush=True)
+            return
+        event = {"event": "plugged", "serial": servo.serial_number, "id": servo.servo_id,
+                 "baud": servo.baud, "waiting": bench.waiting}
+        text = (f"plugged in servo #{servo.serial_number} (ID {servo.servo_id} at {servo.baud} "
+                f"baud); {bench.waiting} waiting")
+    elif command == "power":
+        bench.power_cycle()
+        event, text = {"event": "power_cycled"}, "power-cycled every servo"
+    else:
+        print(f"emulate: unknown command {command!r} (plug, power)", file=sys.stderr, flush=True)
+        return
+    if args.json:
+        print_json(event)
+    else:
+        print(text, flush=True)
+
+
+def _summary(args: argparse.Namespace, robot: RobotConfig, motion: TwinMotion) -> None:
+    summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary()}
+    if args.json:
+        print_json(summary)
+    else:
+        print(
+            f"twin: moved {summary['distance_m']:.3f} m at heading "
+            f"{summary['heading_deg']:.1f} deg in {summary['duration_s']:.1f} s"
+        )

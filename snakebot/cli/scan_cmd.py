@@ -1,4 +1,10 @@
-"""``snakebot scan``: which servos answer on a port, with model, firmware and baud rate."""
+"""``snakebot scan``: which servos answer on a port, with model, firmware and baud rate.
+
+Servos that share an ID are reported: their replies collide, which shows up as corrupt packets or
+contradicting model numbers (see snakebot/setup/duplicates.py). A colliding ID drops out of the
+broadcast ping, so the IDs missing below the highest one found (and ID 1, where new servos
+collide) are pinged one by one.
+"""
 
 from __future__ import annotations
 
@@ -12,6 +18,7 @@ from snakebot.errors import BusError, SnakebotError
 
 # The SDK's PortHandler accepts these (4.5 Mbps needs a custom handler).
 SCAN_BAUDS = tuple(b for b in BAUD_RATES if b <= 4_000_000)
+FACTORY_ID = 1
 
 
 def add_parser(subparsers: Any) -> None:
@@ -40,28 +47,42 @@ def model_name(model_number: int) -> str:
         return f"model {model_number}"
 
 
-def scan(port: str, bauds: tuple[int, ...], protocol: float = 2.0) -> list[dict[str, object]]:
-    """Broadcast-ping at each rate; one entry per servo that answered."""
-    from snakebot.backends.dynamixel.bus import DynamixelBus
+def scan(port: str, bauds: tuple[int, ...], protocol: float = 2.0) -> list[dict[str, Any]]:
+    """Broadcast-ping at each rate; one entry per servo that answered, or whose ID collides.
 
-    found: list[dict[str, object]] = []
-    for baud in bauds:
-        with DynamixelBus(port, baud, protocol=protocol) as bus:
-            for servo_id, (number, firmware) in sorted(bus.broadcast_ping().items()):
+    An entry with ``"duplicate"`` set says why its replies look like several servos.
+    """
+    from snakebot.setup.duplicates import collision_reason
+    from snakebot.setup.link import Link
+
+    found: list[dict[str, Any]] = []
+    with Link(port, bauds[0]) as link:
+        for baud in bauds:
+            pinged = link.at(baud).broadcast_ping()
+            # A shared ID garbles its broadcast slot and drops out: check the gaps too.
+            gaps = range(1, max(pinged, default=0) + 3)
+            for servo_id in sorted({*pinged, *gaps, FACTORY_ID}):
+                reason = collision_reason(link, servo_id, baud)
+                if servo_id not in pinged and reason is None:
+                    continue
+                number, firmware = pinged.get(servo_id, (0, 0))
                 found.append(
                     {
                         "id": servo_id,
-                        "model": model_name(number),
+                        "model": model_name(number) if number else "?",
                         "model_number": number,
                         "firmware": firmware,
                         "baud": baud,
+                        "duplicate": reason,
                     }
                 )
     return found
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the servos found; exit 1 when none answer."""
+    """Print the servos found; exit 1 when none answer or IDs collide."""
+    from snakebot.setup.errors import DuplicateIdError
+
     bauds = SCAN_BAUDS if args.all_bauds else (args.baud,)
     start = time.monotonic()
     servos = scan(args.port, bauds, args.protocol)
@@ -70,10 +91,15 @@ def run(args: argparse.Namespace) -> int:
         print_json({"port": args.port, "servos": servos, "seconds": round(elapsed, 2)})
     else:
         for s in servos:
+            clash = f"  DUPLICATE ID: {s['duplicate']}" if s["duplicate"] else ""
             print(
-                f"ID {s['id']:>3}  {s['model']:<12} firmware {s['firmware']:<3} at {s['baud']} baud"
+                f"ID {s['id']:>3}  {s['model']:<12} firmware {s['firmware']:<3} at {s['baud']} "
+                f"baud{clash}"
             )
         print(f"{len(servos)} servo(s) on {args.port} in {elapsed:.1f} s")
+    clashes = [(s["id"], s["baud"], s["duplicate"]) for s in servos if s["duplicate"]]
+    if clashes:
+        raise DuplicateIdError(args.port, clashes)
     if not servos:
         rates = "any rate" if args.all_bauds else f"{args.baud} baud"
         raise BusError(

@@ -174,6 +174,7 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         lateral_friction=twin_t.number("lateral_friction", 1.0, minimum=0.0),
     )
     twin_t.done()
+    root._seen.add("settings")  # servo settings overrides, read by snakebot.setup
     root.done()
     return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin)
 
@@ -213,6 +214,7 @@ def _parse_joints(root: Table) -> tuple[JointConfig, ...]:
         )
         if joint.upper_rad - joint.lower_rad <= 0:
             raise merged.error("upper_rad", "expected upper_rad > lower_rad")
+        merged._seen.add("settings")  # per-joint servo settings, read by snakebot.setup
         merged.done()
         joints.append(joint)
     return tuple(joints)

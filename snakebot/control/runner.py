@@ -62,12 +62,11 @@ def run_gait(
     ``on_cycle(cycle, gait_time_s)`` runs after every cycle (progress, video, viewer).
     """
     dt = 1.0 / plan.rate_hz
-    total_cycles = max(1, round(plan.duration_s * plan.rate_hz))
     state = backend.read_state()
     safety.reset(state.position_rad)
     gait.reset()
-    body = backend.body_state()
-    metrics.start(state.time_s, body)
+    metrics.start(state.time_s, backend.body_state())
+    start_s = state.time_s
     cycle = 0
     interrupted = False
 
@@ -79,10 +78,10 @@ def run_gait(
         backend.advance(dt)
         state = backend.read_state()
         body = backend.body_state()
-        com = None if body is None else body.com_m
         if scored:
             metrics.add(command, state, body, dt)
         if log is not None:
+            com = None if body is None else body.com_m
             log.write(
                 state.time_s,
                 cycle,
@@ -96,19 +95,20 @@ def run_gait(
         if on_cycle is not None:
             on_cycle(cycle, gait_time_s)
 
+    # Gait time is robot time, so a bus slower than the requested rate plays the gait at its true
+    # speed with fewer updates, never in slow motion. Half a period of slack absorbs float sums.
+    slack = 0.5 * dt
     try:
-        while cycle < total_cycles:
-            gait_time = cycle * dt
+        while (gait_time := state.time_s - start_s) < plan.duration_s - slack:
             step(gait_time, safety.ramp_in(gait_time), scored=True)
     except KeyboardInterrupt:
         interrupted = True
-    gait_end = cycle * dt
+    gait_end_s = state.time_s - start_s
     if plan.ramp_out and safety.ramp_s > 0:
-        ramp_cycles = max(1, round(safety.ramp_s * plan.rate_hz))
-        start_amplitude = safety.ramp_in(gait_end)
-        for k in range(1, ramp_cycles + 1):
-            fraction = 1.0 - k / ramp_cycles
-            step(gait_end + k * dt, start_amplitude * smooth_ramp(fraction), scored=False)
+        start_amplitude = safety.ramp_in(gait_end_s)
+        while (elapsed := state.time_s - start_s - gait_end_s) < safety.ramp_s - slack:
+            fraction = 1.0 - min((elapsed + dt) / safety.ramp_s, 1.0)
+            step(gait_end_s + elapsed, start_amplitude * smooth_ramp(fraction), scored=False)
     summary = metrics.summary(gait.period_s)
     summary["rate_hz"] = plan.rate_hz
     summary["achieved_rate_hz"] = _achieved_rate(metrics, dt)

@@ -5,13 +5,17 @@ A backend joins the contract by adding a factory here; every test in this folder
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Iterator
 
 import pytest
 
 from snakebot.backends.base import Backend
+from snakebot.backends.dynamixel import DynamixelBackend
 from snakebot.backends.twin import GroundFriction, TwinBackend
 from snakebot.config import load_robot
+from snakebot.emulation import make_chain_for_ids, registered
+from snakebot.emulation.port import EmulatedPortHandler
 
 BackendFactory = Callable[[str], Backend]
 
@@ -29,6 +33,27 @@ def _twin_factory() -> Iterator[BackendFactory]:
 
 
 FACTORIES["twin"] = _twin_factory
+
+
+def _dynamixel_factory() -> Iterator[BackendFactory]:
+    """The real dynamixel_sdk over the in-process emulator; the bus clock is the backend's time."""
+    with contextlib.ExitStack() as stack:
+
+        def make(robot_name: str) -> Backend:
+            robot = load_robot(robot_name)
+            chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud)
+            for servo in chain.servos:
+                servo.poke("return_delay_time", 0)
+            url = stack.enter_context(registered(chain))
+            return DynamixelBackend(
+                robot, port=url, port_handler_factory=EmulatedPortHandler,
+                clock=lambda: chain.now_s, sleep=chain.advance,
+            )
+
+        yield make
+
+
+FACTORIES["dynamixel"] = _dynamixel_factory
 
 
 @pytest.fixture(params=sorted(FACTORIES))

@@ -1,0 +1,33 @@
+"""Dynamixel hardware backend: a bus layer over dynamixel_sdk and the Backend contract in SI units.
+
+``DynamixelBackend(robot)`` drives a configured servo chain; ``DynamixelBus`` is the register-level
+bus (also for tools). Only ``sdk.py`` imports ``dynamixel_sdk``.
+"""
+
+from snakebot.backends.dynamixel.backend import DynamixelBackend
+from snakebot.backends.dynamixel.bus import DynamixelBus
+from snakebot.backends.dynamixel.faults import (
+    ChainMismatchError,
+    DynamixelSettingsWarning,
+    HardwareFaultError,
+    ServoSettingsError,
+    ServoStatusError,
+    SyncReadError,
+    decode_hardware_error,
+)
+from snakebot.backends.dynamixel.ticks import TickConverter, rad_to_ticks, ticks_to_rad
+
+__all__ = [
+    "ChainMismatchError",
+    "DynamixelBackend",
+    "DynamixelBus",
+    "DynamixelSettingsWarning",
+    "HardwareFaultError",
+    "ServoSettingsError",
+    "ServoStatusError",
+    "SyncReadError",
+    "TickConverter",
+    "decode_hardware_error",
+    "rad_to_ticks",
+    "ticks_to_rad",
+]

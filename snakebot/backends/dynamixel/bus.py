@@ -1,0 +1,263 @@
+"""A Dynamixel bus with registers by name, typed errors, bounded retries and the SDK traps handled.
+
+Registers are named as in ``snakebot.servo_tables`` (``"present_position"``); values are register
+units (ticks, signed where the register is). Errors and retries: see ``transport.py``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
+from types import TracebackType
+from typing import TypeVar
+
+from snakebot.backends.dynamixel import sdk
+from snakebot.backends.dynamixel.blocks import Block, encode_checked, encode_rows, resolve_block
+from snakebot.backends.dynamixel.faults import ServoStatusError
+from snakebot.backends.dynamixel.plans import SyncReadPlan, SyncWritePlan
+from snakebot.backends.dynamixel.transport import Transport
+from snakebot.errors import BusError
+from snakebot.servo_tables import ServoTable, table_for_model
+
+FACTORY_RESET_OPTIONS = {"all": 0xFF, "keep_id": 0x01, "keep_id_baud": 0x02}
+
+Keys = str | Sequence[str]
+T = TypeVar("T")
+
+
+class DynamixelBus:
+    """One serial port with a chain of Dynamixel servos of one model family, addressed by ID.
+
+    ``model`` picks the control table that register names resolve in (X-series servos share
+    addresses). ``port_handler_factory`` builds the SDK port handler from the port name, e.g. the
+    emulator's ``EmulatedPortHandler``; default ``dynamixel_sdk.PortHandler``. ``clock`` (s) stamps
+    ``last_instruction_s``.
+    """
+
+    def __init__(
+        self,
+        port: str,
+        baud: int,
+        *,
+        protocol: float = 2.0,
+        model: str | int = "XL430-W250",
+        port_handler_factory: sdk.PortHandlerFactory | None = None,
+        retries: int = 2,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.port = port
+        self.baud = baud
+        self.protocol = protocol
+        self.table: ServoTable = table_for_model(model)
+        factory = port_handler_factory or sdk.default_port_handler
+        self._link = sdk.SdkLink(factory(port), protocol)
+        self.transport = Transport(port, self._link, retries, clock)
+        self._sync_plans: dict[tuple[Block, tuple[int, ...]], SyncReadPlan] = {}
+
+    @property
+    def retries(self) -> int:
+        """Extra attempts after a timeout or corrupt packet (settable, e.g. 0 for a fast scan)."""
+        return self.transport.retries
+
+    @retries.setter
+    def retries(self, count: int) -> None:
+        if count < 0:
+            raise ValueError(f"retries must be >= 0, got {count}")
+        self.transport.retries = count
+
+    def run(self, ids: Sequence[int], what: str, op: Callable[[], T]) -> T:
+        """Run one raw SDK call (no retries): OSError becomes a BusError naming port and IDs."""
+        return self.transport.run(ids, what, op)
+
+    @property
+    def retry_counts(self) -> Counter[int]:
+        """Retried transactions per servo ID (timeouts, corrupt packets)."""
+        return self.transport.retry_counts
+
+    @property
+    def group_retries(self) -> int:
+        """Group reads (Sync / Fast Sync / Bulk Read) sent again after a failure."""
+        return self.transport.group_retries
+
+    @property
+    def group_fallbacks(self) -> int:
+        """Group reads that failed and were served by single reads instead."""
+        return self.transport.group_fallbacks
+
+    @property
+    def alerts(self) -> set[int]:
+        """IDs whose last status packet carried the Alert bit (a latched hardware error)."""
+        return self.transport.alerts
+
+    @property
+    def last_instruction_s(self) -> float:
+        """``clock()`` when the last instruction was sent."""
+        return self.transport.last_instruction_s
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def open(self) -> None:
+        """Open the port at the bus baud rate; BusError if the port or rate is unusable."""
+        try:
+            ok = self._link.open(self.baud)
+        except OSError as exc:
+            raise BusError(
+                self.port, [], f"cannot open the port: {exc}. Check the adapter is plugged in and "
+                "the name (ls /dev/ttyUSB* /dev/serial/by-id/; COMx on Windows)"
+            ) from exc
+        if not ok:
+            raise BusError(
+                self.port, [], f"dynamixel_sdk refuses {self.baud} bit/s (it supports up to "
+                "4 Mbps; 4.5 Mbps needs a custom port handler)"
+            )
+
+    def close(self) -> None:
+        """Close the port (idempotent)."""
+        self._link.close()
+
+    @property
+    def is_open(self) -> bool:
+        """Whether the port is open."""
+        return bool(self._link.port.is_open)
+
+    def __enter__(self) -> DynamixelBus:
+        self.open()
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # -- single servos -------------------------------------------------------------------------
+    def ping(self, servo_id: int) -> int:
+        """The servo's model number; BusError if it does not answer after the retries."""
+        def op() -> tuple[int, int, list[int]]:
+            model, result, error = self._link.ping(servo_id)
+            return result, error, [model]
+        return self.transport.unicast(servo_id, "ping", op)[0]
+
+    def ping_all(self, ids: Sequence[int]) -> dict[int, int]:
+        """``{id: model number}`` for the IDs that answer a ping; silent IDs are left out."""
+        found = {}
+        for servo_id in ids:
+            try:
+                found[servo_id] = self.ping(servo_id)
+            except ServoStatusError:
+                raise
+            except BusError:
+                continue
+        return found
+
+    def broadcast_ping(self) -> dict[int, tuple[int, int]]:
+        """``{id: (model number, firmware version)}`` of every servo on the bus.
+
+        Slow: the SDK always waits its whole window (about 0.8 s at 1 Mbps).
+        """
+        found, result = self.transport.run([], "broadcast ping", self._link.broadcast_ping)
+        if result not in (sdk.COMM_SUCCESS, sdk.COMM_RX_TIMEOUT, sdk.COMM_RX_CORRUPT):
+            raise self.transport.fail(result, [], "broadcast ping")
+        return {i: (int(v[0]), int(v[1])) for i, v in found.items()}
+
+    def read(self, servo_id: int, key: str) -> int:
+        """One register of one servo (signed where the register is)."""
+        return self.read_block(servo_id, key)[self.table[key].key]
+
+    def read_block(self, servo_id: int, keys: Keys | Block) -> dict[str, int]:
+        """Several registers of one servo in one Read of the block covering them."""
+        block = keys if isinstance(keys, Block) else resolve_block(self.table, keys)
+
+        def op() -> tuple[int, int, list[int]]:
+            data, result, error = self._link.read(servo_id, block.address, block.size)
+            if result == sdk.COMM_SUCCESS and len(data) != block.size:
+                result = sdk.COMM_RX_CORRUPT
+            return result, error, data
+        data = self.transport.unicast(servo_id, f"read {','.join(block.keys)}", op)
+        return block.decode(data)
+
+    def write(self, servo_id: int, key: str, value: int) -> None:
+        """Write one register (range-checked) and wait for the servo's status."""
+        register = self.table[key]
+        data = encode_checked(register, value)
+
+        def op() -> tuple[int, int, list[int]]:
+            result, error = self._link.write(servo_id, register.address, data)
+            return result, error, []
+        if servo_id == sdk.BROADCAST_ID:
+            self.transport.run([servo_id], f"write {register.key}", op)
+            return
+        what = f"write {register.key}={value}"
+        self.transport.unicast(servo_id, what, op, eeprom=register.eeprom)
+
+    def reboot(self, servo_id: int) -> None:
+        """Reboot one servo (clears a latched hardware error; torque comes back off)."""
+        def op() -> tuple[int, int, list[int]]:
+            result, error = self._link.reboot(servo_id)
+            return result, error, []
+        self.transport.unicast(servo_id, "reboot", op, accept_alert=True)
+        self.transport.alerts.discard(servo_id)
+
+    def factory_reset(self, servo_id: int, *, keep: str = "keep_id_baud") -> None:
+        """Reset one servo's control table; ``keep`` is "keep_id_baud", "keep_id" or "all"."""
+        option = FACTORY_RESET_OPTIONS[keep]
+
+        def op() -> tuple[int, int, list[int]]:
+            result, error = self._link.factory_reset(servo_id, option)
+            return result, error, []
+        self.transport.unicast(servo_id, f"factory reset ({keep})", op, accept_alert=True)
+
+    # -- groups --------------------------------------------------------------------------------
+    def sync_write(self, keys: Keys, values: Mapping[int, int | Sequence[int]]) -> None:
+        """One Sync Write of the registers ``keys`` (contiguous) to ``{id: value(s)}``; no reply."""
+        block = resolve_block(self.table, keys)
+        rows = encode_rows(block, self.table, values)
+        writer = sdk.SyncWriter(self._link, block.address, block.size, rows)
+        ids, what = [i for i, _ in rows], f"sync write {','.join(block.keys)}"
+        self.transport.check_sent(self.transport.run(ids, what, writer.send), ids, what)
+
+    def sync_read(
+        self, keys: Keys | Block, ids: Sequence[int], *, fast: bool = False
+    ) -> dict[int, dict[str, int]]:
+        """One (Fast) Sync Read of the block covering ``keys`` from ``ids``: ``{id: {key: value}}``.
+
+        Raises SyncReadError naming the IDs that stay silent after the retries.
+        """
+        return self.sync_read_plan(keys, ids).read(fast=fast)
+
+    def bulk_read(self, requests: Mapping[int, Keys]) -> dict[int, dict[str, int]]:
+        """One Bulk Read of a different block per servo: ``{id: {key: value}}``."""
+        blocks = {i: resolve_block(self.table, k) for i, k in requests.items()}
+        reader = sdk.BulkReader(self._link, [(i, b.address, b.size) for i, b in blocks.items()])
+        ids = list(blocks)
+
+        def attempt() -> dict[int, dict[str, int]] | None:
+            result = reader.transact()
+            if result != sdk.COMM_SUCCESS:
+                self.transport.retry_or_raise(result, ids, "bulk read")
+                return None
+            out = {}
+            for i, b in blocks.items():
+                data = reader.data(i)
+                if not reader.available(i, b.address, b.size) or len(data) != b.size:
+                    return None
+                out[i] = b.decode(data)
+            return out
+        return self.transport.group_read(
+            ids, attempt, lambda i: self.read_block(i, blocks[i]), "bulk read", dict
+        )
+
+    def sync_read_plan(self, keys: Keys | Block, ids: Sequence[int]) -> SyncReadPlan:
+        """A reusable (Fast) Sync Read of one block from fixed IDs (cached per block and IDs)."""
+        block = keys if isinstance(keys, Block) else resolve_block(self.table, keys)
+        cache_key = (block, tuple(ids))
+        plan = self._sync_plans.get(cache_key)
+        if plan is None:
+            reader = sdk.SyncReader(self._link, block.address, block.size, ids)
+            single = self.read_block
+            plan = self._sync_plans[cache_key] = SyncReadPlan(self.transport, reader, block, single)
+        return plan
+
+    def sync_write_plan(self, key: str, ids: Sequence[int]) -> SyncWritePlan:
+        """A reusable Sync Write of one register to fixed IDs with a preallocated parameter list."""
+        return SyncWritePlan(self.transport, self.table[key], ids)

@@ -1,0 +1,160 @@
+"""Connect-time checks: is the bus the configured chain, do EEPROM settings fit, what caps the rate.
+
+Policy: settings that make the backend wrong or unsafe are errors (:class:`ServoSettingsError`):
+Operating Mode other than 3 (position), the Drive Mode reverse bit (direction lives in the config),
+Min/Max Position Limits that do not cover a joint's configured range. Settings that only cost loop
+rate are warnings (:class:`DynamixelSettingsWarning`): Return Delay Time above 0, a USB latency
+timer above 1 ms, and the Drive Mode profile/torque-on-goal bits.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from snakebot.backends.dynamixel.faults import ChainMismatchError
+from snakebot.backends.dynamixel.ticks import TickConverter
+
+SETTINGS_KEYS = ("return_delay_time", "drive_mode", "operating_mode")
+LIMIT_KEYS = ("max_position_limit", "min_position_limit")
+POSITION_MODE = 3
+SYSFS_USB_SERIAL = Path("/sys/bus/usb-serial/devices")
+
+_DRIVE_REVERSE = 0x01
+_DRIVE_TIME_PROFILE = 0x04
+_DRIVE_TORQUE_ON_GOAL = 0x08
+
+
+@dataclass(frozen=True)
+class ChainReport:
+    """Who answered: ``found`` maps ID to model number; what is wrong with the chain, if anything.
+
+    ``unexpected`` maps IDs that are on the bus but not in the config to their model number;
+    ``mismatched`` maps ID to (found model number, expected model number).
+    """
+
+    found: Mapping[int, int]
+    missing: tuple[int, ...]
+    unexpected: Mapping[int, int] = field(default_factory=dict)
+    mismatched: Mapping[int, tuple[int, int]] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """True when every configured servo answered with the expected model."""
+        return not (self.missing or self.mismatched)
+
+
+def chain_report(
+    ids: Sequence[int],
+    model_number: int,
+    found: Mapping[int, int],
+    on_bus: Mapping[int, int] | None = None,
+) -> ChainReport:
+    """Compare pinged ``found`` ({id: model}) and, if scanned, ``on_bus`` with the config."""
+    missing = tuple(i for i in ids if i not in found)
+    mismatched = {i: (m, model_number) for i, m in found.items() if m != model_number}
+    unexpected = {i: m for i, m in sorted((on_bus or {}).items()) if i not in ids}
+    return ChainReport(dict(found), missing, unexpected, mismatched)
+
+
+def chain_error(
+    port: str, baud: int, report: ChainReport, model_names: Mapping[int, str]
+) -> ChainMismatchError:
+    """The connect failure for a report that is not ok; every line says what to check."""
+    def name(number: int) -> str:
+        return model_names.get(number, f"model {number}")
+
+    lines = []
+    if report.missing:
+        lines.append(f"missing servo ID(s) {', '.join(map(str, report.missing))}: no answer to "
+                     f"ping at {baud} bit/s (check power, cables, ID and baud rate)")
+    for servo_id, (got, want) in sorted(report.mismatched.items()):
+        lines.append(f"servo {servo_id} is a {name(got)}, the config expects a {name(want)}")
+    if report.unexpected:
+        extra = ", ".join(f"{i} ({name(m)})" for i, m in report.unexpected.items())
+        lines.append(f"unexpected servo ID(s) on the bus: {extra} (a new servo is ID 1 at "
+                     "57600 bit/s; give it its configured ID)")
+    return ChainMismatchError(
+        port, missing=report.missing, unexpected=tuple(report.unexpected),
+        mismatched=report.mismatched, message="; ".join(lines),
+    )
+
+
+def check_settings(
+    settings: Mapping[int, Mapping[str, int]],
+    ids: Sequence[int],
+    converter: TickConverter,
+) -> tuple[list[str], list[str]]:
+    """(errors, warnings) for EEPROM ``settings`` ({id: {key: value}}) against the joints.
+
+    ``ids`` are head to tail, in the converter's joint order.
+    """
+    errors: list[str] = []
+    warnings: list[str] = []
+    slow = sorted(i for i in ids if settings[i]["return_delay_time"] > 0)
+    for joint, servo_id in enumerate(ids):
+        values = settings[servo_id]
+        mode, drive = values["operating_mode"], values["drive_mode"]
+        if mode != POSITION_MODE:
+            errors.append(f"servo {servo_id}: Operating Mode is {mode}, needs {POSITION_MODE} "
+                          "(position control)")
+        if drive & _DRIVE_REVERSE:
+            errors.append(f"servo {servo_id}: Drive Mode has the reverse bit set; snakebot takes "
+                          "the direction from the config (joints[].direction), clear the bit")
+        if drive & (_DRIVE_TIME_PROFILE | _DRIVE_TORQUE_ON_GOAL):
+            warnings.append(f"servo {servo_id}: Drive Mode {drive} sets the time-based-profile "
+                            "or torque-on-by-goal bit; snakebot expects 0")
+        low, high = values["min_position_limit"], values["max_position_limit"]
+        want_low, want_high = converter.lower_ticks[joint], converter.upper_ticks[joint]
+        if low > want_low or high < want_high:
+            errors.append(
+                f"servo {servo_id}: Min/Max Position Limit {low}..{high} ticks do not cover "
+                f"joint {joint}'s range {converter.lower_rad[joint]:.3f}.."
+                f"{converter.upper_rad[joint]:.3f} rad ({want_low}..{want_high} ticks)"
+            )
+    if slow:
+        delay_us = max(2 * settings[i]["return_delay_time"] for i in slow)
+        warnings.append(
+            f"Return Delay Time up to {delay_us} µs on servo(s) {', '.join(map(str, slow))}: a "
+            f"Sync Read waits that long per servo (Fast Sync Read once); set it to 0 with "
+            "`snakebot config apply`"
+        )
+    return errors, warnings
+
+
+def usb_latency_timer_ms(port: str, sysfs_root: Path = SYSFS_USB_SERIAL) -> int | None:
+    """The FTDI latency timer of a Linux USB-serial port in ms, or None where there is none."""
+    if "://" in port:
+        return None
+    try:
+        device = Path(port).resolve().name
+        text = (sysfs_root / device / "latency_timer").read_text(encoding="ascii")
+        return int(text.strip())
+    except (OSError, ValueError):
+        return None
+
+
+def latency_warning(port: str, latency_ms: int, wire_time_s: float) -> str | None:
+    """A warning with the fix when the latency timer caps the loop rate (above 1 ms)."""
+    if latency_ms <= 1:
+        return None
+    cap_hz = 1.0 / (latency_ms * 1e-3 + wire_time_s)
+    device = Path(port).resolve().name
+    return (
+        f"{port}: USB latency timer is {latency_ms} ms, which caps the control loop near "
+        f"{cap_hz:.0f} Hz. Fix: echo 1 | sudo tee /sys/bus/usb-serial/devices/{device}/"
+        "latency_timer (persist with the udev rule ATTR{device/latency_timer}=\"1\")"
+    )
+
+
+def cycle_wire_time_s(servo_count: int, read_bytes: int, baud: int, *, fast: bool) -> float:
+    """Bus time of one Sync Write of goals (4 B) plus one (Fast) Sync Read, return delay 0.
+
+    Sizes from reference/dynamixel.md §1.5: Sync Write 14 + 5N, read instruction 14 + N, replies
+    N x (11 + L) or 8 + N x (L + 4) bytes, at 10 bits per byte.
+    """
+    n = servo_count
+    reply = 8 + n * (read_bytes + 4) if fast else n * (11 + read_bytes)
+    return (14 + 5 * n + 14 + n + reply) * 10.0 / baud
+

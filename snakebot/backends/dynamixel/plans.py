@@ -1,0 +1,141 @@
+"""Prepared group transactions for the control loop: built once, no SDK objects made per cycle.
+
+:class:`SyncWritePlan` packs the Sync Write parameters (``[id, data...]`` per servo) with one
+precompiled ``struct``; :class:`SyncReadPlan` keeps one ``GroupSyncRead`` and unpacks every
+servo's block with one ``struct`` too. Plain ints and tuples, not numpy, on this path: a handful of
+small numpy calls costs more than the whole decode when the caches are cold between bus waits.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from snakebot.backends.dynamixel import sdk
+from snakebot.backends.dynamixel.blocks import Block
+from snakebot.servo_tables import Register, RegisterValueError
+
+if TYPE_CHECKING:
+    from snakebot.backends.dynamixel.transport import Transport
+
+_STRUCT_CODES = {(1, False): "B", (1, True): "b", (2, False): "H", (2, True): "h",
+                 (4, False): "I", (4, True): "i"}
+
+Row = tuple[int, ...]
+
+
+def block_struct(block: Block) -> struct.Struct:
+    """Little-endian struct of one servo's block: one code per field, pad bytes for gaps."""
+    codes, at = ["<"], 0
+    for f in block.fields:
+        codes.append("x" * (f.offset - at) + _STRUCT_CODES[(f.size, f.signed)])
+        at = f.offset + f.size
+    codes.append("x" * (block.size - at))
+    return struct.Struct("".join(codes))
+
+
+class SyncWritePlan:
+    """A Sync Write of one register to fixed servo IDs, in the ID order given."""
+
+    def __init__(self, transport: Transport, register: Register, ids: Sequence[int]) -> None:
+        if not register.writable:
+            raise RegisterValueError(f"register {register.key} ({register.address}) is read-only")
+        if len(set(ids)) != len(ids) or not ids:
+            raise ValueError(f"a sync write needs distinct servo IDs, got {list(ids)}")
+        self.register = register
+        self.ids = tuple(ids)
+        self._transport = transport
+        code = _STRUCT_CODES[(register.size, register.signed)]
+        self._packer = struct.Struct("<" + ("B" + code) * len(ids))
+        self._args: list[int] = [v for i in ids for v in (i, 0)]  # [id, value] per servo
+        self._what = f"sync write {register.key}"
+
+    def write(self, values: np.ndarray | Sequence[int], *, checked: bool = True) -> None:
+        """Send ``values`` (register units, one int per ID) in one Sync Write.
+
+        ``checked`` validates the count and the register range; the control loop passes False for
+        goals it has already clipped inside the joint limits (packing still refuses overflow).
+        """
+        items = values.tolist() if isinstance(values, np.ndarray) else list(values)
+        if checked:
+            if len(items) != len(self.ids) or not all(isinstance(v, int) for v in items):
+                raise ValueError(f"{self._what}: need {len(self.ids)} integers, got {items!r}")
+            low, high = min(items), max(items)
+            if low < self.register.minimum or high > self.register.maximum:
+                raise RegisterValueError(
+                    f"{self._what}: values {low}..{high} exceed "
+                    f"{self.register.minimum}..{self.register.maximum}"
+                )
+        args = self._args
+        args[1::2] = items
+        try:
+            param = self._packer.pack(*args)
+        except struct.error as exc:
+            raise RegisterValueError(f"{self._what}: {exc}") from exc
+        address, size = self.register.address, self.register.size
+        # syncWriteTxOnly copies the parameters by slicing, which bytes support like a list.
+        link = self._transport.link
+        result = self._transport.run(self.ids, self._what,
+                                     lambda: link.sync_write(address, size, param))
+        self._transport.check_sent(result, self.ids, self._what)
+
+
+class SyncReadPlan:
+    """A (Fast) Sync Read of one block from fixed servo IDs, reusing one ``GroupSyncRead``."""
+
+    def __init__(
+        self, transport: Transport, reader: sdk.SyncReader, block: Block,
+        single: Callable[[int, Block], dict[str, int]],
+    ) -> None:
+        self.block = block
+        self.ids = reader.ids
+        self._transport = transport
+        self._reader = reader
+        self._single_read = single
+        self._unpacker = block_struct(block)
+        self._total = block.size * len(self.ids)
+        self._what = f"sync read {','.join(block.keys)}"
+
+    def _transact(self, fast: bool) -> list[Row] | None:
+        """One group transaction: each ID's field values in ID order, or None to retry."""
+        reader = self._reader
+        result = reader.transact(fast)
+        if result != sdk.COMM_SUCCESS:
+            self._transport.retry_or_raise(result, self.ids, self._what)
+            return None
+        buffer = bytearray()
+        for servo_id in self.ids:
+            # isAvailable per ID: after a failed read the SDK hands out zeros (reference §1.7).
+            if not reader.available(servo_id):
+                return None
+            buffer.extend(reader.data(servo_id))
+        # No servo's data can be longer than the block, so the total catches any short one.
+        if len(buffer) != self._total:
+            return None
+        return list(self._unpacker.iter_unpack(buffer))
+
+    def _single(self, servo_id: int) -> dict[str, int]:
+        return self._single_read(servo_id, self.block)
+
+    def read(self, *, fast: bool = False) -> dict[int, dict[str, int]]:
+        """``{id: {key: value}}``; SyncReadError names servos silent even when read alone."""
+        keys = self.block.keys
+        return {i: dict(zip(keys, row, strict=True))
+                for i, row in zip(self.ids, self.read_rows(fast=fast), strict=True)}
+
+    def read_rows(self, *, fast: bool = False) -> list[Row]:
+        """One tuple of field values (address order) per servo, in ID order."""
+        transport = self._transport
+        rows = transport.run(self.ids, self._what, lambda: self._transact(fast))
+        if rows is not None:  # the common case: first try, no retry machinery
+            return rows
+        transport.group_retries += transport.retries > 0
+        return transport.group_read(self.ids, lambda: self._transact(fast), self._single,
+                                    self._what, self._assemble, attempts=transport.retries)
+
+    def _assemble(self, values: dict[int, dict[str, int]]) -> list[Row]:
+        keys = self.block.keys
+        return [tuple(values[i][k] for k in keys) for i in self.ids]

@@ -1,0 +1,312 @@
+"""The one backend module that imports ``dynamixel_sdk``: Protocols for its classes, thin adapters.
+
+The SDK's camelCase stays in this file. Everything else in the package talks to :class:`SdkLink`,
+:class:`SyncWriter`, :class:`SyncReader` and :class:`BulkReader`, whose methods are snake_case,
+typed, and never leave the port's busy flag stuck (see :meth:`SdkLink.guard`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Protocol
+
+import dynamixel_sdk as _sdk
+
+COMM_SUCCESS: int = _sdk.COMM_SUCCESS
+COMM_PORT_BUSY: int = _sdk.COMM_PORT_BUSY
+COMM_TX_FAIL: int = _sdk.COMM_TX_FAIL
+COMM_RX_FAIL: int = _sdk.COMM_RX_FAIL
+COMM_RX_TIMEOUT: int = _sdk.COMM_RX_TIMEOUT
+COMM_RX_CORRUPT: int = _sdk.COMM_RX_CORRUPT
+COMM_NOT_AVAILABLE: int = _sdk.COMM_NOT_AVAILABLE
+BROADCAST_ID: int = _sdk.BROADCAST_ID
+MAX_ID: int = _sdk.MAX_ID
+
+
+class PortHandlerLike(Protocol):
+    """What we use of ``dynamixel_sdk.PortHandler`` (or a subclass such as the emulator's)."""
+
+    is_using: bool
+    is_open: bool
+
+    def closePort(self) -> None:  # noqa: N802
+        """Close the serial port."""
+
+    def setBaudRate(self, baudrate: int) -> bool:  # noqa: N802
+        """Reopen at ``baudrate``; False for rates the SDK does not know."""
+
+    def getPortName(self) -> str:  # noqa: N802
+        """The device path or URL."""
+
+
+PortHandlerFactory = Callable[[str], PortHandlerLike]
+"""Builds a port handler from a port name; ``dynamixel_sdk.PortHandler`` by default."""
+
+
+class PacketHandlerLike(Protocol):
+    """What we use of ``Protocol2PacketHandler`` / ``Protocol1PacketHandler``."""
+
+    def getTxRxResult(self, result: int) -> str:  # noqa: N802
+        """Text for a COMM_* result code."""
+
+    def getRxPacketError(self, error: int) -> str:  # noqa: N802
+        """Text for a status error byte."""
+
+    def ping(self, port: PortHandlerLike, dxl_id: int) -> tuple[int, int, int]:
+        """(model number, result, error byte)."""
+
+    def broadcastPing(self, port: PortHandlerLike) -> tuple[dict[int, list[int]], int]:  # noqa: N802
+        """({id: [model number, firmware]}, result)."""
+
+    def reboot(self, port: PortHandlerLike, dxl_id: int) -> tuple[int, int]:
+        """(result, error byte)."""
+
+    def factoryReset(  # noqa: N802
+        self, port: PortHandlerLike, dxl_id: int, option: int
+    ) -> tuple[int, int]:
+        """(result, error byte)."""
+
+    def readTxRx(  # noqa: N802
+        self, port: PortHandlerLike, dxl_id: int, address: int, length: int
+    ) -> tuple[list[int], int, int]:
+        """(data bytes, result, error byte)."""
+
+    def writeTxRx(  # noqa: N802
+        self, port: PortHandlerLike, dxl_id: int, address: int, length: int, data: list[int]
+    ) -> tuple[int, int]:
+        """(result, error byte)."""
+
+    def syncWriteTxOnly(  # noqa: N802
+        self,
+        port: PortHandlerLike,
+        start_address: int,
+        data_length: int,
+        param: list[int] | bytes,
+        param_length: int,
+    ) -> int:
+        """Result of sending prepared ``[id, data...]*N`` parameters."""
+
+
+class GroupSyncWriteLike(Protocol):
+    """``dynamixel_sdk.GroupSyncWrite``."""
+
+    def addParam(self, dxl_id: int, data: list[int]) -> bool:  # noqa: N802
+        """False if the ID is already in the group (or data too long)."""
+
+    def txPacket(self) -> int:  # noqa: N802
+        """Send the group instruction; result."""
+
+
+class GroupSyncReadLike(Protocol):
+    """``dynamixel_sdk.GroupSyncRead``; ``data_dict`` holds each ID's raw bytes after a read."""
+
+    data_dict: dict[int, list[int] | bytearray]
+
+    def addParam(self, dxl_id: int) -> bool:  # noqa: N802
+        """False if the ID is already in the group (or data too long)."""
+
+    def txRxPacket(self) -> int:  # noqa: N802
+        """Send and collect every status; result."""
+
+    def fastSyncRead(self) -> int:  # noqa: N802
+        """Fast Sync Read (one combined status packet); result."""
+
+    def isAvailable(self, dxl_id: int, address: int, data_length: int) -> bool:  # noqa: N802
+        """Whether the last read holds data for that ID and range."""
+
+
+class GroupBulkReadLike(Protocol):
+    """``dynamixel_sdk.GroupBulkRead``."""
+
+    data_dict: dict[int, list[int] | bytearray]
+
+    def addParam(self, dxl_id: int, start_address: int, data_length: int) -> bool:  # noqa: N802
+        """False if the ID is already in the group (or data too long)."""
+
+    def txRxPacket(self) -> int:  # noqa: N802
+        """Send and collect every status; result."""
+
+    def isAvailable(self, dxl_id: int, address: int, data_length: int) -> bool:  # noqa: N802
+        """Whether the last read holds data for that ID and range."""
+
+
+def default_port_handler(port: str) -> PortHandlerLike:
+    """The SDK's own ``PortHandler`` (plain ``serial.Serial``: device paths only, no URLs)."""
+    handler: PortHandlerLike = _sdk.PortHandler(port)
+    return handler
+
+
+class SdkLink:
+    """One opened port plus its packet handler; every call returns the SDK's raw result codes."""
+
+    def __init__(self, port: PortHandlerLike, protocol: float) -> None:
+        self.port = port
+        self.packet: PacketHandlerLike = _sdk.PacketHandler(protocol)
+        self.protocol = protocol
+
+    @contextmanager
+    def guard(self) -> Iterator[None]:
+        """Clear the SDK's non-reentrant busy flag if an exception escapes a transaction.
+
+        ``port.is_using`` is set in ``txPacket`` and cleared at the end of ``rxPacket``; anything
+        raised in between (a serial error, Ctrl-C, the IndexError of a short ``addParam``) would
+        otherwise leave every later call answering "Port is in use!".
+        """
+        try:
+            yield
+        except BaseException:
+            self.port.is_using = False
+            raise
+
+    def release(self) -> None:
+        """Force the busy flag off (after a COMM_PORT_BUSY nobody else can be causing)."""
+        self.port.is_using = False
+
+    def open(self, baud: int) -> bool:
+        """Open the port at ``baud``; False if the SDK rejects the rate."""
+        with self.guard():
+            # setBaudRate (re)opens the port at that rate; openPort would open at 1 Mbps first.
+            return bool(self.port.setBaudRate(baud))
+
+    def close(self) -> None:
+        """Close the port (idempotent)."""
+        self.port.is_using = False
+        if self.port.is_open:
+            self.port.closePort()
+
+    @property
+    def port_name(self) -> str:
+        """The name the port was opened with."""
+        return str(self.port.getPortName())
+
+    def result_text(self, result: int) -> str:
+        """The SDK's text for a COMM_* result code."""
+        return str(self.packet.getTxRxResult(result))
+
+    def error_text(self, error: int) -> str:
+        """The SDK's text for a status packet's error byte."""
+        return str(self.packet.getRxPacketError(error))
+
+    def ping(self, dxl_id: int) -> tuple[int, int, int]:
+        """(model number, result, error byte)."""
+        with self.guard():
+            return self.packet.ping(self.port, dxl_id)
+
+    def broadcast_ping(self) -> tuple[dict[int, list[int]], int]:
+        """({id: [model number, firmware]}, result)."""
+        with self.guard():
+            return self.packet.broadcastPing(self.port)
+
+    def reboot(self, dxl_id: int) -> tuple[int, int]:
+        """(result, error byte)."""
+        with self.guard():
+            return self.packet.reboot(self.port, dxl_id)
+
+    def factory_reset(self, dxl_id: int, option: int) -> tuple[int, int]:
+        """(result, error byte); Protocol 1.0 takes no option."""
+        with self.guard():
+            if self.protocol == 1.0:
+                result, error = self.packet.factoryReset(self.port, dxl_id)  # type: ignore[call-arg]
+                return int(result), int(error)
+            return self.packet.factoryReset(self.port, dxl_id, option)
+
+    def read(self, dxl_id: int, address: int, length: int) -> tuple[list[int], int, int]:
+        """(data bytes, result, error byte)."""
+        with self.guard():
+            return self.packet.readTxRx(self.port, dxl_id, address, length)
+
+    def write(self, dxl_id: int, address: int, data: bytes) -> tuple[int, int]:
+        """(result, error byte); broadcast writes get no reply."""
+        with self.guard():
+            return self.packet.writeTxRx(self.port, dxl_id, address, len(data), list(data))
+
+    def sync_write(self, address: int, length: int, param: list[int] | bytes) -> int:
+        """Send prepared Sync Write parameters ``[id, data...]*N`` (list or bytes); result code."""
+        try:  # guard() spelled out: this runs every control cycle
+            return self.packet.syncWriteTxOnly(self.port, address, length, param, len(param))
+        except BaseException:
+            self.port.is_using = False
+            raise
+
+
+class SyncWriter:
+    """A ``GroupSyncWrite`` of one contiguous block, its rows checked before ``addParam``."""
+
+    def __init__(self, link: SdkLink, address: int, size: int, rows: Sequence[tuple[int, bytes]]):
+        group: GroupSyncWriteLike = _sdk.GroupSyncWrite(link.port, link.packet, address, size)
+        for dxl_id, data in rows:
+            # A short row is accepted by addParam and crashes txPacket later (reference §1.7).
+            if len(data) != size:
+                raise ValueError(f"servo {dxl_id}: {len(data)} data bytes, register needs {size}")
+            if not group.addParam(dxl_id, list(data)):
+                raise ValueError(f"servo {dxl_id} appears twice in one sync write")
+        self._link = link
+        self._group = group
+
+    def send(self) -> int:
+        """Transmit the Sync Write (no status reply); the COMM_* result."""
+        with self._link.guard():
+            return self._group.txPacket()
+
+
+class SyncReader:
+    """A ``GroupSyncRead`` of one contiguous block from fixed IDs, built once and reused."""
+
+    def __init__(self, link: SdkLink, address: int, size: int, ids: Sequence[int]) -> None:
+        group: GroupSyncReadLike = _sdk.GroupSyncRead(link.port, link.packet, address, size)
+        for dxl_id in ids:
+            if not group.addParam(dxl_id):
+                raise ValueError(f"servo {dxl_id} appears twice in one sync read")
+        self._link = link
+        self._group = group
+        self.address = address
+        self.size = size
+        self.ids = tuple(ids)
+
+    def transact(self, fast: bool) -> int:
+        """Run one Sync Read (or Fast Sync Read); the COMM_* result."""
+        try:  # guard() spelled out: this runs every control cycle
+            return self._group.fastSyncRead() if fast else self._group.txRxPacket()
+        except IndexError:
+            # fastSyncReadRxPacket indexes past a valid but short combined reply (one servo's
+            # segment missing) instead of reporting it.
+            self._link.release()
+            return COMM_RX_CORRUPT
+        except BaseException:
+            self._link.release()
+            raise
+
+    def available(self, dxl_id: int) -> bool:
+        """Whether the last read holds fresh data for ``dxl_id`` (the SDK zeroes it otherwise)."""
+        return bool(self._group.isAvailable(dxl_id, self.address, self.size))
+
+    def data(self, dxl_id: int) -> list[int] | bytearray:
+        """Raw block bytes of ``dxl_id`` from the last read; check :meth:`available` first."""
+        return self._group.data_dict[dxl_id]
+
+
+class BulkReader:
+    """A ``GroupBulkRead``: one (address, size) block per ID, built once and reused."""
+
+    def __init__(self, link: SdkLink, blocks: Sequence[tuple[int, int, int]]) -> None:
+        group: GroupBulkReadLike = _sdk.GroupBulkRead(link.port, link.packet)
+        for dxl_id, address, size in blocks:
+            if not group.addParam(dxl_id, address, size):
+                raise ValueError(f"servo {dxl_id} appears twice in one bulk read")
+        self._link = link
+        self._group = group
+        self.blocks = tuple(blocks)
+
+    def transact(self) -> int:
+        """Run one Bulk Read; the COMM_* result."""
+        with self._link.guard():
+            return self._group.txRxPacket()
+
+    def available(self, dxl_id: int, address: int, size: int) -> bool:
+        """Whether the last read holds fresh data for that block."""
+        return bool(self._group.isAvailable(dxl_id, address, size))
+
+    def data(self, dxl_id: int) -> list[int] | bytearray:
+        """Raw block bytes of ``dxl_id`` from the last read."""
+        return self._group.data_dict[dxl_id]

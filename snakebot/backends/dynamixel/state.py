@@ -1,0 +1,57 @@
+"""Decode the cycle's state read (load or current, velocity, position) into joint-frame SI."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.config.schema import RobotConfig
+from snakebot.servo_tables import ServoTable
+
+
+class StateDecoder:
+    """Register rows to a (3, N) array: position rad, velocity rad/s, effort N·m, joint frame.
+
+    Effort: XL430/XC430 report Present Load in 0.1 % of the stall torque (taken at the robot's
+    supply voltage); XM430/XL330 report Present Current, times the torque constant
+    stall torque / stall current. ``read_effort=False`` leaves load out of the read (zeros).
+    """
+
+    def __init__(
+        self, robot: RobotConfig, table: ServoTable, converter: TickConverter, read_effort: bool
+    ) -> None:
+        physics = robot.servo.physics
+        load_key = "present_current" if "present_current" in table else "present_load"
+        if load_key == "present_current":
+            per_unit = table[load_key].scale * physics.stall_torque_nm / table.specs.stall_current_a
+        else:
+            stall = physics.stall_torque_nm * physics.supply_voltage_v / physics.nominal_voltage_v
+            per_unit = table[load_key].scale / 100.0 * stall
+        self.read_effort = read_effort
+        self.keys: tuple[str, ...] = (load_key,) * read_effort + (
+            "present_velocity", "present_position"
+        )
+        """The registers to read, in address order (the order of each row)."""
+        velocity = converter.direction * table["present_velocity"].scale
+        effort = converter.direction * per_unit
+        # Plain floats per joint: (position gain, position bias, velocity gain, effort gain).
+        self._terms = [
+            (pg, pb, vg, eg) for (pg, pb), vg, eg in zip(
+                converter.state_terms(), velocity.tolist(), effort.tolist(), strict=True
+            )
+        ]
+
+    def decode(self, rows: list[tuple[int, ...]]) -> np.ndarray:
+        """(3, N): position, velocity, effort from one row per servo, head to tail."""
+        position, velocity, effort = [], [], []
+        if not self.read_effort:
+            for (vel, pos), (pg, pb, vg, _) in zip(rows, self._terms, strict=True):
+                position.append(pos * pg + pb)
+                velocity.append(vel * vg)
+            effort = [0.0] * len(rows)
+        else:
+            for (load, vel, pos), (pg, pb, vg, eg) in zip(rows, self._terms, strict=True):
+                position.append(pos * pg + pb)
+                velocity.append(vel * vg)
+                effort.append(load * eg)
+        return np.array((position, velocity, effort))

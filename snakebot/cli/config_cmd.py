@@ -1,0 +1,154 @@
+"""``snakebot config diff|apply|assign-id``: servo settings from firmware_configs/, kept in sync."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from snakebot.cli.common import add_robot_option, print_json
+from snakebot.config import load_robot
+from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
+from snakebot.setup.console import confirm
+from snakebot.setup.diff import ChainDiff
+from snakebot.setup.link import SEARCH_BAUDS
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``config`` and its actions."""
+    parser = subparsers.add_parser(
+        "config", help="compare and write servo settings (diff, apply, assign-id)",
+        description="Servo settings as data: servos/<model>.toml [settings] plus the robot "
+        "file's overrides. Servos are found at any baud rate.",
+    )
+    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    diff = actions.add_parser("diff", help="list settings that differ; exit 1 if any do")
+    _robot_and_port(diff)
+    diff.add_argument("--json", action="store_true", help="print one JSON object")
+    diff.set_defaults(handler=run_diff)
+
+    write = actions.add_parser(
+        "apply", help="write the differences (torque off for EEPROM, baud changes last)",
+    )
+    _robot_and_port(write)
+    write.add_argument("--dry-run", action="store_true", help="print the plan, write nothing")
+    write.add_argument("--yes", action="store_true", help="do not ask before torque goes off")
+    write.set_defaults(handler=run_apply)
+
+    assign = actions.add_parser(
+        "assign-id", help="give one (factory-fresh) servo its ID and baud rate",
+        description="Finds the one servo on the bus at any baud rate (a new one is ID 1 at "
+        "57600) and sets its ID and baud rate. Refuses if several servos answer or the ID is "
+        "taken. Growing a chain: plug in one new servo at a time and pass --from 1.",
+    )
+    assign.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
+    assign.add_argument("--from", dest="from_id", type=servo_id_arg,
+                        help="only the servo answering as this ID (default: the only servo)")
+    assign.add_argument("--baud", type=int, help="baud rate to set (default: the robot's "
+                        "bus.baud with --robot, else 1000000)")
+    assign.add_argument("--robot", help="take the baud rate from this robot")
+    assign.set_defaults(handler=run_assign)
+
+
+def _robot_and_port(parser: argparse.ArgumentParser) -> None:
+    add_robot_option(parser, default=None)
+    parser.add_argument("--port", help="serial port (default: the robot's bus.port)")
+
+
+def servo_id_arg(text: str) -> int:
+    """argparse type: a servo ID 0..252."""
+    value = int(text) if text.isdigit() else -1
+    if not 0 <= value <= 252:
+        raise argparse.ArgumentTypeError(f"expected a servo ID 0..252, got {text!r}")
+    return value
+
+
+def _table(diff: ChainDiff) -> list[str]:
+    rows = [("ID", "setting", "servo", "wanted", "unit")]
+    for d in diff.differences:
+        row = d.row()
+        rows.append((str(d.servo_id), d.key, str(row["servo_value"]), str(row["wanted_value"]),
+                     str(row["unit"])))
+    widths = [max(len(r[i]) for r in rows) for i in range(5)]
+    return ["  ".join(c.rjust(w) if i == 0 else c.ljust(w) for i, (c, w) in
+                      enumerate(zip(r, widths, strict=True))).rstrip() for r in rows]
+
+
+def run_diff(args: argparse.Namespace) -> int:
+    """Print the differences; 0 when none, 1 when some."""
+    robot = load_robot(args.robot)
+    chain = load_settings(robot)
+    port = args.port or robot.bus.port
+    with Link(port, chain.baud, model=robot.servo.name) as link:
+        diff = survey(link, chain)
+    if args.json:
+        print_json({
+            "robot": robot.name, "port": port, "identical": diff.identical,
+            "servos": [{"id": s.servo_id, "baud": s.baud, "torque_on": s.torque_on,
+                        "hardware_error": s.hardware_error} for s in diff.servos.values()],
+            "differences": [d.row() for d in diff.differences], "notes": list(diff.notes),
+        })
+    else:
+        count = len(robot.servo_ids)
+        if diff.identical:
+            print(f"{robot.name} on {port}: all {count} servos hold the configured settings")
+        else:
+            print("\n".join(_table(diff)))
+            servos = len({d.servo_id for d in diff.differences})
+            print(f"{len(diff.differences)} difference(s) on {servos} of {count} servos; "
+                  f"`snakebot config apply --robot {args.robot} --port {port}` writes them")
+        for note in diff.notes:
+            print(f"note: {note}", file=sys.stderr)
+    return 0 if diff.identical else 1
+
+
+def run_apply(args: argparse.Namespace) -> int:
+    """Plan, confirm, write, verify; the final diff must come out empty."""
+    robot = load_robot(args.robot)
+    chain = load_settings(robot)
+    port = args.port or robot.bus.port
+    with Link(port, chain.baud, model=robot.servo.name) as link:
+        diff = survey(link, chain)
+        plan = plan_apply(chain, diff)
+        if plan.empty:
+            print(f"{robot.name} on {port}: nothing to write, all servos hold the settings")
+            return 0
+        print(f"plan for {robot.name} on {port} ({len(plan.steps)} steps):")
+        for step in plan.steps:
+            print(f"  {step.describe()}")
+        if args.dry_run:
+            print("dry run: nothing was written")
+            return 0
+        if plan.limp:
+            ids = ", ".join(map(str, plan.limp))
+            print(f"WARNING: torque goes off on servo(s) {ids} to write EEPROM settings: those "
+                  "joints go limp. Lay the snake down or support it.", file=sys.stderr)
+        confirm("Write these settings?", assume_yes=args.yes, what="config apply")
+        total = len(plan.steps)
+        done = iter(range(1, total + 1))
+
+        def report(step: Step) -> None:
+            print(f"  [{next(done)}/{total}] {step.describe()}", flush=True)
+
+        apply(link, chain, plan, diff, on_step=report)
+    print("done: every write read back, the final diff is empty; torque is left off "
+          "(`snakebot run` turns it on)")
+    return 0
+
+
+def run_assign(args: argparse.Namespace) -> int:
+    """Find the lone servo, set its ID and baud rate, verify."""
+    baud = args.baud or (load_robot(args.robot).bus.baud if args.robot else 1_000_000)
+    where = f"ID {args.from_id}" if args.from_id is not None else "the servo"
+    print(f"searching for {where} at {', '.join(map(str, SEARCH_BAUDS))} baud ...",
+          file=sys.stderr, flush=True)
+    with Link(args.port, SEARCH_BAUDS[0]) as link:
+        result = assign_id(link, to_id=args.to, baud=baud, from_id=args.from_id)
+    found = result.found
+    if not result.changed:
+        print(f"servo is already ID {found.servo_id} at {found.baud} baud; nothing written")
+    else:
+        print(f"servo ID {found.servo_id} at {found.baud} baud is now ID {result.servo_id} at "
+              f"{result.baud} baud")
+    return 0

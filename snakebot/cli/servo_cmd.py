@@ -1,0 +1,140 @@
+"""``snakebot servo reboot|reset|info``: recover and inspect single servos."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from snakebot.backends.dynamixel.faults import decode_hardware_error
+from snakebot.cli.common import print_json
+from snakebot.cli.config_cmd import servo_id_arg
+from snakebot.errors import BusError
+from snakebot.setup import Link, SetupError
+from snakebot.setup.console import confirm
+from snakebot.setup.maintenance import factory_reset, reboot, servo_info
+from snakebot.setup.units import display
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``servo`` and its actions."""
+    parser = subparsers.add_parser("servo", help="reboot, factory-reset or inspect one servo")
+    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+
+    boot = actions.add_parser("reboot", help="reboot servos (clears a latched hardware error)")
+    _port(boot)
+    which = boot.add_mutually_exclusive_group(required=True)
+    which.add_argument("--id", type=servo_id_arg, help="the servo to reboot")
+    which.add_argument("--all", action="store_true", help="every servo that answers")
+    boot.add_argument("--yes", action="store_true", help="do not ask when a servo holds torque")
+    boot.set_defaults(handler=run_reboot)
+
+    reset = actions.add_parser("reset", help="factory-reset one servo (erases its settings)")
+    _port(reset)
+    reset.add_argument("--id", type=servo_id_arg, required=True, help="the servo to reset")
+    reset.add_argument("--keep-id", action="store_true", help="keep its ID")
+    reset.add_argument("--keep-baud", action="store_true", help="keep its baud (needs --keep-id)")
+    reset.add_argument("--yes", action="store_true", help="required: confirms the erase")
+    reset.set_defaults(handler=run_reset)
+
+    info = actions.add_parser("info", help="model, firmware, errors and the whole control table")
+    _port(info)
+    info.add_argument("--id", type=servo_id_arg, required=True, help="the servo to read")
+    info.add_argument("--json", action="store_true", help="print one JSON object")
+    info.set_defaults(handler=run_info)
+
+
+def _port(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    parser.add_argument("--baud", type=int, default=1_000_000,
+                        help="the rate the servo listens at (default 1000000)")
+
+
+def run_reboot(args: argparse.Namespace) -> int:
+    """Reboot one servo or all; exit 1 if a hardware error stays latched."""
+    with Link(args.port, args.baud) as link:
+        bus = link.bus
+        ids = sorted(bus.broadcast_ping()) if args.all else [args.id]
+        if not ids:
+            raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
+        before = {i: bus.read_block(i, ("torque_enable", "hardware_error_status")) for i in ids}
+        holding = [i for i, v in before.items() if v["torque_enable"]]
+        if holding:
+            print(f"WARNING: servo(s) {', '.join(map(str, holding))} hold torque; a reboot turns "
+                  "it off and the joints go limp", file=sys.stderr)
+            confirm("Reboot anyway?", assume_yes=args.yes, what="servo reboot")
+        stuck = []
+        for servo_id in ids:
+            was = decode_hardware_error(before[servo_id]["hardware_error_status"])
+            now = decode_hardware_error(reboot(link, servo_id, args.baud))
+            status = f"cleared {', '.join(was)}" if was else "no error was latched"
+            if now:
+                status = f"still latched: {', '.join(now)} (the cause persists)"
+                stuck.append(servo_id)
+            print(f"servo {servo_id}: rebooted; {status}")
+    if stuck:
+        print(f"snakebot: servo(s) {', '.join(map(str, stuck))} latch their error again: remove "
+              "the cause (voltage, heat, a jammed joint) and reboot again", file=sys.stderr)
+        return 1
+    return 0
+
+
+def run_reset(args: argparse.Namespace) -> int:
+    """Factory-reset one servo after checking it will not collide with another."""
+    if not args.yes:
+        raise SetupError(f"servo reset erases every setting of servo {args.id}: add --yes")
+    with Link(args.port, args.baud) as link:
+        if link.ping_clean(args.id, args.baud) is None:
+            raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
+                           f"scan --port {args.port} --all-bauds` shows where the servos are")
+        if not args.keep_id and (args.id, args.baud) != (1, 57600):
+            other = link.probe(1, 57600, tries=1)
+            if other.models or other.corrupt:
+                raise SetupError(
+                    "after a reset without --keep-id the servo answers as ID 1 at 57600 baud, "
+                    "where another servo already answers: reset with --keep-id, or unplug it"
+                )
+        new_id, new_baud = factory_reset(link, args.id, args.baud, keep_id=args.keep_id,
+                                         keep_baud=args.keep_baud)
+    print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} baud")
+    return 0
+
+
+def run_info(args: argparse.Namespace) -> int:
+    """Print one servo's model, firmware, health and control table with units."""
+    with Link(args.port, args.baud) as link:
+        info = servo_info(link, args.id, args.baud)
+    table = info.table
+    rows = []
+    for register in info.registers():
+        raw = info.values[register.key]
+        value = display(register, None, raw, table)[0]
+        si = f"{register.to_si(raw):.6g} {register.unit}" if register.unit else ""
+        rows.append({"address": register.address, "name": register.name, "key": register.key,
+                     "value": raw, "si": si, "eeprom": register.eeprom,
+                     "access": register.access, "shown": value})
+    get = info.values.get
+    summary = {
+        "id": info.servo_id, "baud": info.baud, "model": table.model,
+        "model_number": get("model_number"), "firmware": get("firmware_version"),
+        "hardware_error": list(info.hardware_errors),
+        "temperature_c": get("present_temperature"),
+        "input_voltage_v": round(table["present_input_voltage"].to_si(
+            get("present_input_voltage", 0)), 3),
+        "torque_on": bool(get("torque_enable")),
+    }
+    if args.json:
+        print_json({**summary, "registers": rows})
+        return 0
+    errors = ", ".join(info.hardware_errors) or "none"
+    print(f"servo {info.servo_id} at {info.baud} baud: {table.model} (model "
+          f"{summary['model_number']}), firmware {summary['firmware']}")
+    print(f"  hardware error: {errors}; temperature {summary['temperature_c']} degC; input "
+          f"{summary['input_voltage_v']:.1f} V; torque {'on' if summary['torque_on'] else 'off'}")
+    print(f"  {'addr':>4}  {'name':<24} {'value':>10}  {'SI':<18} memory")
+    for row in rows:
+        memory = "EEPROM" if row["eeprom"] else "RAM"
+        access = "" if row["access"] == "RW" else " (read-only)"
+        print(f"  {row['address']:>4}  {row['name']:<24} {row['shown']:>10}  {row['si']:<18} "
+              f"{memory}{access}")
+    return 0

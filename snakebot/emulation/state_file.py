@@ -1,0 +1,89 @@
+"""Emulated servos' EEPROM across emulated power cycles: a JSON file, one entry per serial number.
+
+Format (``version`` 1)::
+
+    {"format": "snakebot-emulator-state", "version": 1,
+     "servos": {"3": {"model_number": 1060, "eeprom": "<hex of control-table bytes 0..63>"}}}
+
+Only EEPROM (addresses below the model's ``eeprom_end``) is kept; RAM comes back at its power-up
+defaults, as on a real servo. Files are replaced atomically.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from snakebot.emulation.errors import EmulationError
+from snakebot.emulation.servo import VirtualServo
+
+FORMAT = "snakebot-emulator-state"
+VERSION = 1
+
+
+@dataclass(frozen=True)
+class SavedServo:
+    """One servo's saved EEPROM image and model number."""
+
+    model_number: int
+    eeprom: bytes
+
+
+def eeprom_image(servo: VirtualServo) -> SavedServo:
+    """The servo's EEPROM bytes as they are now."""
+    end = servo.table.specs.eeprom_end
+    return SavedServo(servo.table.model_number, bytes(servo.memory.data[:end]))
+
+
+def save_state(path: Path, servos: Iterable[VirtualServo]) -> dict[int, SavedServo]:
+    """Write every servo's EEPROM to ``path`` (atomically); returns what was written."""
+    images = {s.serial_number: eeprom_image(s) for s in servos}
+    payload = {
+        "format": FORMAT, "version": VERSION,
+        "servos": {str(serial): {"model_number": image.model_number, "eeprom": image.eeprom.hex()}
+                   for serial, image in sorted(images.items())},
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as out:
+            json.dump(payload, out, indent=1)
+            out.write("\n")
+        os.replace(temp, path)
+    except BaseException:
+        Path(temp).unlink(missing_ok=True)
+        raise
+    return images
+
+
+def load_state(path: Path) -> dict[int, SavedServo]:
+    """``{serial: SavedServo}`` from a state file; EmulationError saying what is wrong with it."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("format") != FORMAT or data.get("version") != VERSION:
+            raise ValueError(f"expected format {FORMAT!r} version {VERSION}")
+        servos = data["servos"]
+        if not isinstance(servos, Mapping):
+            raise ValueError("'servos' must be an object keyed by serial number")
+        return {int(serial): SavedServo(int(entry["model_number"]), bytes.fromhex(entry["eeprom"]))
+                for serial, entry in servos.items()}
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise EmulationError(f"{path}: not a usable emulator state file: {exc}") from exc
+
+
+def restore(servo: VirtualServo, saved: SavedServo) -> None:
+    """Load a saved EEPROM image into ``servo`` and power it up (RAM at its defaults)."""
+    if saved.model_number != servo.table.model_number:
+        raise EmulationError(f"serial {servo.serial_number} was saved as model "
+                             f"{saved.model_number}, not {servo.table.model_number}")
+    end = servo.table.specs.eeprom_end
+    if len(saved.eeprom) != end:
+        raise EmulationError(f"serial {servo.serial_number}: {len(saved.eeprom)} EEPROM bytes "
+                             f"saved, the model has {end}")
+    servo.memory.data[:end] = saved.eeprom
+    servo.memory.version += 1
+    servo.reboot()

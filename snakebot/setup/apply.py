@@ -1,0 +1,195 @@
+"""Write only the differences, in a safe order, verifying every write; a rerun finishes the job.
+
+Order per servo, head to tail: Status Return Level first (every later write must be answered),
+a reboot if a hardware error is latched, torque off before EEPROM items (the joint goes limp),
+Operating Mode before the other EEPROM items (a mode change resets gains and profiles, e-Manual
+Operating Mode), a reboot after settings that act at boot, then RAM items. Baud rates change last,
+one servo at a time, each found again at its new rate before the next. IDs never change here: a
+servo is known by its ID (``assign-id`` changes IDs). Torque is left off.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+from snakebot.setup.diff import ChainDiff, Difference, survey
+from snakebot.setup.errors import SetupError, VerifyError
+from snakebot.setup.link import Link, unanswered_ok
+from snakebot.setup.maintenance import reboot, wait_for_boot
+from snakebot.setup.settings import REBOOT_KEYS, ChainSettings, Setting
+
+Action = Literal["write", "torque_off", "reboot", "baud"]
+FIRST_KEYS = ("status_return_level",)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One action on one servo; ``write`` steps with ``recheck`` are skipped if already right."""
+
+    servo_id: int
+    action: Action
+    setting: Setting | None = None
+    current: int | None = None
+    recheck: bool = False
+    reason: str = ""
+
+    def describe(self) -> str:
+        """One line for the plan, e.g. ``servo 3: return_delay_time 500 -> 0 us``."""
+        head = f"servo {self.servo_id}:"
+        if self.setting is None:
+            what = "torque off" if self.action == "torque_off" else "reboot"
+            return f"{head} {what} ({self.reason})"
+        want, unit = self.setting.show(self.setting.raw)
+        want = f"{want} {unit}".rstrip()
+        if self.current is None:
+            return f"{head} {self.setting.key} -> {want} (checked again after the {self.reason})"
+        have, _ = self.setting.show(self.current)
+        kind = "baud rate" if self.action == "baud" else self.setting.key
+        return f"{head} {kind} {have} -> {want}"
+
+
+@dataclass(frozen=True)
+class ApplyPlan:
+    """The steps in order; ``limp`` lists servos whose torque is on now and will go off."""
+
+    steps: tuple[Step, ...]
+    limp: tuple[int, ...]
+
+    @property
+    def empty(self) -> bool:
+        """Nothing to do."""
+        return not self.steps
+
+
+def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
+    """The steps that bring every servo to ``chain``'s settings, given what ``survey`` found."""
+    steps: list[Step] = []
+    bauds: list[Step] = []
+    limp: list[int] = []
+    for wanted in chain.servos:
+        servo_id = wanted.servo_id
+        state = diff.servos[servo_id]
+        diffs = diff.for_id(servo_id)
+        first = [d for d in diffs if d.key in FIRST_KEYS]
+        eeprom = [d for d in diffs if d.setting.eeprom and d.key != "baud_rate"]
+        eeprom.sort(key=lambda d: (d.key != "operating_mode", d.setting.register.address))
+        ram = [d for d in diffs if not d.setting.eeprom and d.key not in FIRST_KEYS]
+        steps += [_write(d) for d in first]
+        resets = bool(state.hardware_error)
+        if state.hardware_error:
+            steps.append(Step(servo_id, "reboot", reason="clears the latched hardware error"))
+        if eeprom:
+            limp += [servo_id] if state.torque_on else []
+            why = "the joint goes limp" if state.torque_on else "already off"
+            steps.append(Step(servo_id, "torque_off", reason=f"EEPROM writes need it; {why}"))
+            steps += [_write(d) for d in eeprom]
+            resets |= any(d.key == "operating_mode" for d in eeprom)
+        booted = [d.key for d in eeprom if d.key in REBOOT_KEYS]
+        if booted:
+            steps.append(Step(servo_id, "reboot", reason=f"{', '.join(booted)} acts at boot"))
+        if resets or booted:
+            why = "reboot" if state.hardware_error or booted else "mode change"
+            steps += [Step(servo_id, "write", s, None, recheck=True, reason=why)
+                      for s in wanted.settings if not s.eeprom]
+        else:
+            steps += [_write(d) for d in ram]
+        bauds += [Step(servo_id, "baud", d.setting, d.current) for d in diffs
+                  if d.key == "baud_rate"]
+    return ApplyPlan(tuple(steps + bauds), tuple(limp))
+
+
+def _write(diff: Difference) -> Step:
+    return Step(diff.servo_id, "write", diff.setting, diff.current)
+
+
+class Applier:
+    """Runs a plan's steps on a link, tracking the baud each servo listens at (``where``)."""
+
+    def __init__(self, link: Link, diff: ChainDiff) -> None:
+        self.link = link
+        self.where = {i: s.baud for i, s in diff.servos.items()}
+        # Status Return Level < 2: writes get no status reply (e-Manual Status Return Level).
+        self.quiet = {i for i, s in diff.servos.items()
+                      if s.values.get("status_return_level", 2) < 2}
+
+    def run(self, step: Step) -> bool:
+        """Execute one step; False if a ``recheck`` write found the value already right."""
+        servo_id, baud = step.servo_id, self.where[step.servo_id]
+        bus = self.link.at(baud)
+        if step.action == "reboot":
+            reboot(self.link, servo_id, baud)
+            self.quiet.discard(servo_id)
+            return True
+        if step.action == "torque_off":
+            self._write(servo_id, "torque_enable", 0)
+            return True
+        assert step.setting is not None
+        if step.action == "baud":
+            self._change_baud(servo_id, step.setting.raw)
+            return True
+        if step.recheck and bus.read(servo_id, step.setting.key) == step.setting.raw:
+            return False
+        self._write(servo_id, step.setting.key, step.setting.raw)
+        return True
+
+    def _write(self, servo_id: int, key: str, value: int) -> None:
+        bus = self.link.at(self.where[servo_id])
+        if servo_id in self.quiet or key == "status_return_level":
+            bus.sync_write(key, {servo_id: value})  # answered or not, the read-back decides
+        else:
+            bus.write(servo_id, key, value)
+        back = bus.read(servo_id, key)
+        if back != value:
+            raise VerifyError(self.link.port, servo_id, key, value, back)
+        if key == "status_return_level":
+            (self.quiet.discard if value >= 2 else self.quiet.add)(servo_id)
+
+    def _change_baud(self, servo_id: int, index: int) -> None:
+        old = self.where[servo_id]
+        new = self.link.bus.table.baud_rates[index]
+        other = self.link.probe(servo_id, new, tries=1)
+        if other.models or other.corrupt:
+            raise SetupError(
+                f"{self.link.port}: cannot move servo {servo_id} from {old} to {new} baud: another "
+                f"servo already answers as ID {servo_id} at {new} baud. Unplug it, or give it "
+                "another ID with `snakebot config assign-id`"
+            )
+        bus = self.link.at(old)
+        # The status may already come back at the new rate; finding the servo there decides.
+        with unanswered_ok():
+            bus.write(servo_id, "baud_rate", index)
+        try:
+            wait_for_boot(self.link, servo_id, new, timeout_s=1.0)
+        except SetupError:
+            raise SetupError(
+                f"{self.link.port}: servo {servo_id} does not answer at {new} baud after the "
+                f"change (it was at {old}). Nothing else was changed; run `snakebot scan --port "
+                f"{self.link.port} --all-bauds` to find it, then apply again"
+            ) from None
+        self.where[servo_id] = new
+        back = self.link.at(new).read(servo_id, "baud_rate")
+        if back != index:
+            raise VerifyError(self.link.port, servo_id, "baud_rate", index, back)
+
+
+def apply(
+    link: Link,
+    chain: ChainSettings,
+    plan: ApplyPlan,
+    diff: ChainDiff,
+    on_step: Callable[[Step], None] | None = None,
+) -> ChainDiff:
+    """Run ``plan`` (from ``plan_apply(chain, diff)``), then diff again; SetupError unless empty."""
+    applier = Applier(link, diff)
+    for step in plan.steps:
+        if on_step is not None:
+            on_step(step)
+        applier.run(step)
+    after = survey(link, chain)
+    if not after.identical:
+        left = "; ".join(f"servo {d.servo_id} {d.key} {d.current} != {d.wanted}"
+                         for d in after.differences)
+        raise SetupError(f"{link.port}: settings still differ after apply: {left}")
+    return after

@@ -1,0 +1,146 @@
+"""Give one servo its ID and baud rate: the factory-fresh servo flow (every new one is ID 1, 57600).
+
+The servo is searched for at every baud rate. Without ``from_id`` it must be the only servo on the
+bus; with it, the only one answering as that ID. The target ID must be free, both at the rate the
+servo is at and at the rate it moves to. The ID changes first, the baud rate last, each verified
+by finding the servo again.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from snakebot.servo_tables import ServoTable, table_for_model
+from snakebot.setup.duplicates import collision_reason
+from snakebot.setup.errors import DuplicateIdError, SetupError, VerifyError
+from snakebot.setup.link import SEARCH_BAUDS, Link, unanswered_ok
+from snakebot.setup.maintenance import wait_for_boot
+
+FACTORY_ID = 1
+
+
+@dataclass(frozen=True)
+class Found:
+    """A servo that answered: its ID, the rate it answered at and its model number."""
+
+    servo_id: int
+    baud: int
+    model_number: int
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """What assign-id did: the servo as found, and its ID and baud rate now."""
+
+    found: Found
+    servo_id: int
+    baud: int
+
+    @property
+    def changed(self) -> bool:
+        """Whether anything was written."""
+        return (self.servo_id, self.baud) != (self.found.servo_id, self.found.baud)
+
+
+def find_servos(
+    link: Link, *, from_id: int | None = None, bauds: Sequence[int] = SEARCH_BAUDS
+) -> list[Found]:
+    """Every servo answering (as ``from_id``, if given) at ``bauds``; DuplicateIdError on clashes.
+
+    Without ``from_id`` a broadcast ping lists the IDs at each rate (slow: about a second per
+    rate); ID 1 is always checked too, since new servos collide there.
+    """
+    found: list[Found] = []
+    clashes: list[tuple[int, int, str]] = []
+    for baud in bauds:
+        ids = {from_id} if from_id is not None else {FACTORY_ID, *link.at(baud).broadcast_ping()}
+        for servo_id in sorted(ids):
+            reason = collision_reason(link, servo_id, baud)
+            if reason:
+                clashes.append((servo_id, baud, reason))
+                continue
+            model = link.ping_clean(servo_id, baud, tries=1)
+            if model is not None:
+                found.append(Found(servo_id, baud, model))
+    if clashes:
+        raise DuplicateIdError(link.port, clashes)
+    return found
+
+
+def _describe(found: Sequence[Found]) -> str:
+    return ", ".join(f"ID {f.servo_id} at {f.baud} baud" for f in found)
+
+
+def _table(link: Link, servo: Found) -> ServoTable:
+    try:
+        return table_for_model(servo.model_number)
+    except LookupError as exc:
+        raise SetupError(f"{link.port}: the servo is model {servo.model_number}: {exc}") from None
+
+
+def _lone(link: Link, found: list[Found], from_id: int | None) -> Found:
+    who = "no servo" if from_id is None else f"no servo as ID {from_id}"
+    if not found:
+        raise SetupError(
+            f"{link.port}: {who} answered at any baud rate ({', '.join(map(str, SEARCH_BAUDS))}). "
+            "Check the servo's power (its LED blinks once at power-up) and cable"
+        )
+    if len(found) > 1:
+        hint = ("connect only the new servo, or name it with --from ID (a new servo is ID 1 at "
+                "57600)") if from_id is None else "unplug all but the one to change"
+        raise SetupError(f"{link.port}: {len(found)} servos answer ({_describe(found)}); "
+                         f"assign-id changes one servo at a time: {hint}")
+    return found[0]
+
+
+def _check_free(link: Link, servo: Found, to_id: int, bauds: set[int]) -> None:
+    for baud in sorted(bauds):
+        if to_id == servo.servo_id and baud == servo.baud:
+            continue
+        probe = link.probe(to_id, baud, tries=1)
+        if probe.models or probe.corrupt:
+            raise SetupError(
+                f"{link.port}: ID {to_id} is taken: a servo already answers as ID {to_id} at "
+                f"{baud} baud. Pick another --to, or move that servo first"
+            )
+
+
+def assign_id(
+    link: Link, *, to_id: int, baud: int, from_id: int | None = None,
+    bauds: Sequence[int] = SEARCH_BAUDS,
+) -> Assignment:
+    """Find the lone servo, then set its ID to ``to_id`` and its rate to ``baud`` (verified)."""
+    servo = _lone(link, find_servos(link, from_id=from_id, bauds=bauds), from_id)
+    table = _table(link, servo)
+    try:
+        index = table.baud_index(baud)
+    except ValueError as exc:
+        raise SetupError(f"--baud {baud}: {exc}") from None
+    _check_free(link, servo, to_id, {servo.baud, baud})
+    link.bus.table = table
+    bus = link.at(servo.baud)
+    if (to_id, baud) != (servo.servo_id, servo.baud) and bus.read(servo.servo_id, "torque_enable"):
+        bus.write(servo.servo_id, "torque_enable", 0)  # ID and Baud Rate are EEPROM items
+    if to_id != servo.servo_id:
+        with unanswered_ok():  # the reply may already carry the new ID
+            bus.write(servo.servo_id, "id", to_id)
+        _verify(link, to_id, servo.baud, "id", to_id)
+    if baud != servo.baud:
+        with unanswered_ok():  # the reply may already come at the new rate
+            link.at(servo.baud).write(to_id, "baud_rate", index)
+        _verify(link, to_id, baud, "baud_rate", index)
+    return Assignment(servo, to_id, baud)
+
+
+def _verify(link: Link, servo_id: int, baud: int, key: str, value: int) -> None:
+    try:
+        wait_for_boot(link, servo_id, baud, timeout_s=1.0)
+    except SetupError:
+        raise SetupError(
+            f"{link.port}: after writing {key} the servo does not answer as ID {servo_id} at "
+            f"{baud} baud; `snakebot scan --all-bauds` finds it"
+        ) from None
+    back = link.at(baud).read(servo_id, key)
+    if back != value:
+        raise VerifyError(link.port, servo_id, key, value, back)

@@ -1,0 +1,178 @@
+"""One serial port for the setup tools: a DynamixelBus whose baud rate they switch, raw probes.
+
+Ports with a URL scheme (``dxlemu://bus0`` for the in-process emulator, ``spy:///dev/ttyUSB0?
+file=dump.txt`` for a traffic dump) open through pyserial's ``serial_for_url``; device paths
+(``/dev/ttyUSB0``, ``COM3``) through the SDK's own port handler.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from types import TracebackType
+
+from snakebot.backends.dynamixel import sdk
+from snakebot.backends.dynamixel.bus import DynamixelBus
+from snakebot.backends.dynamixel.faults import ServoStatusError
+from snakebot.errors import BusError
+
+SEARCH_BAUDS = (57600, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
+"""Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
+
+
+def port_handler_factory(port: str) -> sdk.PortHandlerFactory:
+    """The SDK port handler class for ``port``: pyserial URLs via the emulator's handler."""
+    if "://" in port:
+        from snakebot.emulation.port import EmulatedPortHandler
+
+        return EmulatedPortHandler
+    return sdk.default_port_handler
+
+
+def search_order(first: int) -> tuple[int, ...]:
+    """:data:`SEARCH_BAUDS` with ``first`` tried first."""
+    return (first, *(b for b in SEARCH_BAUDS if b != first))
+
+
+@dataclass(frozen=True)
+class Probe:
+    """What ``tries`` raw pings of one ID got: clean replies (model numbers), corrupt, silent."""
+
+    servo_id: int
+    baud: int
+    models: tuple[int, ...]
+    corrupt: int
+    silent: int
+
+    @property
+    def model(self) -> int | None:
+        """The model number if every reply was clean and agreed, else None."""
+        if self.corrupt or len(set(self.models)) != 1:
+            return None
+        return self.models[0]
+
+    @property
+    def collides(self) -> bool:
+        """Whether the replies look like two servos answering at once."""
+        return self.corrupt > 0 or len(set(self.models)) > 1
+
+    def clash(self) -> str:
+        """Why the replies look like several servos ("" when they do not)."""
+        if self.corrupt:
+            total = self.corrupt + len(self.models) + self.silent
+            return f"{self.corrupt} of {total} ping replies were corrupt"
+        models = sorted(set(self.models))
+        if len(models) > 1:
+            return f"ping replies name different models ({', '.join(map(str, models))})"
+        return ""
+
+
+class Link:
+    """A port opened for setup: ``bus`` (registers by name, typed errors) at a switchable rate.
+
+    ``model`` picks the control table register names resolve in (X-series servos share it).
+    """
+
+    def __init__(self, port: str, baud: int, *, model: str | int = "XL430-W250",
+                 retries: int = 2) -> None:
+        self.port = port
+        self.handler = port_handler_factory(port)(port)
+        self.bus = DynamixelBus(port, baud, model=model, retries=retries,
+                                port_handler_factory=lambda _name: self.handler)
+        self._raw = sdk.SdkLink(self.handler, 2.0)
+        self._open = False
+
+    def __enter__(self) -> Link:
+        self.at(self.bus.baud)
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the port (idempotent)."""
+        self.bus.close()
+        self._open = False
+
+    @property
+    def baud(self) -> int:
+        """The rate the port is at."""
+        return self.bus.baud
+
+    def at(self, baud: int) -> DynamixelBus:
+        """The bus, with the port (re)opened at ``baud`` if it is not there already."""
+        if not self._open or self.bus.baud != baud:
+            self.bus.baud = baud
+            self.bus.open()
+            self._open = True
+        return self.bus
+
+    @contextmanager
+    def retries(self, count: int) -> Iterator[DynamixelBus]:
+        """The bus with ``retries`` set to ``count`` for the block (searches fail fast)."""
+        saved = self.bus.retries
+        self.bus.retries = count
+        try:
+            yield self.bus
+        finally:
+            self.bus.retries = saved
+
+    def probe(self, servo_id: int, baud: int, tries: int = 2, *, patient: bool = False) -> Probe:
+        """Ping ``servo_id`` at ``baud`` up to ``tries`` times without retries; classify replies.
+
+        Unless ``patient``, a first ping that gets no reply at all ends the probe (an absent ID
+        costs one timeout, about 35 ms on a real port).
+        """
+        self.at(baud)
+        models, corrupt, silent = [], 0, 0
+        for attempt in range(tries):
+            if attempt and silent == attempt and not patient:
+                break
+            model, result, _error = self.bus.run(
+                [servo_id], "ping", lambda: self._raw.ping(servo_id)
+            )
+            if result == sdk.COMM_SUCCESS:
+                models.append(model)
+            elif result in (sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL):
+                corrupt += 1
+            elif result == sdk.COMM_PORT_BUSY:
+                self._raw.release()
+                silent += 1
+            else:
+                silent += 1
+        return Probe(servo_id, baud, tuple(models), corrupt, silent)
+
+    def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
+        """One Read without retries: (data, SDK result code); for collision checks."""
+        data, result, _error = self.bus.run(
+            [servo_id], "read", lambda: self._raw.read(servo_id, address, length)
+        )
+        return data, result
+
+    def ping_clean(self, servo_id: int, baud: int, tries: int = 2) -> int | None:
+        """The model number if ``servo_id`` answers cleanly at ``baud`` (None if silent)."""
+        probe = self.probe(servo_id, baud, tries)
+        return probe.models[0] if probe.models and not probe.collides else None
+
+
+def answering(probes: Sequence[Probe]) -> list[Probe]:
+    """The probes that got any reply at all (clean or corrupt)."""
+    return [p for p in probes if p.models or p.corrupt]
+
+
+@contextmanager
+def unanswered_ok() -> Iterator[None]:
+    """Ignore a missing or garbled status (an ID or baud change may lose it); not a servo error.
+
+    The caller then verifies by finding the servo again.
+    """
+    try:
+        yield
+    except ServoStatusError:
+        raise
+    except BusError:
+        pass

@@ -1,0 +1,96 @@
+"""Servo maintenance: reboot (clears a latched hardware error), factory reset, and servo info."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from snakebot.backends.dynamixel.faults import decode_hardware_error
+from snakebot.errors import BusError
+from snakebot.servo_tables import Register, ServoTable, table_for_model
+from snakebot.setup.errors import SetupError
+from snakebot.setup.link import Link
+
+BOOT_TIMEOUT_S = 3.0
+RESET_KEEP = {(False, False): "all", (True, False): "keep_id", (True, True): "keep_id_baud"}
+"""(keep ID, keep baud) -> DynamixelBus.factory_reset option (e-Manual Factory Reset 0xFF/01/02)."""
+
+
+def wait_for_boot(link: Link, servo_id: int, baud: int, timeout_s: float = BOOT_TIMEOUT_S) -> int:
+    """Ping until the servo answers again after a reboot; its model number."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        model = link.ping_clean(servo_id, baud, tries=1)
+        if model is not None:
+            return model
+        if time.monotonic() > deadline:
+            raise SetupError(f"{link.port}: servo {servo_id} did not answer at {baud} baud within "
+                             f"{timeout_s:.0f} s of a reboot; power-cycle it")
+        time.sleep(0.05)
+
+
+def reboot(link: Link, servo_id: int, baud: int) -> int:
+    """Reboot one servo, wait until it answers, return its Hardware Error Status (0 = clear)."""
+    bus = link.at(baud)
+    bus.reboot(servo_id)
+    wait_for_boot(link, servo_id, baud)
+    return bus.read(servo_id, "hardware_error_status")
+
+
+def factory_reset(link: Link, servo_id: int, baud: int, *, keep_id: bool,
+                  keep_baud: bool) -> tuple[int, int]:
+    """Factory-reset one servo; (ID, baud) it answers at afterwards.
+
+    The firmware keeps the baud only together with the ID (option 0x02); without the ID the servo
+    comes back as ID 1 at 57600.
+    """
+    if keep_baud and not keep_id:
+        raise SetupError("the firmware keeps the baud rate only together with the ID (Factory "
+                         "Reset option 0x02): add --keep-id, or drop --keep-baud")
+    bus = link.at(baud)
+    table = bus.table
+    if bus.read(servo_id, "torque_enable"):
+        bus.write(servo_id, "torque_enable", 0)
+    bus.factory_reset(servo_id, keep=RESET_KEEP[(keep_id, keep_baud)])
+    new_id = servo_id if keep_id else table["id"].default
+    new_baud = baud if keep_baud else table.baud_rates[table["baud_rate"].default]
+    wait_for_boot(link, new_id, new_baud)
+    return new_id, new_baud
+
+
+@dataclass(frozen=True)
+class ServoInfo:
+    """One servo's identity, health and full control table (raw register values)."""
+
+    servo_id: int
+    baud: int
+    table: ServoTable
+    values: dict[str, int]
+
+    @property
+    def hardware_errors(self) -> tuple[str, ...]:
+        """Names of the latched Hardware Error Status bits (empty when clear)."""
+        return decode_hardware_error(self.values.get("hardware_error_status", 0))
+
+    def registers(self) -> list[Register]:
+        """The registers read, in address order."""
+        return sorted((self.table[k] for k in self.values), key=lambda r: r.address)
+
+
+def servo_info(link: Link, servo_id: int, baud: int) -> ServoInfo:
+    """Read the whole control table of one servo (indirect address/data entries left out)."""
+    model = link.ping_clean(servo_id, baud)
+    if model is None:
+        raise BusError(link.port, [servo_id], f"no clean answer at {baud} baud; `snakebot scan "
+                       f"--port {link.port} --all-bauds` shows where the servos are")
+    try:
+        table = table_for_model(model)
+    except LookupError as exc:
+        raise SetupError(f"{link.port}: servo {servo_id} is model {model}: {exc}") from exc
+    link.bus.table = table
+    keys = [k for k, r in table.registers.items()
+            if r.key == k and not k.startswith("indirect") and table.by_address(r.address) is r]
+    values: dict[str, int] = {}
+    for group in ([k for k in keys if table[k].eeprom], [k for k in keys if not table[k].eeprom]):
+        values.update(link.at(baud).read_block(servo_id, group))
+    return ServoInfo(servo_id, baud, table, values)

@@ -1,0 +1,102 @@
+"""Connect: the chain report, the EEPROM checks, the settings warnings, faults found at connect."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from snakebot.backends.dynamixel.faults import (
+    ChainMismatchError,
+    DynamixelSettingsWarning,
+    HardwareFaultError,
+    ServoSettingsError,
+)
+from snakebot.emulation import HardwareError, registered
+from tests.integration.backends.dynamixel.conftest import Bench, make_bench
+
+
+def test_connect_reads_the_chain_and_turns_torque_on(bench: Bench) -> None:
+    backend = bench.backend()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DynamixelSettingsWarning)
+        backend.connect()
+    try:
+        assert backend.fast_read
+        assert backend.torque_enabled
+        assert all(s.torque_enabled for s in bench.chain.servos)
+        gains = [(s.peek("position_p_gain"), s.peek("position_d_gain")) for s in bench.chain.servos]
+        assert set(gains) == {(640, 4000)}  # snake12's [gains]
+    finally:
+        backend.close()
+    assert not backend.bus.is_open
+
+
+def test_missing_unexpected_and_mismatched_servos_are_all_reported(bench: Bench) -> None:
+    bench.chain.silence(5)
+    bench.chain.remove(bench.servo(7))
+    bench.add(7, "XM430-W350")
+    bench.add(20)
+    backend = bench.backend()
+    with pytest.raises(ChainMismatchError) as info:
+        backend.connect()
+    error = info.value
+    assert error.missing == (5,)
+    assert error.unexpected == (20,)
+    assert error.mismatched == {7: (1020, 1060)}
+    assert error.servo_ids == (5, 7)
+    text = str(error)
+    assert "missing servo ID(s) 5" in text
+    assert "servo 7 is a XM430-W350, the config expects a XL430-W250" in text
+    assert "unexpected servo ID(s) on the bus: 20 (XL430-W250)" in text
+    assert not backend.bus.is_open
+    assert not any(s.torque_enabled for s in bench.chain.servos)
+
+
+def test_eeprom_settings_that_break_the_backend_refuse_to_connect(bench: Bench) -> None:
+    bench.servo(3).poke("operating_mode", 4)
+    bench.servo(4).poke("drive_mode", 1)
+    bench.servo(9).poke("max_position_limit", 3000)  # joint limit 1.5 rad is tick 3025
+    backend = bench.backend()
+    with pytest.raises(ServoSettingsError) as info:
+        backend.connect()
+    problems = info.value.problems
+    assert len(problems) == 3
+    assert problems[0].startswith("servo 3: Operating Mode is 4")
+    assert problems[1].startswith("servo 4: Drive Mode has the reverse bit")
+    assert problems[2].startswith("servo 9: Min/Max Position Limit 0..3000")
+    assert not any(s.torque_enabled for s in bench.chain.servos)
+
+
+def test_default_return_delay_warns_with_the_fix() -> None:
+    chain = make_bench(range(1, 13), return_delay=250)
+    with registered(chain) as url:
+        backend = Bench(chain, url).backend()
+        with pytest.warns(DynamixelSettingsWarning, match=r"Return Delay Time up to 500 µs"):
+            backend.connect()
+        backend.close()
+
+
+def test_latched_hardware_error_fails_connect_with_the_reboot_command(bench: Bench) -> None:
+    bench.chain.latch_hardware_error(6, HardwareError.OVERHEATING)
+    backend = bench.backend()
+    with pytest.raises(HardwareFaultError) as info:
+        backend.connect()
+    assert info.value.servo_id == 6
+    assert info.value.flags == ("overheating",)
+    assert f"snakebot servo reboot --port {bench.url} --id 6" in str(info.value)
+
+
+def test_a_tripped_watchdog_from_a_dead_session_is_cleared(bench: Bench) -> None:
+    first = bench.backend()
+    first.connect()
+    bench.chain.advance(0.5)  # the host "dies": no packets for 500 ms
+    assert all(s.watchdog_tripped for s in bench.chain.servos)
+    first.bus.close()  # the process is gone, no stop ramp
+    second = bench.backend()
+    second.connect()
+    try:
+        assert not any(s.watchdog_tripped for s in bench.chain.servos)
+        assert {s.peek("bus_watchdog") for s in bench.chain.servos} == {5}
+    finally:
+        second.close()
