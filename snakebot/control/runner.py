@@ -106,8 +106,12 @@ def run_gait(
     gait_end_s = state.time_s - start_s
     if plan.ramp_out and safety.ramp_s > 0:
         start_amplitude = safety.ramp_in(gait_end_s)
-        while (elapsed := state.time_s - start_s - gait_end_s) < safety.ramp_s - slack:
-            fraction = 1.0 - min((elapsed + dt) / safety.ramp_s, 1.0)
+        fraction = 1.0
+        while fraction > 0.0:  # the last command is exactly the rest pose, whatever the timing
+            elapsed = state.time_s - start_s - gait_end_s
+            fraction = max(0.0, 1.0 - (elapsed + dt) / safety.ramp_s)
+            if fraction < slack / safety.ramp_s:
+                fraction = 0.0
             step(gait_end_s + elapsed, start_amplitude * smooth_ramp(fraction), scored=False)
     summary = metrics.summary(gait.period_s)
     summary["rate_hz"] = plan.rate_hz
