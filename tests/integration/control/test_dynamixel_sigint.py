@@ -56,7 +56,9 @@ def test_sigint_ramps_out_and_leaves_torque_as_configured(
             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         )
         deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and not (log.exists() and log.read_text().count("\n") > 40):
+        while time.monotonic() < deadline:
+            if log.exists() and log.read_text().count("\n") > 40:
+                break
             time.sleep(0.05)
         run.send_signal(signal.SIGINT)
         out, err = run.communicate(timeout=30)
