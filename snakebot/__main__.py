@@ -1,7 +1,5 @@
 """``python -m snakebot`` runs the command-line interface."""
 
-import sys
+from snakebot.cli.main import entry_point
 
-from snakebot.cli.main import main
-
-sys.exit(main())
+entry_point()

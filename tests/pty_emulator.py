@@ -27,6 +27,14 @@ class Emulator:
         payload: dict[str, Any] = json.loads(self.proc.stdout.readline())
         return payload
 
+    def stop(self) -> list[dict[str, Any]]:
+        """SIGINT, as Ctrl-C; wait for a clean exit; the JSON lines it printed on the way out."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        out, err = self.proc.communicate(timeout=30)
+        assert self.proc.returncode == 0, err
+        return [json.loads(line) for line in out.splitlines() if line.strip()]
+
     def command(self, line: str) -> dict[str, Any]:
         assert self.proc.stdin is not None
         self.proc.stdin.write(line + "\n")
@@ -43,6 +51,7 @@ def emulator(*args: str) -> Iterator[Emulator]:
     try:
         yield Emulator(proc)
     finally:
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=10)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            proc.wait(timeout=10)
         assert proc.returncode == 0, proc.stderr.read() if proc.stderr else ""

@@ -10,7 +10,9 @@ import argparse
 import importlib
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
+from typing import TextIO
 
 from snakebot import __version__
 from snakebot.errors import SnakebotError
@@ -33,6 +35,18 @@ def build_parser() -> argparse.ArgumentParser:
         module = importlib.import_module(f"snakebot.cli.{name}_cmd")
         module.add_parser(subparsers)
     return parser
+
+
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
+    # Warnings here are advice for the user (a slow bus setting, say), not for a developer.
+    print(f"snakebot: warning: {message}", file=file or sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -61,3 +75,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_BUG
+
+
+def entry_point() -> None:
+    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
+    warnings.showwarning = _show_warning
+    sys.exit(main())
