@@ -19,31 +19,10 @@ from types import TracebackType
 
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
+from snakebot.emulation.wire import LINE_RATES
 
 Trace = Callable[[str, bytes], None]
-_RATES = {
-    getattr(termios, f"B{rate}"): rate
-    for rate in (
-        9600,
-        19200,
-        38400,
-        57600,
-        115200,
-        230400,
-        460800,
-        500000,
-        576000,
-        921600,
-        1000000,
-        1152000,
-        2000000,
-        2500000,
-        3000000,
-        3500000,
-        4000000,
-    )
-    if hasattr(termios, f"B{rate}")
-}
+_RATES = {getattr(termios, f"B{rate}"): rate for rate in LINE_RATES if hasattr(termios, f"B{rate}")}
 
 
 class PtyServer:

@@ -6,6 +6,27 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 BITS_PER_BYTE = 10
+# Serial line rates (bit/s) a host may set on the emulated port; 4.5 Mbps is the X-series top.
+LINE_RATES = (
+    9600,
+    19200,
+    38400,
+    57600,
+    115200,
+    230400,
+    460800,
+    500000,
+    576000,
+    921600,
+    1000000,
+    1152000,
+    2000000,
+    2500000,
+    3000000,
+    3500000,
+    4000000,
+    4500000,
+)
 _OVERSAMPLE = 16
 
 

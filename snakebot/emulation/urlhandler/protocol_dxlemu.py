@@ -22,7 +22,7 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.registry import SCHEME, TIME_MODES, lookup_chain
-from snakebot.emulation.wire import byte_time_s
+from snakebot.emulation.wire import LINE_RATES, byte_time_s
 
 _GRAMMAR = f"{SCHEME}://<name>[?time={'|'.join(TIME_MODES)}][&poll_ms=<float>]"
 
@@ -52,26 +52,7 @@ class Serial(SerialBase):  # type: ignore[misc]
 
     is_open: bool
 
-    BAUDRATES = (
-        9600,
-        19200,
-        38400,
-        57600,
-        115200,
-        230400,
-        460800,
-        500000,
-        576000,
-        921600,
-        1000000,
-        1152000,
-        2000000,
-        2500000,
-        3000000,
-        3500000,
-        4000000,
-        4500000,
-    )
+    BAUDRATES = LINE_RATES
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._chain: EmulatedChain | None = None
