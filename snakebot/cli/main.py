@@ -18,7 +18,9 @@ from snakebot import __version__
 from snakebot.errors import SnakebotError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
-COMMANDS = ("run", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate")
+COMMANDS = (
+    "run", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune", "sysid"
+)
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 

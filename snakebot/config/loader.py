@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -122,6 +123,22 @@ def _parse_gains(table: Table) -> ServoGains:
     return gains
 
 
+def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
+    """``[twin.servo]``: servo parameters fitted by ``snakebot sysid``; the twin uses them."""
+    physics = servo.physics
+    fitted = replace(
+        physics,
+        stiffness_scale=table.number("stiffness_scale", 1.0, positive=True),
+        damping_nms=table.number("damping_nms", -1.0) if table.has("damping_nms") else None,
+        armature_kgm2=table.number("armature_kgm2", physics.armature_kgm2, minimum=0.0),
+        friction_loss_nm=table.number("friction_loss_nm", physics.friction_loss_nm, minimum=0.0),
+    )
+    if fitted.damping_nms is not None and fitted.damping_nms < 0:
+        raise table.error("damping_nms", f"expected a number >= 0, got {fitted.damping_nms}")
+    table.done()
+    return replace(servo, physics=fitted)
+
+
 def load_robot(name_or_path: str | Path) -> RobotConfig:
     """Load and validate a robot by name (``snake8``) or path; errors name file and key path."""
     path = resolve_robot_path(name_or_path)
@@ -173,6 +190,7 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         axial_friction=twin_t.number("axial_friction", 1.0, minimum=0.0),
         lateral_friction=twin_t.number("lateral_friction", 1.0, minimum=0.0),
     )
+    servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
     twin_t.done()
     root._seen.add("settings")  # servo settings overrides, read by snakebot.setup
     root.done()

@@ -19,7 +19,8 @@ class ServoPhysics:
     """Electromechanical facts of one servo model (datasheet values, see the servo file).
 
     ``stall_torque_nm`` and ``no_load_speed_rad_s`` are at ``nominal_voltage_v``; the twin scales
-    them to ``supply_voltage_v``.
+    them to ``supply_voltage_v``. ``stiffness_scale`` and ``damping_nms`` (joint damping with
+    torque on, replacing back-EMF + viscous) come from a robot's ``[twin.servo]`` (sysid).
     """
 
     stall_torque_nm: float
@@ -32,6 +33,8 @@ class ServoPhysics:
     ticks_per_rev: int
     pwm_limit: int
     d_gain_loop_period_s: float
+    stiffness_scale: float = 1.0
+    damping_nms: float | None = None
 
 
 @dataclass(frozen=True)

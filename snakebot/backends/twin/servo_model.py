@@ -58,11 +58,13 @@ def servo_dynamics(physics: ServoPhysics, gains: ServoGains) -> ServoDynamics:
     stall_torque = physics.stall_torque_nm * voltage_ratio
     no_load_speed = physics.no_load_speed_rad_s * voltage_ratio
     error_gain = (physics.ticks_per_rev / (2 * math.pi)) / (_P_DIVISOR * physics.pwm_limit)
-    stiffness = stall_torque * error_gain * gains.position_p
+    stiffness = stall_torque * error_gain * gains.position_p * physics.stiffness_scale
     gain_damping = (
         stall_torque * error_gain * _D_TO_P_WEIGHT * gains.position_d * physics.d_gain_loop_period_s
     )
     back_emf = physics.stall_torque_nm / physics.no_load_speed_rad_s + physics.viscous_damping_nms
+    if physics.damping_nms is not None:  # fitted by sysid ([twin.servo] in the robot file)
+        back_emf = physics.damping_nms
     return ServoDynamics(
         stiffness_nm_per_rad=stiffness,
         gain_damping_nms=gain_damping,

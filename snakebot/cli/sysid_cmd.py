@@ -1,0 +1,143 @@
+"""``snakebot sysid``: fit the twin's servo parameters to telemetry logs, or record such a log."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+from pathlib import Path
+from typing import Any
+
+from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.config import load_robot
+from snakebot.errors import ConfigError
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register the ``sysid`` command."""
+    parser = subparsers.add_parser(
+        "sysid",
+        help="fit the twin's servo parameters (stiffness, damping, ...) to telemetry logs",
+        description="Replays each log's commands on the twin and fits the servo parameters so "
+        "the twin's joints follow the log's, then writes them to the robot file's "
+        "[twin.servo]. With --record, first records a log: one joint held off the ground "
+        "(--hold) and chirped, the others still.",
+    )
+    add_robot_option(parser)
+    parser.add_argument("logs", nargs="*", type=Path, metavar="LOG", help="telemetry CSV logs")
+    parser.add_argument(
+        "--params",
+        default="stiffness,damping,armature",
+        help="parameters to fit, from stiffness,damping,armature,friction_loss",
+    )
+    parser.add_argument("--workers", type=int, default=2, help="parallel replays (default 2)")
+    parser.add_argument("--max-evaluations", type=int, default=40, metavar="N")
+    parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
+    parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    group = parser.add_argument_group("recording a log (--record)")
+    group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
+    group.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
+    group.add_argument("--port", help="serial port for --backend dynamixel")
+    group.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
+    group.add_argument(
+        "--hold",
+        type=float,
+        default=0.5,
+        metavar="RAD",
+        help="angle to hold the joint at while it chirps (default 0.5)",
+    )
+    group.add_argument("--amplitude", type=positive_float, default=0.12, metavar="RAD")
+    group.add_argument("--duration", type=positive_float, default=4.0, metavar="S")
+    group.add_argument("--stop-hz", type=positive_float, default=6.0, metavar="HZ")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Record a log, or fit the twin to logs and write the result."""
+    robot = load_robot(args.robot)
+    if args.record is not None:
+        return _record(robot, args)
+    if not args.logs:
+        raise ConfigError("LOG", "", "give one or more telemetry logs, or --record LOG")
+    from snakebot.tuning.config_edit import set_table_values
+    from snakebot.tuning.sysid import fit_servo, load_log
+
+    if args.report is not None:
+        from snakebot.tuning.plots import pyplot
+
+        pyplot()
+    names = [p.strip() for p in args.params.split(",") if p.strip()]
+    logs = [load_log(path, robot) for path in args.logs]
+    result = fit_servo(
+        robot, logs, names, workers=max(1, args.workers), max_evaluations=args.max_evaluations
+    )
+    summary: dict[str, Any] = {
+        "robot": robot.name,
+        "logs": [str(p) for p in args.logs],
+        "fitted": list(result.names),
+        "before": result.before.report(robot),
+        "after": result.after.report(robot),
+        "tracking_rms_before_rad": result.rms_before_rad,
+        "tracking_rms_after_rad": result.rms_after_rad,
+        "replays": result.simulations,
+    }
+    if not args.no_write and result.rms_after_rad < result.rms_before_rad:
+        fields = {
+            "stiffness": "stiffness_scale",
+            "damping": "damping_nms",
+            "armature": "armature_kgm2",
+            "friction_loss": "friction_loss_nm",
+        }
+        values = {fields[n]: float(getattr(result.after, fields[n])) for n in result.names}
+        set_table_values(robot.source, "twin.servo", values)
+        summary["written_to"] = f"{robot.source} [twin.servo]"
+    if args.report is not None:
+        from snakebot.tuning.plots import sysid_plots
+
+        args.report.mkdir(parents=True, exist_ok=True)
+        summary["plots"] = [str(p) for p in sysid_plots(result, logs, args.report)]
+        (args.report / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    if args.json:
+        print_json(summary)
+        return 0
+    print(
+        f"{robot.name}: twin vs log {result.rms_before_rad:.5f} rad RMS before, "
+        f"{result.rms_after_rad:.5f} rad after ({result.simulations} replays)"
+    )
+    for key, value in summary["after"].items():
+        print(f"  {key:<22} {summary['before'][key]:.6g} -> {value:.6g}")
+    print(
+        f"  written to {summary['written_to']}"
+        if "written_to" in summary
+        else "  robot file unchanged"
+    )
+    return 0
+
+
+def _record(robot: Any, args: argparse.Namespace) -> int:
+    from snakebot.tuning.excitation import chirp_plan, record
+
+    with contextlib.ExitStack() as stack:
+        if args.backend == "sim":
+            from snakebot.backends.twin import TwinBackend
+
+            backend: Any = stack.enter_context(TwinBackend(robot))
+        else:
+            from snakebot.backends.dynamixel import DynamixelBackend
+
+            backend = stack.enter_context(DynamixelBackend(robot, port=args.port, baud=args.baud))
+        start = backend.read_state().position_rad
+        commands = chirp_plan(
+            robot,
+            start,
+            args.joint,
+            args.hold,
+            amplitude_rad=args.amplitude,
+            duration_s=args.duration,
+            stop_hz=args.stop_hz,
+        )
+        rows = record(backend, commands, args.record)
+    print(f"recorded {rows} cycles to {args.record}")
+    return 0

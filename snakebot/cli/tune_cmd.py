@@ -1,0 +1,293 @@
+"""``snakebot tune gait|gains``: search gait parameters on the twin, or servo gains on a backend."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.config import load_robot
+from snakebot.errors import ConfigError, SafetyLimitError
+from snakebot.gaits import parse_set_options
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``tune`` and its two subcommands."""
+    parser = subparsers.add_parser("tune", help="tune gait parameters or servo gains")
+    commands = parser.add_subparsers(dest="tune_command", metavar="WHAT", required=True)
+    _add_gait_parser(commands)
+    _add_gains_parser(commands)
+    parser.set_defaults(handler=run)
+
+
+def _add_gait_parser(commands: Any) -> None:
+    from snakebot.tuning.objectives import OBJECTIVES
+    from snakebot.tuning.problem import ENGINES
+    from snakebot.tuning.tuner import DEFAULT_BUDGET, METHODS
+
+    parser = commands.add_parser(
+        "gait",
+        help="search a gait's parameters on the twin for speed, efficiency or a heading",
+        description="Each candidate runs like `snakebot run --duration D --rate R` on the twin; "
+        "candidates that break joint limits, exceed the servo's speed or torque, or leave the "
+        "ground are penalised so the best gait is playable on the robot.",
+    )
+    add_robot_option(parser)
+    parser.add_argument("--gait", default="serpenoid", help="gait to tune (default serpenoid)")
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="fix a gait parameter"
+    )
+    parser.add_argument(
+        "--params",
+        help="comma-separated parameters to search; a+b ties two (default depends on the gait)",
+    )
+    parser.add_argument(
+        "--bounds",
+        action="append",
+        default=[],
+        metavar="NAME=LOW:HIGH",
+        help="search bounds, e.g. omega=0.5:4*pi (repeatable or comma-separated)",
+    )
+    parser.add_argument("--objective", choices=OBJECTIVES, default="speed")
+    parser.add_argument(
+        "--heading",
+        type=float,
+        default=0.0,
+        metavar="DEG",
+        help="world direction for speed_toward_heading (0 = +x, the head's start direction)",
+    )
+    parser.add_argument("--method", choices=METHODS, default="cmaes")
+    parser.add_argument(
+        "--budget",
+        type=int,
+        help="most evaluations (default: "
+        + ", ".join(f"{m} {n}" for m, n in DEFAULT_BUDGET.items())
+        + ")",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=min(2, os.cpu_count() or 1),
+        help="parallel simulations (default: 2, or 1 on a 1-core machine)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument(
+        "--duration",
+        type=positive_float,
+        default=10.0,
+        help="seconds per evaluation, as `snakebot run --duration` (default 10)",
+    )
+    parser.add_argument("--rate", type=positive_float, default=100.0, help="control rate in Hz")
+    parser.add_argument("--friction", metavar="AXIAL,LATERAL", help="override the ground model")
+    parser.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default="batch",
+        help="batch: mujoco.batch threads (default); processes: a process pool",
+    )
+    parser.add_argument(
+        "--allow-roll", action="store_true", help="do not stop runs whose head turns upside down"
+    )
+    parser.add_argument("--out", type=Path, help="write the best gait to this gait file (TOML)")
+    parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Dispatch to the chosen subcommand."""
+    if args.tune_command == "gains":
+        return run_gains(args)
+    return run_gait(args)
+
+
+def run_gait(args: argparse.Namespace) -> int:
+    """Tune, then write the gait file, the report and the summary."""
+    from snakebot.backends.twin import GroundFriction
+    from snakebot.tuning.objectives import objective_for
+    from snakebot.tuning.problem import EvalPlan
+    from snakebot.tuning.progress import ProgressBar, gait_summary_text
+    from snakebot.tuning.space import build_space, parse_bounds, tuning_base
+    from snakebot.tuning.tuner import DEFAULT_BUDGET, save_best_gait, tune_gait
+
+    robot = load_robot(args.robot)
+    fixed = parse_set_options(args.gait, args.set)
+    base = tuning_base(args.gait, robot.joint_count, fixed)
+    names = [p.strip() for p in args.params.split(",")] if args.params else None
+    limit = float(min(-robot.lower_rad.max(), robot.upper_rad.min()))
+    space = build_space(args.gait, base, names, parse_bounds(args.bounds), limit)
+    if args.method == "cmaes":
+        from snakebot.tuning.cmaes import require_cma
+
+        require_cma()  # fail before any simulation when the package is missing
+    if args.report is not None:
+        from snakebot.tuning.plots import pyplot
+
+        pyplot()
+    budget = args.budget if args.budget is not None else DEFAULT_BUDGET[args.method]
+    plan = EvalPlan(
+        duration_s=args.duration,
+        rate_hz=args.rate,
+        workers=max(1, args.workers),
+        engine=args.engine,
+        allow_roll=args.allow_roll or args.gait == "rolling",
+        friction=GroundFriction.parse(args.friction) if args.friction else None,
+    )
+    objective = objective_for(args.objective, args.heading, robot.body_length_m)
+    bar = None if args.quiet else ProgressBar(budget)
+    result = tune_gait(
+        robot,
+        space,
+        objective,
+        args.method,
+        budget=budget,
+        seed=args.seed,
+        plan=plan,
+        listener=bar,
+    )
+    if bar is not None:
+        bar.finish()
+    summary = result.summary()
+    if args.out is not None and result.best.feasible:
+        save_best_gait(result, args.out)
+        summary["gait_file"] = str(args.out)
+    if args.report is not None:
+        from snakebot.tuning.plots import gait_plots
+
+        args.report.mkdir(parents=True, exist_ok=True)
+        summary["plots"] = [str(p) for p in gait_plots(result, args.report)]
+        (args.report / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    if args.json:
+        print_json(summary)
+    else:
+        print(gait_summary_text(summary))
+    if not result.best.feasible:
+        raise SafetyLimitError(
+            "no candidate stayed inside the servo envelope (joint limits, speed, torque, ground "
+            "contact); narrow --bounds or raise --budget. Nothing was written to --out"
+        )
+    return 0
+
+
+def _add_gains_parser(commands: Any) -> None:
+    parser = commands.add_parser(
+        "gains",
+        help="tune the servos' Position P/I/D gains for tracking (steps, chirps, a gait)",
+        description="Each candidate: one small step per tested joint while the others hold, "
+        "then the reference gait. Keeps the candidate with the lowest gait tracking error "
+        "whose steps overshoot at most --max-overshoot and settle, and whose gait never holds "
+        "a joint at its torque limit for long; writes it to the robot file's [gains].",
+    )
+    add_robot_option(parser)
+    parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
+    parser.add_argument("--port", help="serial port for --backend dynamixel")
+    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    parser.add_argument("--joints", help="joint indices to step-test, e.g. 0,3 (default all)")
+    parser.add_argument(
+        "--gait", help="reference gait (default: sidewinding with pitch joints, else serpenoid)"
+    )
+    parser.add_argument("--gait-duration", type=positive_float, default=6.0, metavar="S")
+    parser.add_argument(
+        "--step",
+        type=positive_float,
+        metavar="RAD",
+        help="step size (default 0.2 rad on sim, 0.1 rad on hardware)",
+    )
+    parser.add_argument("--max-overshoot", type=float, default=0.10, metavar="FRACTION")
+    parser.add_argument("--budget", type=int, help="candidates (default 20 sim, 9 hardware)")
+    parser.add_argument(
+        "--i-values",
+        help="Position I values to try, e.g. 0,100 (default: "
+        "the current one; the twin has no I term)",
+    )
+    parser.add_argument("--no-chirp", action="store_true", help="skip the chirp measurements")
+    parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
+    parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+
+
+def run_gains(args: argparse.Namespace) -> int:
+    """Search the gains on the chosen backend, then write them and report."""
+    from snakebot.tuning.gain_search import search_gains, write_gains
+    from snakebot.tuning.gains import GainTest
+    from snakebot.tuning.progress import gain_line, gains_summary_text
+
+    robot = load_robot(args.robot)
+    joints = tuple(range(robot.joint_count))
+    if args.joints:
+        joints = tuple(_indices(args.joints, robot.joint_count))
+    gait = args.gait or (
+        "sidewinding" if any(j.axis == "pitch" for j in robot.joints) else "serpenoid"
+    )
+    hardware = args.backend == "dynamixel"
+    test = GainTest(
+        joints=joints,
+        gait=gait,
+        gait_s=args.gait_duration,
+        step_rad=args.step or (0.1 if hardware else 0.2),
+        max_overshoot=args.max_overshoot,
+    )
+    if args.report is not None:
+        from snakebot.tuning.plots import pyplot
+
+        pyplot()
+    i_values = _indices(args.i_values, 16384) if args.i_values else []
+    budget = args.budget or (9 if hardware else 20)
+
+    def progress(done: int, total: int, score: Any, best: Any) -> None:
+        if not args.json:
+            print(gain_line(done, total, score), file=sys.stderr, flush=True)
+
+    with contextlib.ExitStack() as stack:
+        session = _gain_session(robot, args, stack)
+        result = search_gains(
+            session,
+            robot,
+            test,
+            budget=budget,
+            i_values=i_values,
+            chirps=not args.no_chirp,
+            listener=progress,
+        )
+    summary = result.summary(robot, test)
+    if result.improved and not args.no_write:
+        summary["written_to"] = str(write_gains(robot, result.best.gains))
+    if args.report is not None:
+        from snakebot.tuning.plots import gain_plots
+
+        args.report.mkdir(parents=True, exist_ok=True)
+        summary["plots"] = [str(p) for p in gain_plots(result, test, args.report)]
+        (args.report / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    if args.json:
+        print_json(summary)
+        return 0
+    print(gains_summary_text(summary))
+    return 0
+
+
+def _gain_session(robot: Any, args: argparse.Namespace, stack: contextlib.ExitStack) -> Any:
+    if args.backend == "sim":
+        from snakebot.backends.twin import TwinBackend
+
+        return lambda: TwinBackend(robot)
+    from snakebot.backends.dynamixel import DynamixelBackend
+    from snakebot.tuning.gains import held
+
+    backend = stack.enter_context(DynamixelBackend(robot, port=args.port, baud=args.baud))
+    return lambda: held(backend)
+
+
+def _indices(text: str, count: int) -> list[int]:
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ConfigError("--joints", text, "expected comma-separated integers") from None
+    bad = [v for v in values if not 0 <= v < count]
+    if bad or not values:
+        raise ConfigError("--joints", text, f"expected integers in 0..{count - 1}")
+    return values

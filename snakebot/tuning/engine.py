@@ -1,0 +1,261 @@
+"""Many runs side by side on one twin model with ``mujoco.batch``: the runner's cycle, batched.
+
+Each control cycle sets every run's command, steps all live runs by one control period on a
+thread pool, and samples what ``run_gait`` would read. The states are bit-identical to
+``TwinBackend`` stepping one run at a time (mujoco.batch guarantees it at any thread count), so
+a tuned gait replays in ``snakebot run`` to the same metrics. Runs that fly, flip or diverge are
+stopped early and stop costing time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
+
+import mujoco
+import numpy as np
+from mujoco import batch as mj_batch
+
+from snakebot.backends.twin import GroundFriction, TwinBackend
+from snakebot.backends.twin.model_builder import joint_name, link_name
+from snakebot.config.schema import RobotConfig
+from snakebot.tuning.commands import BatchCommands
+from snakebot.tuning.feasibility import Envelope
+from snakebot.tuning.trace import FloatArray, Trace
+
+_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+_RECORD = ("qpos", "qvel", "actuator_force", "subtree_com", "xquat", "geom_xpos", "geom_xmat")
+_BAD_WARNINGS = [
+    int(mujoco.mjtWarning.mjWARN_BADQACC),
+    int(mujoco.mjtWarning.mjWARN_BADQPOS),
+    int(mujoco.mjtWarning.mjWARN_BADQVEL),
+]
+
+
+@dataclass(frozen=True)
+class TwinLayout:
+    """Where the runner's quantities live in the twin's MjData."""
+
+    qpos_index: np.ndarray
+    dof_index: np.ndarray
+    head_id: int
+    link_geoms: np.ndarray
+    radius_m: np.ndarray
+    half_length_m: np.ndarray
+
+
+def twin_layout(model: mujoco.MjModel, robot: RobotConfig) -> TwinLayout:
+    """Indices of the joints, the head and the module capsules in a twin model of ``robot``."""
+    geoms = np.array([model.geom(f"{link_name(i)}_geom").id for i in range(robot.link_count)])
+    joints = [model.joint(joint_name(i)).id for i in range(robot.joint_count)]
+    return TwinLayout(
+        qpos_index=model.jnt_qposadr[joints].copy(),
+        dof_index=model.jnt_dofadr[joints].copy(),
+        head_id=model.body(link_name(0)).id,
+        link_geoms=geoms,
+        radius_m=model.geom_size[geoms, 0].copy(),
+        half_length_m=model.geom_size[geoms, 1].copy(),
+    )
+
+
+class TwinBatch:
+    """Runs batches of commands on copies of one twin model, ``workers`` threads at a time.
+
+    ``models`` (one per run) may replace the model per run, e.g. with other gains or servo
+    parameters; they must come from the same robot so the layout matches.
+    """
+
+    def __init__(
+        self, robot: RobotConfig, *, workers: int = 2, friction: GroundFriction | None = None
+    ) -> None:
+        self.robot = robot
+        self.workers = max(1, workers)
+        self.twin = TwinBackend(robot, friction=friction)
+        self.twin.connect()
+        model, data = self.twin.model, self.twin.data
+        self.model = model
+        self.initial_state = np.empty(mujoco.mj_stateSize(model, _STATE))
+        mujoco.mj_getState(model, data, self.initial_state, _STATE)
+        body = self.twin.body_state()
+        self.start_com_m, self.start_head_quat = body.com_m, body.head_quat
+        self.layout = twin_layout(model, robot)
+
+    def initial_state_with_pose(self, joint_rad: FloatArray) -> FloatArray:
+        """The start state with the joints bent to ``joint_rad`` (N,) and at rest."""
+        data = mujoco.MjData(self.model)
+        mujoco.mj_setState(self.model, data, self.initial_state, _STATE)
+        data.qpos[self.layout.qpos_index] = joint_rad
+        mujoco.mj_forward(self.model, data)
+        state = np.empty_like(self.initial_state)
+        mujoco.mj_getState(self.model, data, state, _STATE)
+        return state
+
+    def run(
+        self,
+        commands: BatchCommands,
+        duration_s: float,
+        rate_hz: float,
+        *,
+        models: Sequence[mujoco.MjModel] | None = None,
+        envelope: Envelope | None = None,
+        initial_state: FloatArray | None = None,
+    ) -> list[Trace]:
+        """Run ``commands.size`` runs for ``duration_s`` at ``rate_hz``; one Trace per run.
+
+        Open-loop commands go to MuJoCo a chunk of cycles at a time (one thread-pool pass per
+        chunk instead of one per cycle); closed-loop ones one cycle at a time.
+        """
+        count = commands.size
+        dt = 1.0 / rate_hz
+        steps = self.twin.steps_for(dt)
+        times = _cycle_times(self.model.opt.timestep, steps, duration_s, dt, commands.length)
+        batch = mj_batch.Batch(self.model, count, nthread=min(self.workers, count))
+        if models is not None:
+            batch.set_models(list(models))
+        batch.state[:] = self.initial_state if initial_state is None else initial_state
+        rec = _Recorder(count, len(times) - 1, self.robot.joint_count)
+        per_run = list(models) if models is not None else [self.model] * count
+        damping = np.stack([m.dof_damping[self.layout.dof_index] for m in per_run])
+        lay = self.layout
+        live = np.ones(count, dtype=bool)
+        stopped_at = np.zeros(count, dtype=int)
+        reasons = [""] * count
+        check_every = max(1, round((envelope.stop_after_s if envelope else 1.0) * rate_hz))
+        chunk = check_every if commands.open_loop else 1
+        measured = batch.bind("qpos")[:, lay.qpos_index].copy()
+        commands.reset(measured)
+        k = 0
+        while k < len(times) - 1 and live.any():
+            span = range(k, min(k + chunk, len(times) - 1))
+            rows = [commands(c, times[c] - times[0], measured) for c in span]
+            ids = np.flatnonzero(live)
+            sent = np.stack([r[1] for r in rows], axis=1)  # (B, C, N)
+            control = np.repeat(sent[ids], steps, axis=1)
+            before = batch.warning[:, _BAD_WARNINGS, 0].sum(axis=1)
+            try:
+                out = batch.rollout(len(span) * steps, control=control, record=_RECORD, ids=ids)
+            except mj_batch.SimulationError as exc:
+                self._stop(exc.ids, "diverged", k, live, stopped_at, reasons)
+                continue
+            bad = ids[batch.warning[ids][:, _BAD_WARNINGS, 0].sum(axis=1) > before[ids]]
+            self._stop(bad, "diverged", k, live, stopped_at, reasons)
+            end = {name: values[:, steps - 1 :: steps] for name, values in out.items()}
+            position = end["qpos"][..., lay.qpos_index]
+            velocity = end["qvel"][..., lay.dof_index]
+            force = end["actuator_force"]
+            axis_z = np.abs(end["geom_xmat"][..., lay.link_geoms, 8])
+            lowest = end["geom_xpos"][..., lay.link_geoms, 2] - lay.radius_m
+            rec.store(
+                ids,
+                span,
+                time_s=np.broadcast_to(times[span.start + 1 : span.stop + 1], position.shape[:2]),
+                target=np.stack([r[0] for r in rows], axis=1)[ids],
+                command=sent[ids],
+                position=position,
+                velocity=velocity,
+                effort=force - damping[ids, None, :] * velocity,
+                force=force,
+                com=end["subtree_com"][:, :, lay.head_id],
+                quat=end["xquat"][:, :, lay.head_id],
+                clearance=(lowest - lay.half_length_m * axis_z).min(axis=2),
+            )
+            stopped_at[live] = span.stop
+            measured[ids] = position[:, -1]
+            k = span.stop
+            if envelope is not None and k % check_every == 0:
+                for reason, runs in rec.hopeless(k - 1, check_every, envelope, live).items():
+                    self._stop(runs, reason, k, live, stopped_at, reasons)
+        return [
+            rec.trace(b, int(stopped_at[b]), dt, reasons[b], self.start_com_m, self.start_head_quat)
+            for b in range(count)
+        ]
+
+    @staticmethod
+    def _stop(
+        runs: np.ndarray, reason: str, cycle: int, live: np.ndarray, at: np.ndarray, why: list[str]
+    ) -> None:
+        for b in np.asarray(runs, dtype=int):
+            if live[b]:
+                live[b] = False
+                at[b] = cycle
+                why[b] = reason
+
+
+def _cycle_times(
+    timestep_s: float, steps: int, duration_s: float, dt_s: float, length: float
+) -> list[float]:
+    """Robot time before each cycle and after the last, summed step by step as MuJoCo does, so
+    the cycle count and gait times are run_gait's (which stops half a period before the end)."""
+    times = [0.0]
+    while times[-1] < duration_s - 0.5 * dt_s and len(times) <= length:
+        now = times[-1]
+        for _ in range(steps):
+            now += timestep_s
+        times.append(now)
+    return times
+
+
+class _Recorder:
+    """Preallocated (B, K, ...) sample arrays, cut into one Trace per run at the end."""
+
+    # Trailing shape of each array: "" a scalar per cycle, "n" one value per joint, "3" a vector.
+    _FIELDS: ClassVar[dict[str, str]] = {
+        "time_s": "",
+        "target": "n",
+        "command": "n",
+        "position": "n",
+        "velocity": "n",
+        "effort": "n",
+        "force": "n",
+        "com": "3",
+        "quat": "4",
+        "clearance": "",
+    }
+
+    def __init__(self, count: int, cycles: int, joints: int) -> None:
+        self.arrays: dict[str, FloatArray] = {}
+        for name, kind in self._FIELDS.items():
+            tail = () if not kind else (joints,) if kind == "n" else (int(kind),)
+            self.arrays[name] = np.zeros((count, cycles, *tail))
+
+    def store(self, runs: np.ndarray, cycles: range, **values: FloatArray) -> None:
+        """Write (len(runs), len(cycles), ...) samples into their place."""
+        for name, value in values.items():
+            self.arrays[name][runs, cycles.start : cycles.stop] = value
+
+    def hopeless(
+        self, cycle: int, window: int, envelope: Envelope, live: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """Live runs that spent the whole last ``window`` cycles in flight or upside down."""
+        span = slice(cycle + 1 - window, cycle + 1)
+        com_z = self.arrays["com"][:, span, 2]
+        airborne = envelope.airborne(com_z, self.arrays["clearance"][:, span]).all(axis=1)
+        quat = self.arrays["quat"][:, span]
+        up_z = 1.0 - 2.0 * (quat[..., 1] ** 2 + quat[..., 2] ** 2)
+        flipped = envelope.flipped(up_z).all(axis=1)
+        return {
+            "airborne": np.flatnonzero(live & airborne),
+            "flipped": np.flatnonzero(live & flipped & ~airborne),
+        }
+
+    def trace(
+        self, run: int, cycles: int, dt_s: float, reason: str, com: FloatArray, quat: FloatArray
+    ) -> Trace:
+        a = {name: values[run, :cycles].copy() for name, values in self.arrays.items()}
+        return Trace(
+            dt_s=dt_s,
+            time_s=a["time_s"],
+            target_rad=a["target"],
+            command_rad=a["command"],
+            position_rad=a["position"],
+            velocity_rad_s=a["velocity"],
+            effort_nm=a["effort"],
+            actuator_force_nm=a["force"],
+            com_m=a["com"],
+            head_quat=a["quat"],
+            clearance_m=a["clearance"],
+            start_com_m=com.copy(),
+            start_head_quat=quat.copy(),
+            stop_reason=reason,
+        )

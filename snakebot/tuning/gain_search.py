@@ -1,0 +1,122 @@
+"""`tune gains` without the command line: search the Position gains, report, write the config."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from snakebot.backends.base import ServoGains
+from snakebot.config.schema import RobotConfig
+from snakebot.tuning.config_edit import set_table_values
+from snakebot.tuning.gains import (
+    BackendSession,
+    GainScore,
+    GainTest,
+    candidate_grid,
+    evaluate_gains,
+    measure_chirps,
+    refine,
+)
+from snakebot.tuning.trace import FloatArray
+
+Chirp = tuple[float, tuple[FloatArray, FloatArray, FloatArray]]
+Listener = Callable[[int, int, GainScore, GainScore], None]
+
+
+@dataclass(frozen=True)
+class GainSearch:
+    """The current gains' score, the best candidate's, every candidate in order, and chirps."""
+
+    current: GainScore
+    best: GainScore
+    scores: tuple[GainScore, ...]
+    chirp_before: dict[int, Chirp]
+    chirp_after: dict[int, Chirp]
+
+    @property
+    def improved(self) -> bool:
+        """True when the best feasible candidate tracks the gait better than the current gains."""
+        return (
+            self.best.feasible
+            and self.best.gains != self.current.gains
+            and (not self.current.feasible or self.best.loss < self.current.loss)
+        )
+
+    def summary(self, robot: RobotConfig, test: GainTest) -> dict[str, object]:
+        """JSON-ready report."""
+        joints = test.joints
+        return {
+            "robot": robot.name,
+            "reference_gait": test.gait,
+            "joints": list(joints),
+            "current": self.current.as_dict(joints),
+            "best": self.best.as_dict(joints),
+            "improved": self.improved,
+            "tracking_rms_before_rad": self.current.tracking_rms_rad,
+            "tracking_rms_after_rad": self.best.tracking_rms_rad,
+            "chirp_rms_before_rad": {str(j): v[0] for j, v in self.chirp_before.items()},
+            "chirp_rms_after_rad": {str(j): v[0] for j, v in self.chirp_after.items()},
+            "evaluations": len(self.scores),
+            "candidates": [s.as_dict(joints) for s in self.scores],
+        }
+
+
+def search_gains(
+    session: BackendSession,
+    robot: RobotConfig,
+    test: GainTest,
+    *,
+    budget: int,
+    i_values: Sequence[int] = (),
+    chirps: bool = True,
+    listener: Listener | None = None,
+) -> GainSearch:
+    """A coarse grid around the current gains, then a finer pattern around the best; at most
+    ``budget`` candidates (the current gains count as the first)."""
+    current = robot.gains
+    grid = candidate_grid(
+        current,
+        p_values=4 if budget >= 16 else 3,
+        d_values=3 if budget >= 10 else 2,
+        i_values=i_values,
+    )
+    scores: list[GainScore] = []
+
+    def run(candidates: Sequence[ServoGains]) -> None:
+        for gains in candidates:
+            if len(scores) >= budget:
+                return
+            scores.append(evaluate_gains(session, robot, gains, test))
+            if listener is not None:
+                listener(len(scores), budget, scores[-1], min(scores, key=_key))
+
+    run(grid)
+    run(refine(min(scores, key=_key).gains, grid))
+    best = min(scores, key=_key)
+    before: dict[int, Chirp] = {}
+    after: dict[int, Chirp] = {}
+    if chirps:
+        before = measure_chirps(session, robot, current, test)
+        after = measure_chirps(session, robot, best.gains, test)
+    return GainSearch(scores[0], best, tuple(scores), before, after)
+
+
+def write_gains(robot: RobotConfig, gains: ServoGains) -> Path:
+    """Set ``[gains]`` of the robot file in place (comments and layout kept)."""
+    set_table_values(
+        robot.source,
+        "gains",
+        {
+            "position_p": gains.position_p,
+            "position_i": gains.position_i,
+            "position_d": gains.position_d,
+        },
+    )
+    return robot.source
+
+
+def _key(score: GainScore) -> tuple[float, float]:
+    tracking = score.tracking_rms_rad
+    return (score.loss, tracking if math.isfinite(tracking) else math.inf)

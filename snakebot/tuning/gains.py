@@ -1,0 +1,241 @@
+"""Servo gain tuning on any Backend: step tests one joint at a time, then a reference gait.
+
+The same code drives the twin and the servo chain. Each candidate's Position P/I/D registers go
+to every servo; each tested joint then steps by a small angle while the others hold; then the
+reference gait runs through the normal runner (ramp-in and ramp-out included). The loss is the
+gait's tracking error; a candidate is rejected when a step overshoots more than allowed, never
+settles, or the gait holds a joint at its torque (current) limit too long.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from snakebot.backends.base import Backend, JointCommand, ServoGains
+from snakebot.backends.twin.servo_model import servo_dynamics
+from snakebot.config.schema import RobotConfig
+from snakebot.control.metrics import RunMetrics
+from snakebot.control.runner import RunPlan, run_gait
+from snakebot.control.safety import SafetyLayer
+from snakebot.gaits import make_gait
+from snakebot.tuning.feasibility import SATURATION_FRACTION
+from snakebot.tuning.responses import StepMetrics, chirp_commands, rms, step_commands, step_metrics
+from snakebot.tuning.trace import FloatArray
+
+REGISTER_MAX = 16383
+BackendSession = Callable[[], contextlib.AbstractContextManager[Backend]]
+
+
+@dataclass(frozen=True)
+class GainTest:
+    """What each candidate goes through, and the limits a candidate must respect."""
+
+    joints: tuple[int, ...]
+    gait: str
+    gait_params: dict[str, object] = field(default_factory=dict)
+    step_rad: float = 0.2
+    lead_s: float = 0.3
+    step_s: float = 0.7
+    gait_s: float = 6.0
+    rate_hz: float = 100.0
+    max_overshoot: float = 0.10
+    max_saturation_s: float = 0.25
+
+
+@dataclass(frozen=True)
+class GainScore:
+    """One candidate's results; ``loss`` is the gait tracking RMS (rad), inf when rejected."""
+
+    gains: ServoGains
+    steps: tuple[StepMetrics, ...]
+    tracking_rms_rad: float
+    saturation_s: float
+    reason: str = ""
+    step_traces: tuple[tuple[FloatArray, FloatArray, FloatArray], ...] = field(
+        default=(), repr=False, compare=False
+    )
+
+    @property
+    def feasible(self) -> bool:
+        """True when the candidate met every limit."""
+        return not self.reason
+
+    @property
+    def loss(self) -> float:
+        """Gait tracking RMS in rad, or inf for a rejected candidate."""
+        return self.tracking_rms_rad if self.feasible else math.inf
+
+    def as_dict(self, joints: Sequence[int]) -> dict[str, object]:
+        """JSON-ready summary with the per-joint step metrics."""
+        return {
+            "position_p": self.gains.position_p,
+            "position_i": self.gains.position_i,
+            "position_d": self.gains.position_d,
+            "tracking_rms_rad": self.tracking_rms_rad,
+            "saturation_s": self.saturation_s,
+            "feasible": self.feasible,
+            "rejected_because": self.reason or None,
+            "steps": {str(j): s.as_dict() for j, s in zip(joints, self.steps, strict=True)},
+        }
+
+
+def evaluate_gains(
+    session: BackendSession, robot: RobotConfig, gains: ServoGains, test: GainTest
+) -> GainScore:
+    """Apply ``gains``, run the step tests and the reference gait, and score them."""
+    with session() as backend:
+        backend.set_gains(gains)
+        steps, traces = [], []
+        for joint in test.joints:
+            hold = backend.read_state().position_rad
+            commands = step_commands(
+                hold,
+                joint,
+                test.step_rad,
+                robot.lower_rad,
+                robot.upper_rad,
+                rate_hz=test.rate_hz,
+                lead_s=test.lead_s,
+                step_s=test.step_s,
+            )
+            time_s, position, _ = play(backend, commands, test.rate_hz)
+            t0 = time_s[0] - 1.0 / test.rate_hz
+            lead = round(test.lead_s * test.rate_hz)
+            steps.append(
+                step_metrics(
+                    time_s - t0, position[:, joint], hold[joint], commands[-1, joint], test.lead_s
+                )
+            )
+            traces.append((time_s - t0, commands[:, joint], position[:, joint]))
+            play(backend, np.tile(hold, (max(lead, 1), 1)), test.rate_hz)
+        tracking, saturation = _gait_tracking(backend, robot, test)
+    reason = _rejection(steps, saturation, test)
+    return GainScore(gains, tuple(steps), tracking, saturation, reason, tuple(traces))
+
+
+def measure_chirps(
+    session: BackendSession,
+    robot: RobotConfig,
+    gains: ServoGains,
+    test: GainTest,
+    amplitude_rad: float = 0.1,
+    duration_s: float = 4.0,
+) -> dict[int, tuple[float, tuple[FloatArray, FloatArray, FloatArray]]]:
+    """Per tested joint: chirp tracking RMS (rad) and (time, command, position)."""
+    out = {}
+    with session() as backend:
+        backend.set_gains(gains)
+        for joint in test.joints:
+            hold = backend.read_state().position_rad
+            commands = chirp_commands(
+                hold, joint, amplitude_rad, rate_hz=test.rate_hz, duration_s=duration_s
+            )
+            time_s, position, _ = play(backend, commands, test.rate_hz)
+            error = commands[:, joint] - position[:, joint]
+            out[joint] = (rms(error), (time_s - time_s[0], commands[:, joint], position[:, joint]))
+    return out
+
+
+def play(
+    backend: Backend, commands: FloatArray, rate_hz: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Send commands (K, N) one per cycle; returns time (K,), positions and efforts (K, N)."""
+    dt = 1.0 / rate_hz
+    time_s, position, effort = [], [], []
+    for row in commands:
+        backend.send_command(JointCommand(row))
+        backend.advance(dt)
+        state = backend.read_state()
+        time_s.append(state.time_s)
+        position.append(state.position_rad)
+        effort.append(state.effort_nm)
+    return np.array(time_s), np.array(position), np.array(effort)
+
+
+def candidate_grid(
+    current: ServoGains, p_values: int = 4, d_values: int = 3, i_values: Sequence[int] = ()
+) -> list[ServoGains]:
+    """Stage one: P log-spaced over [P/4, 4P], D over [0, 2D] (at least 0..1000), I as given.
+    The current gains come first."""
+    p_axis = np.geomspace(
+        max(1, current.position_p // 4), min(REGISTER_MAX, 4 * max(current.position_p, 1)), p_values
+    )
+    d_axis = np.linspace(0, min(REGISTER_MAX, max(2 * current.position_d, 1000)), d_values)
+    out = [current]
+    for i in i_values or (current.position_i,):
+        for p in p_axis:
+            for d in d_axis:
+                gains = ServoGains(round(float(p)), int(i), round(float(d)))
+                if gains not in out:
+                    out.append(gains)
+    return out
+
+
+def refine(best: ServoGains, grid: Sequence[ServoGains]) -> list[ServoGains]:
+    """Stage two: a 3 x 3 pattern around ``best`` at half the stage-one spacing."""
+    ps = sorted({g.position_p for g in grid})
+    ds = sorted({g.position_d for g in grid})
+    p_ratio = math.sqrt(ps[1] / ps[0]) if len(ps) > 1 and ps[0] > 0 else 1.5
+    d_step = (ds[1] - ds[0]) / 2 if len(ds) > 1 else 500.0
+    out = []
+    for p in (
+        best.position_p / math.sqrt(p_ratio),
+        best.position_p,
+        best.position_p * math.sqrt(p_ratio),
+    ):
+        for d in (best.position_d - d_step, best.position_d, best.position_d + d_step):
+            gains = ServoGains(
+                int(np.clip(round(p), 1, REGISTER_MAX)),
+                best.position_i,
+                int(np.clip(round(d), 0, REGISTER_MAX)),
+            )
+            if gains not in out and gains not in grid:
+                out.append(gains)
+    return out
+
+
+def _gait_tracking(backend: Backend, robot: RobotConfig, test: GainTest) -> tuple[float, float]:
+    gait = make_gait(
+        test.gait,
+        robot.joint_count,
+        test.gait_params,
+        lower_rad=robot.lower_rad,
+        upper_rad=robot.upper_rad,
+    )
+    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+    limit = SATURATION_FRACTION * servo_dynamics(robot.servo.physics, robot.gains).torque_limit_nm
+    run = np.zeros(robot.joint_count)
+    longest = [0.0]
+
+    def watch(cycle: int, gait_time_s: float) -> None:
+        nonlocal run
+        saturated = np.abs(backend.read_state().effort_nm) >= limit
+        run = np.where(saturated, run + 1, 0)
+        longest[0] = max(longest[0], float(run.max()) / test.rate_hz)
+
+    plan = RunPlan(test.gait_s, test.rate_hz)
+    result = run_gait(backend, gait, SafetyLayer.for_robot(robot), plan, metrics, on_cycle=watch)
+    tracking = result.summary["tracking_rms_rad"]
+    return float(tracking) if isinstance(tracking, float) else math.nan, longest[0]
+
+
+def _rejection(steps: Sequence[StepMetrics], saturation_s: float, test: GainTest) -> str:
+    for step in steps:
+        if step.overshoot > test.max_overshoot:
+            return f"overshoot {step.overshoot:.0%} > {test.max_overshoot:.0%}"
+        if math.isnan(step.settling_time_s):
+            return "a step never settled"
+    if saturation_s > test.max_saturation_s:
+        return f"held a joint at the torque limit for {saturation_s:.2f} s"
+    return ""
+
+
+@contextlib.contextmanager
+def held(backend: Backend) -> Iterator[Backend]:
+    """A session on an already connected backend (hardware): nothing to open or close."""
+    yield backend

@@ -1,0 +1,159 @@
+"""A gait tuning problem: points of a search space in, scored runs on the twin out.
+
+Every evaluation is kept in order; ``best`` is the lowest loss, so a feasible gait always wins
+over one that breaks the servo envelope (objectives.Objective.loss).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+from snakebot.backends.twin import GroundFriction
+from snakebot.config.schema import RobotConfig
+from snakebot.gaits import Gait, make_gait
+from snakebot.gaits.spec import ParamValue
+from snakebot.tuning.commands import GaitCommands
+from snakebot.tuning.engine import TwinBatch
+from snakebot.tuning.feasibility import Envelope, Violations, assess
+from snakebot.tuning.objectives import Objective
+from snakebot.tuning.pool import PoolJob, ProcessPool
+from snakebot.tuning.space import SearchSpace
+from snakebot.tuning.trace import FloatArray, Trace, summarise
+
+ENGINES = ("batch", "processes")
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One scored candidate: its point, full gait params, run summary, violations and loss."""
+
+    index: int
+    x: tuple[float, ...]
+    params: dict[str, ParamValue]
+    summary: dict[str, object]
+    violations: Violations
+    value: float
+    loss: float
+
+    @property
+    def feasible(self) -> bool:
+        """True when the run stayed inside the servo envelope."""
+        return self.violations.feasible
+
+
+@dataclass(frozen=True)
+class EvalPlan:
+    """How each candidate runs: like ``snakebot run --duration D --rate R`` on the twin."""
+
+    duration_s: float = 10.0
+    rate_hz: float = 100.0
+    workers: int = 2
+    engine: str = "batch"
+    allow_roll: bool = False
+    friction: GroundFriction | None = None
+
+
+Listener = Callable[["GaitProblem"], None]
+
+
+class GaitProblem:
+    """Scores points of ``space`` for ``objective`` by running them on the twin of ``robot``."""
+
+    def __init__(
+        self,
+        robot: RobotConfig,
+        space: SearchSpace,
+        objective: Objective,
+        plan: EvalPlan,
+        *,
+        listener: Listener | None = None,
+    ) -> None:
+        self.robot = robot
+        self.space = space
+        self.objective = objective
+        self.plan = plan
+        self.listener = listener
+        self.history: list[Evaluation] = []
+        self._twin = TwinBatch(robot, workers=plan.workers, friction=plan.friction)
+        self.envelope = Envelope.for_robot(
+            robot, float(self._twin.start_com_m[2]), allow_roll=plan.allow_roll
+        )
+        self._pool = ProcessPool(plan.workers) if plan.engine == "processes" else None
+
+    def close(self) -> None:
+        """Release the worker processes, if any."""
+        if self._pool is not None:
+            self._pool.close()
+
+    @property
+    def evaluations(self) -> int:
+        """Candidates run so far."""
+        return len(self.history)
+
+    @property
+    def best(self) -> Evaluation | None:
+        """The lowest-loss evaluation so far (the first one found, on ties)."""
+        return min(self.history, key=lambda e: e.loss, default=None)
+
+    def evaluate(self, points: Sequence[FloatArray] | FloatArray) -> list[Evaluation]:
+        """Run every point (D,) on the twin in parallel and score it; returns them in order."""
+        rows = [tuple(float(v) for v in point) for point in points]
+        params = [self.space.params(x) for x in rows]
+        out = []
+        for x, p, trace in zip(rows, params, self.run(params), strict=True):
+            out.append(self.score(x, p, trace, len(self.history)))
+            self.history.append(out[-1])
+        if self.listener is not None:
+            self.listener(self)
+        return out
+
+    def baseline(self) -> Evaluation:
+        """The base parameters (defaults and --set), scored but not counted as an evaluation."""
+        params = dict(self.space.base)
+        trace = self.run([params])[0]
+        return self.score(tuple(float(v) for v in self.space.start()), params, trace, -1)
+
+    def run(self, params: Sequence[Mapping[str, ParamValue]]) -> list[Trace]:
+        """The raw runs of full gait parameter sets, on the chosen engine."""
+        plan, robot = self.plan, self.robot
+        if self._pool is not None:
+            jobs = [
+                PoolJob(
+                    robot,
+                    self.space.gait,
+                    p,
+                    plan.duration_s,
+                    plan.rate_hz,
+                    self.envelope,
+                    plan.friction,
+                )
+                for p in params
+            ]
+            return self._pool.run(jobs)
+        gaits = [self.gait(p) for p in params]
+        commands = GaitCommands(gaits, robot, 1.0 / plan.rate_hz)
+        return self._twin.run(commands, plan.duration_s, plan.rate_hz, envelope=self.envelope)
+
+    def gait(self, params: Mapping[str, ParamValue]) -> Gait:
+        """The gait ``params`` describe, with the robot's joint limits."""
+        robot = self.robot
+        return make_gait(
+            self.space.gait,
+            robot.joint_count,
+            params,
+            lower_rad=robot.lower_rad,
+            upper_rad=robot.upper_rad,
+        )
+
+    def score(
+        self, x: tuple[float, ...], params: dict[str, ParamValue], trace: Trace, index: int
+    ) -> Evaluation:
+        """Summarise and assess one run."""
+        period = self.gait(params).period_s
+        summary = summarise(trace, self.robot, period)
+        violations = assess(trace, self.envelope, self.plan.duration_s)
+        value = self.objective.value(summary) if not trace.stop_reason else math.nan
+        loss = self.objective.loss(value, violations)
+        return Evaluation(index, x, params, summary, violations, value, loss)

@@ -1,0 +1,67 @@
+"""The batch engine and the process pool run candidates exactly as `snakebot run` does."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from snakebot.backends.twin import TwinBackend
+from snakebot.config import load_robot
+from snakebot.control.metrics import RunMetrics
+from snakebot.control.runner import RunPlan, run_gait
+from snakebot.control.safety import SafetyLayer
+from snakebot.gaits import make_gait
+from snakebot.tuning.commands import GaitCommands
+from snakebot.tuning.engine import TwinBatch
+from snakebot.tuning.feasibility import Envelope
+from snakebot.tuning.pool import PoolJob, ProcessPool
+from snakebot.tuning.trace import summarise
+
+PARAMS = [{"omega": 6.0, "phase_lag": 0.5}, {"omega": 2.0, "amplitude": 0.6}]
+KEYS = ("distance_m", "tracking_rms_rad", "positive_work_j", "turn_deg", "cost_of_transport")
+
+
+def runner_summary(robot_name: str, gait: str, params: dict[str, float]) -> dict[str, object]:
+    robot = load_robot(robot_name)
+    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+    with TwinBackend(robot) as twin:
+        result = run_gait(
+            twin,
+            make_gait(gait, robot.joint_count, params),
+            SafetyLayer.for_robot(robot),
+            RunPlan(1.5),
+            metrics,
+        )
+    return result.summary
+
+
+def test_batched_and_pooled_runs_match_the_runner_bit_for_bit() -> None:
+    robot = load_robot("snake8")
+    gaits = [make_gait("serpenoid", 8, p) for p in PARAMS]
+    batch = TwinBatch(robot)
+    traces = batch.run(GaitCommands(gaits, robot, 0.01), 1.5, 100.0)
+    envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
+    with ProcessPool(2) as pool:
+        pooled = pool.run([PoolJob(robot, "serpenoid", p, 1.5, 100.0, envelope) for p in PARAMS])
+    for params, gait, trace, other in zip(PARAMS, gaits, traces, pooled, strict=True):
+        expected = runner_summary("snake8", "serpenoid", params)
+        for summary in (summarise(trace, robot, gait.period_s), summarise(other, robot, None)):
+            assert {k: summary[k] for k in KEYS} == {k: expected[k] for k in KEYS}
+        assert np.array_equal(trace.position_rad, other.position_rad)
+
+
+def test_hopeless_runs_stop_early_and_say_why() -> None:
+    robot = load_robot("snake12")
+    batch = TwinBatch(robot)
+    envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
+    flying = dataclasses.replace(envelope, lift_limit_m=-1.0)  # every sample counts as flight
+    gaits = [make_gait("sidewinding", 12)]
+    trace = batch.run(GaitCommands(gaits, robot, 0.01), 2.0, 100.0, envelope=flying)[0]
+    assert trace.stop_reason == "airborne" and trace.cycles == 25
+    upside_down = dataclasses.replace(envelope, rest_com_z_m=-1.0, lift_limit_m=10.0)
+    upside_down = dataclasses.replace(upside_down, allow_roll=False)
+    rolled = batch.run(
+        GaitCommands([make_gait("rolling", 12)], robot, 0.01), 2.0, 100.0, envelope=upside_down
+    )[0]
+    assert rolled.stop_reason in ("", "flipped")

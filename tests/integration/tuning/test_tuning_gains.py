@@ -1,0 +1,105 @@
+"""Gain tuning converges on the twin, writes the robot file, and runs over the emulated bus."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from snakebot.backends.base import ServoGains
+from snakebot.backends.dynamixel.backend import DynamixelBackend
+from snakebot.backends.twin import TwinBackend
+from snakebot.cli.main import main
+from snakebot.config import load_robot
+from snakebot.emulation.physics import make_twin_chain
+from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.emulation.registry import registered
+from snakebot.tuning.gain_search import search_gains
+from snakebot.tuning.gains import GainTest, evaluate_gains, held
+
+QUICK = GainTest(joints=(0, 4), gait="serpenoid", gait_s=2.0, step_s=0.5)
+
+
+def test_search_on_the_twin_lowers_gait_tracking_error_within_limits() -> None:
+    robot = load_robot("snake8")
+    result = search_gains(lambda: TwinBackend(robot), robot, QUICK, budget=6, chirps=False)
+    assert result.current.gains == robot.gains and result.current.feasible
+    assert result.improved and result.best.feasible
+    assert result.best.tracking_rms_rad < 0.5 * result.current.tracking_rms_rad
+    assert all(step.overshoot <= QUICK.max_overshoot for step in result.best.steps)
+
+
+def test_overshoot_beyond_the_limit_rejects_a_candidate() -> None:
+    robot = load_robot("snake8")
+    strict = GainTest(joints=(0,), gait="serpenoid", gait_s=1.0, max_overshoot=-1.0)
+    score = evaluate_gains(lambda: TwinBackend(robot), robot, robot.gains, strict)
+    assert not score.feasible and "overshoot" in score.reason
+
+
+def test_cli_writes_the_new_gains_into_the_robot_file(
+    config_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = config_dir / "robots" / "snake8.toml"
+    before = path.read_text()
+    argv = [
+        "tune",
+        "gains",
+        "--robot",
+        str(path),
+        "--joints",
+        "0",
+        "--gait-duration",
+        "1.5",
+        "--budget",
+        "4",
+        "--report",
+        str(config_dir / "report"),
+        "--json",
+    ]
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert (
+        summary["improved"]
+        and summary["tracking_rms_after_rad"] < summary["tracking_rms_before_rad"]
+    )
+    gains = tomllib.loads(path.read_text())["gains"]
+    best = summary["best"]
+    assert (
+        [gains[k] for k in ("position_p", "position_i", "position_d")]
+        == [best["position_p"], best["position_i"], best["position_d"]]
+        != [640, 0, 4000]
+    )
+    assert load_robot(path).gains == ServoGains(
+        gains["position_p"], gains["position_i"], gains["position_d"]
+    )
+    lines = [
+        line
+        for line in before.splitlines()
+        if "position_p" not in line and "position_d" not in line
+    ]
+    assert all(line in path.read_text().splitlines() for line in lines)  # comments kept
+    assert (config_dir / "report" / "steps.png").is_file()
+    assert (config_dir / "report" / "chirp.png").is_file()
+
+
+def test_the_hardware_path_runs_over_the_emulated_bus() -> None:
+    robot = load_robot("snake8")
+    chain, _ = make_twin_chain(robot, 1_000_000)
+    for servo in chain.servos:
+        servo.poke("return_delay_time", 0)
+    with registered(chain) as url:
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            baud=1_000_000,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
+        with backend:
+            test = GainTest(joints=(0,), gait="serpenoid", gait_s=1.0, step_rad=0.1)
+            score = evaluate_gains(lambda: held(backend), robot, ServoGains(900, 0, 3000), test)
+            assert chain.servo(1).peek("position_p_gain") == 900
+    assert score.steps[0].overshoot >= 0.0 and score.tracking_rms_rad > 0.0

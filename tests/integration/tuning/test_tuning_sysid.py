@@ -1,0 +1,71 @@
+"""sysid recovers the servo parameters a twin log was made with, and writes them."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from snakebot.backends.twin import TwinBackend
+from snakebot.cli.main import main
+from snakebot.config import load_robot
+from snakebot.tuning.excitation import chirp_plan, record
+from snakebot.tuning.sysid import ServoFit, fit_servo, load_log
+
+TRUE = (1.25, 0.8, 1.5)  # stiffness, damping and armature, relative to the shipped values
+
+
+def test_fit_recovers_stiffness_damping_and_armature(tmp_path: Path) -> None:
+    robot = load_robot("snake12")
+    nominal = ServoFit.of(robot)
+    truth = nominal.scaled(("stiffness", "damping", "armature"), TRUE)
+    log_path = tmp_path / "lift.csv"
+    with TwinBackend(truth.apply(robot)) as twin:
+        plan = chirp_plan(robot, twin.read_state().position_rad, 1, 0.5, duration_s=2.0)
+        assert record(twin, plan, log_path) == len(plan)
+    result = fit_servo(robot, [load_log(log_path, robot)])
+    for field in ("stiffness_scale", "damping_nms", "armature_kgm2"):
+        assert getattr(result.after, field) == pytest.approx(getattr(truth, field), rel=0.02)
+    assert result.rms_after_rad < 0.01 * result.rms_before_rad
+
+
+def test_cli_records_fits_and_writes_twin_servo(
+    config_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    robots = config_dir / "robots"
+    truth_path = robots / "truth.toml"
+    shutil.copy(robots / "snake12.toml", truth_path)
+    with truth_path.open("a") as handle:
+        handle.write("\n[twin.servo]\nstiffness_scale = 0.8\narmature_kgm2 = 0.0025\n")
+    log_path = config_dir / "lift.csv"
+    assert (
+        main(["sysid", "--robot", str(truth_path), "--record", str(log_path), "--duration", "1.5"])
+        == 0
+    )
+    capsys.readouterr()
+    target = robots / "snake12.toml"
+    assert (
+        main(
+            [
+                "sysid",
+                "--robot",
+                str(target),
+                str(log_path),
+                "--params",
+                "stiffness,armature",
+                "--report",
+                str(config_dir / "report"),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["after"]["stiffness_scale"] == pytest.approx(0.8, rel=0.02)
+    assert summary["tracking_rms_after_rad"] < summary["tracking_rms_before_rad"]
+    physics = load_robot(target).servo.physics
+    assert physics.stiffness_scale == pytest.approx(0.8, rel=0.02)
+    assert physics.armature_kgm2 == pytest.approx(0.0025, rel=0.02)
+    assert (config_dir / "report" / "replay.png").is_file()
