@@ -17,7 +17,9 @@ from snakebot.emulation.protocol import (
     Packet,
     StatusError,
     build_status,
-    fast_status_segments,
+    crc16,
+    fast_status_header,
+    fast_status_segment,
 )
 from snakebot.emulation.servo import VirtualServo
 
@@ -40,8 +42,13 @@ def _read_reply(servo: VirtualServo, address: int, length: int) -> tuple[int, by
     """(error byte, data) of a read; a failed read still carries `length` zeros for the SDK."""
     error, data = servo.read(address, length)
     if error:
-        data = bytes(length) if length <= MAX_PACKET_BYTES - 11 else b""
+        data = _zeros(length)
     return servo.status_error(error), data
+
+
+def _zeros(length: int) -> bytes:
+    """`length` zero bytes, or none when that many could not fit in a packet."""
+    return bytes(length) if length <= MAX_PACKET_BYTES - 11 else b""
 
 
 def _answers(servo: VirtualServo, instruction: int) -> bool:
@@ -162,11 +169,14 @@ def _reads(
     instruction: int,
 ) -> list[Slot]:
     """Slots of a (Fast) Sync/Bulk Read in parameter order; fast replies form one packet."""
+    by_id: dict[int, list[VirtualServo]] = {}
+    for servo in servos:
+        by_id.setdefault(servo.servo_id, []).append(servo)
     answers: list[list[tuple[VirtualServo, int, bytes]]] = []
     for servo_id, address, length in requests:
         row = []
-        for servo in servos:
-            if servo.servo_id == servo_id and _answers(servo, instruction):
+        for servo in by_id.get(servo_id, ()):
+            if _answers(servo, instruction):
                 error, data = _read_reply(servo, address, length)
                 row.append((servo, error, data))
         answers.append(row)
@@ -176,19 +186,26 @@ def _reads(
             for row in answers
             if row
         ]
+    if not any(answers):
+        return []
+    # A silent servo's part is what the others assume it sent: no error, `length` zeros.
     entries = [
-        (servo_id, row[0][1] if row else 0, row[0][2] if row else bytes(length))
+        (servo_id, row[0][1], row[0][2]) if row else (servo_id, 0, _zeros(length))
         for (servo_id, _, length), row in zip(requests, answers, strict=True)
     ]
+    # Each servo continues the CRC of what the others sent before it (one running CRC, so a
+    # reply costs time linear in its length); servos sharing an ID each send their own part.
+    header = fast_status_header(entries)
+    crc = crc16(header)
     slots: list[Slot] = []
-    for index, row in enumerate(answers):
+    for index, (entry, row) in enumerate(zip(entries, answers, strict=True)):
         replies = []
         for servo, error, data in row:
-            own = list(entries)
-            own[index] = (servo.servo_id, error, data)
-            replies.append((servo, fast_status_segments(own)[index]))
+            segment = fast_status_segment(crc, servo.servo_id, error, data)
+            replies.append((servo, header + segment if index == 0 else segment))
         if replies:
             slots.append(Slot(tuple(replies), segment=index > 0))
+        crc = crc16(fast_status_segment(crc, *entry), crc)
     return slots
 
 

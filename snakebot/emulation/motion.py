@@ -110,9 +110,9 @@ class ProfileMotion:
     def step(self, servo: VirtualServo, dt_s: float) -> None:
         """Advance the servo's state by `dt_s` seconds."""
         state = servo.state
-        if not servo.torque_enabled and state.velocity_rad_s == 0.0 and state.effort == 0.0:
-            return
         command = servo.command()
+        if not command.torque_enabled and state.velocity_rad_s == 0.0 and state.effort == 0.0:
+            return
         position, velocity = state.position_rad, state.velocity_rad_s
         holding = command.operating_mode in OperatingMode.POSITION_MODES
         if holding and velocity == 0.0 and position == command.goal_position_rad:

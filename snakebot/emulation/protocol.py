@@ -115,6 +115,21 @@ def build_status(servo_id: int, error: int, params: bytes | bytearray = b"") -> 
     return frame(servo_id, bytes([Instruction.STATUS, error]) + bytes(params))
 
 
+def fast_status_header(entries: Sequence[tuple[int, int, bytes]]) -> bytes:
+    """The bytes a Fast Sync/Bulk Read reply starts with: header, ID 0xFE, LEN of the whole
+    packet (for `entries` of (servo ID, error byte, data)) and the 0x55 instruction."""
+    length = 1 + sum(len(data) + 4 for _, _, data in entries)
+    return HEADER + bytes([BROADCAST_ID, length & 0xFF, length >> 8, Instruction.STATUS])
+
+
+def fast_status_segment(crc_so_far: int, servo_id: int, error: int, data: bytes) -> bytes:
+    """One servo's part of a fast reply: error, ID, data, then the CRC of the packet so far
+    (`crc_so_far` is the CRC of every byte sent before this part)."""
+    body = bytes([error, servo_id]) + data
+    crc = crc16(body, crc_so_far)
+    return body + bytes([crc & 0xFF, crc >> 8])
+
+
 def fast_status_segments(entries: Sequence[tuple[int, int, bytes]]) -> list[bytes]:
     """Split a Fast Sync/Bulk Read reply into the bytes each servo sends, in order.
 
@@ -122,16 +137,13 @@ def fast_status_segments(entries: Sequence[tuple[int, int, bytes]]) -> list[byte
     LEN for the whole packet, 0x55); each segment ends with the CRC of the packet so far, so the
     last one ends with the packet CRC. Fast replies are not stuffed (reference §1.3, §1.5).
     """
-    length = 1 + sum(len(data) + 4 for _, _, data in entries)
-    sent = bytearray(HEADER + bytes([BROADCAST_ID, length & 0xFF, length >> 8, Instruction.STATUS]))
+    header = fast_status_header(entries)
+    crc = crc16(header)
     segments: list[bytes] = []
-    start = 0
     for servo_id, error, data in entries:
-        sent += bytes([error, servo_id]) + data
-        crc = crc16(sent)
-        sent += bytes([crc & 0xFF, crc >> 8])
-        segments.append(bytes(sent[start:]))
-        start = len(sent)
+        segment = fast_status_segment(crc, servo_id, error, data)
+        crc = crc16(segment, crc)
+        segments.append(header + segment if not segments else segment)
     return segments
 
 

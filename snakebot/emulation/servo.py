@@ -8,7 +8,7 @@ Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset
 from __future__ import annotations
 
 import itertools
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from snakebot.emulation import firmware
 from snakebot.emulation.errors import EmulationError
@@ -61,6 +61,7 @@ class VirtualServo:
         self._registered: bytes | None = None
         self._registered_address = 0
         self._command: tuple[int, ServoCommand] | None = None
+        self._rules: tuple[int, _StepRules] | None = None
         self.memory.load_defaults()
         self.memory.set("id", servo_id)
         self.memory.set("baud_rate", self.table.baud_index(baud))
@@ -205,18 +206,19 @@ class VirtualServo:
         if dt_s <= 0.0:
             return
         self.uptime_s += dt_s
+        rules = self._step_rules()
         # The watchdog only runs while torque is on (e-Manual bus watchdog).
-        self._since_packet_s = self._since_packet_s + dt_s if self.torque_enabled else 0.0
+        self._since_packet_s = self._since_packet_s + dt_s if rules.torque_enabled else 0.0
         self.motion.step(self, dt_s)
-        watchdog = self.memory.get("bus_watchdog")
+        rules = self._step_rules()  # the motion model may have changed the table
         if (
-            self.torque_enabled
+            rules.torque_enabled
             and not self._watchdog_tripped
-            and watchdog > 0
-            and self._since_packet_s > watchdog * 0.02
+            and rules.watchdog_s > 0
+            and self._since_packet_s > rules.watchdog_s
         ):
             self._trip_watchdog()
-        self._detect_faults(dt_s)
+        self._detect_faults(dt_s, self._step_rules())
 
     def command(self) -> ServoCommand:
         """The control table's current request in SI, in the motor's frame (see motion.py)."""
@@ -262,15 +264,41 @@ class VirtualServo:
         self.memory.set("goal_velocity", 0)
         self.state = replace(self.state, velocity_rad_s=0.0)
 
-    def _detect_faults(self, dt_s: float) -> None:
-        get, state, found = self.memory.get, self.state, 0
+    def _step_rules(self) -> _StepRules:
+        """The writable items `step` checks, decoded once per change of the table."""
+        version = self.memory.version
+        if self._rules is None or self._rules[0] != version:
+            get = self.memory.get
+            rules = _StepRules(
+                torque_enabled=get("torque_enable") == 1,
+                watchdog_s=get("bus_watchdog") * 0.02,
+                min_volts_x10=get("min_voltage_limit"),
+                max_volts_x10=get("max_voltage_limit"),
+                temperature_limit_c=get("temperature_limit"),
+            )
+            self._rules = (version, rules)
+        return self._rules[1]
+
+    def _detect_faults(self, dt_s: float, rules: _StepRules) -> None:
+        state, found = self.state, 0
         volts = state.input_voltage_v * 10.0
-        if not get("min_voltage_limit") <= volts <= get("max_voltage_limit"):
+        if not rules.min_volts_x10 <= volts <= rules.max_volts_x10:
             found |= HardwareError.INPUT_VOLTAGE
-        if state.temperature_c > get("temperature_limit"):
+        if state.temperature_c > rules.temperature_limit_c:
             found |= HardwareError.OVERHEATING
         self._overload_s = self._overload_s + dt_s if abs(state.effort) >= 1.0 else 0.0
         if self._overload_s > OVERLOAD_AFTER_S:
             found |= HardwareError.OVERLOAD
-        if found & ~get("hardware_error_status"):
+        if found and found & ~self.memory.get("hardware_error_status"):
             self.latch_error(found)
+
+
+@dataclass(frozen=True)
+class _StepRules:
+    """Torque Enable, Bus Watchdog (s) and the fault limits, as of one table version."""
+
+    torque_enabled: bool
+    watchdog_s: float
+    min_volts_x10: int
+    max_volts_x10: int
+    temperature_limit_c: int
