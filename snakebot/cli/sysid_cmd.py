@@ -10,6 +10,7 @@ from typing import Any
 
 from snakebot.cli.common import add_robot_option, positive_float, print_json
 from snakebot.config import load_robot
+from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
 from snakebot.errors import ConfigError
 
 
@@ -28,7 +29,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--params",
         default="stiffness,damping,armature",
-        help="parameters to fit, from stiffness,damping,armature,friction_loss",
+        help="parameters to fit, from stiffness,damping,armature,friction_loss,delay "
+        f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s)",
     )
     parser.add_argument("--workers", type=int, default=2, help="parallel replays (default 2)")
     parser.add_argument("--max-evaluations", type=int, default=40, metavar="N")
@@ -62,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.logs:
         raise ConfigError("LOG", "", "give one or more telemetry logs, or --record LOG")
     from snakebot.tuning.config_edit import set_table_values
-    from snakebot.tuning.sysid import fit_servo, load_log
+    from snakebot.tuning.sysid import FIELDS, fit_servo, load_log
 
     if args.report is not None:
         from snakebot.tuning.plots import pyplot
@@ -84,13 +86,7 @@ def run(args: argparse.Namespace) -> int:
         "replays": result.simulations,
     }
     if not args.no_write and result.rms_after_rad < result.rms_before_rad:
-        fields = {
-            "stiffness": "stiffness_scale",
-            "damping": "damping_nms",
-            "armature": "armature_kgm2",
-            "friction_loss": "friction_loss_nm",
-        }
-        values = {fields[n]: float(getattr(result.after, fields[n])) for n in result.names}
+        values = {FIELDS[n]: float(getattr(result.after, FIELDS[n])) for n in result.names}
         set_table_values(robot.source, "twin.servo", values)
         summary["written_to"] = f"{robot.source} [twin.servo]"
     if args.report is not None:

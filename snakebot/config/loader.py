@@ -12,6 +12,7 @@ from typing import Any
 from snakebot.backends.base import ServoGains
 from snakebot.config.fields import Table
 from snakebot.config.schema import (
+    MAX_ACTUATOR_DELAY_S,
     BusConfig,
     JointConfig,
     LinkConfig,
@@ -132,6 +133,11 @@ def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
         damping_nms=table.number("damping_nms", -1.0) if table.has("damping_nms") else None,
         armature_kgm2=table.number("armature_kgm2", physics.armature_kgm2, minimum=0.0),
         friction_loss_nm=table.number("friction_loss_nm", physics.friction_loss_nm, minimum=0.0),
+        actuator_delay_s=(
+            table.number("actuator_delay_s", minimum=0.0, maximum=MAX_ACTUATOR_DELAY_S)
+            if table.has("actuator_delay_s")
+            else None
+        ),
     )
     if fitted.damping_nms is not None and fitted.damping_nms < 0:
         raise table.error("damping_nms", f"expected a number >= 0, got {fitted.damping_nms}")

@@ -13,14 +13,20 @@ from snakebot.backends.base import ServoGains, StopPolicy
 Axis = Literal["yaw", "pitch"]
 GroundModel = Literal["anisotropic", "isotropic"]
 
+# Longest actuator delay a robot file may set: far above a Dynamixel chain's few milliseconds
+# of bus transfer and servo loop, and it sizes the twin's command history (docs/twin.md).
+MAX_ACTUATOR_DELAY_S = 0.1
+
 
 @dataclass(frozen=True)
 class ServoPhysics:
     """Electromechanical facts of one servo model (datasheet values, see the servo file).
 
     ``stall_torque_nm`` and ``no_load_speed_rad_s`` are at ``nominal_voltage_v``; the twin scales
-    them to ``supply_voltage_v``. ``stiffness_scale`` and ``damping_nms`` (joint damping with
-    torque on, replacing back-EMF + viscous) come from a robot's ``[twin.servo]`` (sysid).
+    them to ``supply_voltage_v``. ``stiffness_scale``, ``damping_nms`` (joint damping with
+    torque on, replacing back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command
+    leaving the controller to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no
+    delay model) come from a robot's ``[twin.servo]`` (sysid).
     """
 
     stall_torque_nm: float
@@ -35,6 +41,7 @@ class ServoPhysics:
     d_gain_loop_period_s: float
     stiffness_scale: float = 1.0
     damping_nms: float | None = None
+    actuator_delay_s: float | None = None
 
 
 @dataclass(frozen=True)

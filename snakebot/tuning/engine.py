@@ -18,7 +18,7 @@ import numpy as np
 from mujoco import batch as mj_batch
 
 from snakebot.backends.twin import GroundFriction, TwinBackend
-from snakebot.backends.twin.model_builder import joint_name, link_name
+from snakebot.backends.twin.model_builder import hold_ctrl_history, joint_name, link_name
 from snakebot.config.schema import RobotConfig
 from snakebot.tuning.commands import BatchCommands
 from snakebot.tuning.feasibility import Envelope
@@ -81,11 +81,18 @@ class TwinBatch:
         self.start_com_m, self.start_head_quat = body.com_m, body.head_quat
         self.layout = twin_layout(model, robot)
 
-    def initial_state_with_pose(self, joint_rad: FloatArray) -> FloatArray:
-        """The start state with the joints bent to ``joint_rad`` (N,) and at rest."""
+    def initial_state_with_pose(
+        self, joint_rad: FloatArray, command_rad: FloatArray | None = None
+    ) -> FloatArray:
+        """The start state with the joints bent to ``joint_rad`` (N,) and at rest.
+
+        A delayed servo's past commands become ``command_rad`` (N,; default ``joint_rad``), the
+        goals it held there, rather than the straight pose's zeros.
+        """
         data = mujoco.MjData(self.model)
         mujoco.mj_setState(self.model, data, self.initial_state, _STATE)
         data.qpos[self.layout.qpos_index] = joint_rad
+        hold_ctrl_history(self.model, data, joint_rad if command_rad is None else command_rad)
         mujoco.mj_forward(self.model, data)
         state = np.empty_like(self.initial_state)
         mujoco.mj_getState(self.model, data, state, _STATE)

@@ -4,9 +4,12 @@ Each log's commands are replayed open loop on twins that differ only in the fitt
 side by side (engine.TwinBatch), from the pose the log starts in. The residual is the joint
 positions (rad) and, weighted by ``VELOCITY_WEIGHT_S``, velocities of twin minus log.
 ``scipy.optimize.least_squares`` (trust-region reflective, box bounds, Jacobian scaling) fits the
-logarithms of the parameters relative to the current ones; the finite-difference Jacobian is one
-parallel batch. (``mujoco.minimize``'s Levenberg-Marquardt stalled on the armature, whose effect
-is some 50 times weaker than the stiffness's; the scaled trust region does not.)
+logarithms of the parameters relative to the current ones, but the actuator delay in seconds
+within [0, MAX_ACTUATOR_DELAY_S]; the finite-difference Jacobian is one parallel batch.
+(``mujoco.minimize``'s Levenberg-Marquardt stalled on the armature, whose effect is some 50 times
+weaker than the stiffness's; the scaled trust region does not.) The delay often starts on its
+bound 0 and may end there, where the reflective method's scaling (by the distance to the bound)
+freezes it: with the delay, the fit uses the rectangular trust region ("dogbox") instead.
 """
 
 from __future__ import annotations
@@ -24,29 +27,44 @@ from scipy.optimize import least_squares
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.servo_model import servo_dynamics
-from snakebot.config.schema import RobotConfig
+from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, RobotConfig
 from snakebot.errors import ConfigError
 from snakebot.telemetry import read_log
 from snakebot.tuning.commands import ArrayCommands
 from snakebot.tuning.engine import TwinBatch
 from snakebot.tuning.trace import FloatArray
 
-PARAMS = ("stiffness", "damping", "armature", "friction_loss")
+PARAMS = ("stiffness", "damping", "armature", "friction_loss", "delay")
 DEFAULT_PARAMS = ("stiffness", "damping", "armature")
+# Where each parameter lives in ServoFit and in the robot file's [twin.servo].
+FIELDS = {
+    "stiffness": "stiffness_scale",
+    "damping": "damping_nms",
+    "armature": "armature_kgm2",
+    "friction_loss": "friction_loss_nm",
+    "delay": "actuator_delay_s",
+}
 VELOCITY_WEIGHT_S = 0.05
 SEARCH_FACTOR = 5.0  # each parameter is searched within [current / 5, current * 5]
 # Contacts and friction make the replay rough at small scales: difference over 2 % changes.
 FD_STEP = 0.02
+# The delayed command is piecewise linear in the delay between timesteps (2 ms on the shipped
+# robots): a 1 ms step spans at most one kink.
+FD_DELAY_STEP_S = 0.001
 
 
 @dataclass(frozen=True)
 class ServoFit:
-    """The fitted servo parameters as the robot file's ``[twin.servo]`` holds them."""
+    """The fitted servo parameters as the robot file's ``[twin.servo]`` holds them.
+
+    ``actuator_delay_s`` None: the twin has no delay model (and no command history).
+    """
 
     stiffness_scale: float
     damping_nms: float
     armature_kgm2: float
     friction_loss_nm: float
+    actuator_delay_s: float | None = None
 
     @classmethod
     def of(cls, robot: RobotConfig) -> ServoFit:
@@ -58,6 +76,7 @@ class ServoFit:
             servo.joint_damping_nms,
             servo.armature_kgm2,
             servo.friction_loss_nm,
+            physics.actuator_delay_s,
         )
 
     def apply(self, robot: RobotConfig) -> RobotConfig:
@@ -68,18 +87,26 @@ class ServoFit:
             damping_nms=self.damping_nms,
             armature_kgm2=self.armature_kgm2,
             friction_loss_nm=self.friction_loss_nm,
+            actuator_delay_s=self.actuator_delay_s,
         )
         return dataclasses.replace(robot, servo=dataclasses.replace(robot.servo, physics=physics))
 
     def scaled(self, names: Sequence[str], factors: Sequence[float]) -> ServoFit:
-        """These values with parameter ``names[i]`` multiplied by ``factors[i]``."""
+        """These values with parameter ``names[i]`` multiplied by ``factors[i]``; ``delay`` is
+        not a factor but the new delay (s)."""
         fields = dict(zip(names, factors, strict=True))
         return ServoFit(
             self.stiffness_scale * fields.get("stiffness", 1.0),
             self.damping_nms * fields.get("damping", 1.0),
             self.armature_kgm2 * fields.get("armature", 1.0),
             self.friction_loss_nm * fields.get("friction_loss", 1.0),
+            fields.get("delay", self.actuator_delay_s),
         )
+
+    def at(self, names: Sequence[str], x: Sequence[float]) -> ServoFit:
+        """The fit's point ``x``: log factors on these values, but ``delay`` in seconds."""
+        values = [v if n == "delay" else math.exp(v) for n, v in zip(names, x, strict=True)]
+        return self.scaled(names, values)
 
     def report(self, robot: RobotConfig) -> dict[str, float]:
         """JSON-ready values, with the stiffness also in N·m/rad at the robot's gains."""
@@ -90,6 +117,7 @@ class ServoFit:
             "damping_nms": self.damping_nms,
             "armature_kgm2": self.armature_kgm2,
             "friction_loss_nm": self.friction_loss_nm,
+            "actuator_delay_s": self.actuator_delay_s or 0.0,
         }
 
 
@@ -160,7 +188,8 @@ class Replayer:
             commands = ArrayCommands(
                 np.broadcast_to(log.command_rad, (len(fits), *log.command_rad.shape))
             )
-            start = self.batch.initial_state_with_pose(log.start_pose_rad)
+            # The servos held the log's first goal before it began (at rest, under load).
+            start = self.batch.initial_state_with_pose(log.start_pose_rad, log.command_rad[0])
             traces = self.batch.run(
                 commands, cycles * log.dt_s, 1.0 / log.dt_s, models=models, initial_state=start
             )
@@ -194,21 +223,33 @@ def fit_servo(
     workers: int = 2,
     max_evaluations: int = 40,
 ) -> SysidResult:
-    """Fit ``names`` (some of PARAMS) so the twin replays ``logs`` as the robot did."""
+    """Fit ``names`` (some of PARAMS) so the twin replays ``logs`` as the robot did.
+
+    Fitting ``delay`` gives every candidate twin a command history (a robot without a delay
+    model starts from 0 s), so all of them share one layout and one batch.
+    """
     names = tuple(names)
     unknown = [n for n in names if n not in PARAMS]
     if unknown or not names:
         raise ConfigError("--params", ",".join(unknown), f"expected some of {', '.join(PARAMS)}")
     start = ServoFit.of(robot)
-    zero = [n for n in names if getattr(start, _FIELD[n]) <= 0]
+    zero = [n for n in names if n != "delay" and getattr(start, FIELDS[n]) <= 0]
     if zero:
         raise ConfigError("--params", zero[0], "cannot fit a parameter that is 0 now (log scale)")
+    if "delay" in names and start.actuator_delay_s is None:
+        start = dataclasses.replace(start, actuator_delay_s=0.0)
+        robot = start.apply(robot)
     replayer = Replayer(robot, logs, workers)
     bound = math.log(SEARCH_FACTOR)
+    is_delay = np.array([n == "delay" for n in names])
+    lower = np.where(is_delay, 0.0, -bound)
+    upper = np.where(is_delay, MAX_ACTUATOR_DELAY_S, bound)
+    step = np.where(is_delay, FD_DELAY_STEP_S, FD_STEP)
+    x0 = np.where(is_delay, start.actuator_delay_s or 0.0, 0.0)
     last: dict[bytes, FloatArray] = {}
 
     def residuals(points: Sequence[FloatArray]) -> FloatArray:
-        return replayer.residuals([start.scaled(names, np.exp(p).tolist()) for p in points])
+        return replayer.residuals([start.at(names, p.tolist()) for p in points])
 
     def residual(x: FloatArray) -> FloatArray:
         r = last.get(x.tobytes())
@@ -219,8 +260,8 @@ def fit_servo(
 
     def jacobian(x: FloatArray) -> FloatArray:
         # Central differences: forward ones stopped ~10 % short on the weak armature direction.
-        low = np.maximum(x - FD_STEP, -bound)
-        high = np.minimum(x + FD_STEP, bound)
+        low = np.maximum(x - step, lower)
+        high = np.minimum(x + step, upper)
         eye = np.eye(len(x))
         points = [x + (h - x) * e for h, e in zip(high, eye, strict=True)]
         points += [x + (lo - x) * e for lo, e in zip(low, eye, strict=True)]
@@ -231,14 +272,14 @@ def fit_servo(
 
     solution = least_squares(
         residual,
-        np.zeros(len(names)),
+        x0,
         jac=jacobian,
-        bounds=(np.full(len(names), -bound), np.full(len(names), bound)),
+        bounds=(lower, upper),
+        method="dogbox" if "delay" in names else "trf",
         x_scale="jac",
         max_nfev=max_evaluations,
     )
-    x = solution.x
-    after = start.scaled(names, np.exp(x).tolist())
+    after = start.at(names, solution.x.tolist())
     replays = replayer.positions([start, after])
     return SysidResult(
         names,
@@ -250,14 +291,6 @@ def fit_servo(
         tuple(r[: len(log.command_rad)] for r, log in zip(replays[0], logs, strict=True)),
         tuple(r[: len(log.command_rad)] for r, log in zip(replays[1], logs, strict=True)),
     )
-
-
-_FIELD = {
-    "stiffness": "stiffness_scale",
-    "damping": "damping_nms",
-    "armature": "armature_kgm2",
-    "friction_loss": "friction_loss_nm",
-}
 
 
 def _model(robot: RobotConfig) -> mujoco.MjModel:

@@ -12,6 +12,7 @@ from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
     build_model,
+    hold_ctrl_history,
     joint_name,
     link_name,
 )
@@ -70,6 +71,7 @@ class TwinBackend(Backend):
         self._head_id = self.model.body(link_name(0)).id
         self._apply_gains(self._gains, torque=True)
         self.data.ctrl[:] = 0.0
+        hold_ctrl_history(self.model, self.data, self.data.ctrl)  # the straight pose's goals
         mujoco.mj_forward(self.model, self.data)
         self.torque_enabled = True
         self._pacer = Pacer(self.stats) if self._realtime else None

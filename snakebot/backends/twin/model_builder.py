@@ -12,8 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
-from snakebot.backends.twin.servo_model import ServoDynamics, servo_dynamics
+from snakebot.backends.twin.servo_model import ServoDynamics, history_samples, servo_dynamics
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
 
@@ -23,6 +24,9 @@ SCENE_PATH = Path(__file__).resolve().parents[3] / "sim" / "scene.xml"
 _LINK_CONTYPE = 2
 _SPIN_ROLL_FRICTION = (0.005, 0.0001, 0.0001)
 _AXIS_VECTORS = {"yaw": (0.0, 0.0, 1.0), "pitch": (0.0, 1.0, 0.0)}
+# Actuator history interpolation: 0 holds the last sample, so the delay acts in whole timesteps;
+# 1 (linear) makes the delayed command continuous in the delay, which sysid needs to fit it.
+_LINEAR_INTERP = 1
 
 
 @dataclass(frozen=True)
@@ -153,9 +157,14 @@ def _add_joint(body: mujoco.MjsBody, robot: RobotConfig, index: int, servo: Serv
 
 
 def add_actuators(spec: mujoco.MjSpec, robot: RobotConfig) -> None:
-    """One position servo per joint: kp and kv from the gains, force clipped at stall torque."""
+    """One position servo per joint: kp and kv from the gains, force clipped at stall torque.
+
+    With an actuator delay each servo acts on its command of ``delay_s`` ago, read from a
+    history of ``history_samples`` commands (part of the ``mjSTATE_INTEGRATION`` state).
+    """
     servo = servo_dynamics(robot.servo.physics, robot.gains)
     kv = servo.actuator_kv(spec.option.timestep)
+    samples = history_samples(spec.option.timestep)
     for index, joint_cfg in enumerate(robot.joints):
         actuator = spec.add_actuator(name=f"servo{joint_cfg.servo_id}", target=joint_name(index))
         actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
@@ -164,6 +173,20 @@ def add_actuators(spec: mujoco.MjSpec, robot: RobotConfig) -> None:
         actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
         actuator.forcerange = [-servo.torque_limit_nm, servo.torque_limit_nm]
         actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        if servo.delay_s is not None:
+            actuator.delay = servo.delay_s
+            actuator.nsample = samples
+            actuator.interp = _LINEAR_INTERP
+
+
+def hold_ctrl_history(model: mujoco.MjModel, data: mujoco.MjData, command_rad: np.ndarray) -> None:
+    """Make ``command_rad`` (N,) every past command of the delayed actuators, as if the servos
+    had held it; MjData starts the history at 0, a straight-snake command. No-op without delay.
+    """
+    for actuator in np.flatnonzero(model.actuator_history[:, 0] > 0):
+        samples = int(model.actuator_history[actuator, 0])
+        values = np.full((samples, 1), float(command_rad[actuator]))
+        mujoco.mj_initCtrlHistory(model, data, int(actuator), None, values)
 
 
 def build_model(

@@ -1,4 +1,5 @@
-"""A Dynamixel in position mode as MuJoCo sees it: stiffness, damping, torque limit, armature.
+"""A Dynamixel in position mode as MuJoCo sees it: stiffness, damping, torque limit, armature,
+and the delay from a command leaving the controller to the servo acting on it.
 
 A Dynamixel position loop is a voltage P(I)D controller (Rhoban/bam, ``bam/actuator.py``):
 duty = clip(error_gain * P * err, ±1), torque = (kt/R) * (duty * V - kt * qdot) - friction.
@@ -13,7 +14,7 @@ import math
 from dataclasses import dataclass
 
 from snakebot.backends.base import ServoGains
-from snakebot.config.schema import ServoPhysics
+from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, ServoPhysics
 
 # X-series firmware: KPP = P/128 and the output is in PWM units out of 2 * PWM Limit, which is
 # bam's error_gain = (ticks/rad) / (256 * pwm_limit) per unit of P (arXiv 2410.08650, bam).
@@ -24,7 +25,8 @@ _D_TO_P_WEIGHT = 128.0 / 16.0
 
 @dataclass(frozen=True)
 class ServoDynamics:
-    """MuJoCo parameters for one joint: position actuator kp/kv, joint damping, limits."""
+    """MuJoCo parameters for one joint: position actuator kp/kv, joint damping, limits, and the
+    actuator delay (s; None: the actuator keeps no command history)."""
 
     stiffness_nm_per_rad: float
     gain_damping_nms: float
@@ -33,6 +35,7 @@ class ServoDynamics:
     no_load_speed_rad_s: float
     armature_kgm2: float
     friction_loss_nm: float
+    delay_s: float | None = None
 
     @property
     def joint_damping_nms(self) -> float:
@@ -73,4 +76,12 @@ def servo_dynamics(physics: ServoPhysics, gains: ServoGains) -> ServoDynamics:
         no_load_speed_rad_s=no_load_speed,
         armature_kgm2=physics.armature_kgm2,
         friction_loss_nm=physics.friction_loss_nm,
+        delay_s=physics.actuator_delay_s,
     )
+
+
+def history_samples(timestep_s: float) -> int:
+    """Command samples a delayed actuator keeps: enough for ``MAX_ACTUATOR_DELAY_S`` plus the
+    older neighbour that linear interpolation needs. It depends on the timestep only, so twins
+    with different delays share one layout (and one ``mujoco.batch``)."""
+    return math.ceil(MAX_ACTUATOR_DELAY_S / timestep_s) + 2

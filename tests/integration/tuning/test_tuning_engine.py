@@ -12,11 +12,12 @@ from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.gaits import make_gait
-from snakebot.tuning.commands import GaitCommands
+from snakebot.tuning.commands import ArrayCommands, GaitCommands
 from snakebot.tuning.engine import TwinBatch
 from snakebot.tuning.feasibility import Envelope
 from snakebot.tuning.pool import PoolJob, ProcessPool
 from snakebot.tuning.trace import summarise
+from tests.integration.twin.robots import with_delay
 
 PARAMS = [{"omega": 6.0, "phase_lag": 0.5}, {"omega": 2.0, "amplitude": 0.6}]
 KEYS = ("distance_m", "tracking_rms_rad", "positive_work_j", "turn_deg", "cost_of_transport")
@@ -65,3 +66,17 @@ def test_hopeless_runs_stop_early_and_say_why() -> None:
         GaitCommands([make_gait("rolling", 12)], robot, 0.01), 2.0, 100.0, envelope=upside_down
     )[0]
     assert rolled.stop_reason in ("", "flipped")
+
+
+def test_a_delayed_replay_from_a_bent_pose_starts_with_the_held_goals() -> None:
+    robot = with_delay(load_robot("snake12"), 0.05)
+    batch = TwinBatch(robot)
+    pose = np.zeros(robot.joint_count)
+    pose[0] = 0.5
+    hold = ArrayCommands(np.broadcast_to(pose, (1, 10, robot.joint_count)))
+    drift = []
+    for past in (pose, np.zeros(robot.joint_count)):  # the goals held, or MjData's zeros
+        start = batch.initial_state_with_pose(pose, past)
+        trace = batch.run(hold, 0.1, 100.0, initial_state=start)[0]
+        drift.append(float(np.abs(trace.position_rad[:, 0] - 0.5).max()))
+    assert drift[0] < 1e-3 and drift[1] > 0.05  # zeros: the joint heads for 0 for 50 ms

@@ -26,3 +26,9 @@ def robot_with_joints(joint_count: int, base: str = "snake8", **twin: object) ->
 def with_gains(robot: RobotConfig, p: int, d: int = 0) -> RobotConfig:
     """``robot`` with other Position P/D gain registers."""
     return dataclasses.replace(robot, gains=ServoGains(position_p=p, position_d=d))
+
+
+def with_delay(robot: RobotConfig, delay_s: float | None) -> RobotConfig:
+    """``robot`` with another actuator delay (None: no delay model)."""
+    physics = dataclasses.replace(robot.servo.physics, actuator_delay_s=delay_s)
+    return dataclasses.replace(robot, servo=dataclasses.replace(robot.servo, physics=physics))

@@ -52,6 +52,31 @@ def test_bad_config_names_file_and_key(
     assert expected in str(info.value)
 
 
+def with_twin_servo(config_dir: Path, lines: str) -> Path:
+    """A copy of snake12 with a ``[twin.servo]`` table holding ``lines``."""
+    table = f"[twin.servo]\n{lines}\n\n[joint_defaults]"
+    return edit_robot(config_dir, "snake12", "[joint_defaults]", table)
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [("0.5", "expected a number <= 0.1"), ("-0.001", ">= 0.0"), ('"2 ms"', "expected a number")],
+)
+def test_bad_actuator_delay_names_file_and_key(config_dir: Path, value: str, expected: str) -> None:
+    path = with_twin_servo(config_dir, f"actuator_delay_s = {value}")
+    with pytest.raises(ConfigError) as info:
+        load_robot(path)
+    assert info.value.key == "twin.servo.actuator_delay_s"
+    assert str(path) in str(info.value)
+    assert expected in str(info.value)
+
+
+def test_actuator_delay_is_read_and_absent_means_no_delay_model(config_dir: Path) -> None:
+    assert load_robot("snake12").servo.physics.actuator_delay_s is None
+    path = with_twin_servo(config_dir, "actuator_delay_s = 0.012")
+    assert load_robot(path).servo.physics.actuator_delay_s == 0.012
+
+
 def test_unknown_robot_lists_known_ones() -> None:
     with pytest.raises(ConfigError, match=r"known robots: .*snake12"):
         load_robot("snake99")
