@@ -38,6 +38,8 @@ class Gait(abc.ABC):
 
 def as_times(gait: str, time_s: float | npt.ArrayLike) -> tuple[FloatArray, bool]:
     """Times as a 1-D float array (T,) in s, and whether the caller passed a scalar."""
+    if type(time_s) is float and math.isfinite(time_s):  # the control loop's case, once a cycle
+        return np.array([time_s]), True
     try:
         t = np.asarray(time_s, dtype=np.float64)
     except (TypeError, ValueError) as exc:
