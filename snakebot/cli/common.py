@@ -6,6 +6,8 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
 
 
 def positive_float(text: str) -> float:
@@ -35,3 +37,13 @@ def print_json(payload: object) -> None:
     json.dump(payload, sys.stdout, indent=None, allow_nan=False, default=str)
     sys.stdout.write("\n")
     sys.stdout.flush()
+
+
+def write_report(
+    directory: Path, summary: dict[str, object], draw: Callable[[Path], Sequence[Path]]
+) -> None:
+    """Draw a command's plots into ``directory`` and write ``summary.json`` beside them; the
+    summary gains the list of plot paths."""
+    directory.mkdir(parents=True, exist_ok=True)
+    summary["plots"] = [str(path) for path in draw(directory)]
+    (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=str))

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
 from snakebot.config import load_robot
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
 from snakebot.errors import ConfigError
@@ -92,9 +91,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report is not None:
         from snakebot.tuning.plots import sysid_plots
 
-        args.report.mkdir(parents=True, exist_ok=True)
-        summary["plots"] = [str(p) for p in sysid_plots(result, logs, args.report)]
-        (args.report / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+        write_report(args.report, summary, lambda directory: sysid_plots(result, logs, directory))
     if args.json:
         print_json(summary)
         return 0

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 import sys
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError, SafetyLimitError
 from snakebot.gaits import parse_set_options
@@ -159,9 +158,7 @@ def run_gait(args: argparse.Namespace) -> int:
     if args.report is not None:
         from snakebot.tuning.plots import gait_plots
 
-        args.report.mkdir(parents=True, exist_ok=True)
-        summary["plots"] = [str(p) for p in gait_plots(result, args.report)]
-        (args.report / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+        write_report(args.report, summary, lambda directory: gait_plots(result, directory))
     if args.json:
         print_json(summary)
     else:
@@ -260,9 +257,7 @@ def run_gains(args: argparse.Namespace) -> int:
     if args.report is not None:
         from snakebot.tuning.plots import gain_plots
 
-        args.report.mkdir(parents=True, exist_ok=True)
-        summary["plots"] = [str(p) for p in gain_plots(result, test, args.report)]
-        (args.report / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+        write_report(args.report, summary, lambda directory: gain_plots(result, test, directory))
     if args.json:
         print_json(summary)
         return 0
