@@ -43,7 +43,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--physics",
         action="store_true",
-        help="back the servos with the MuJoCo twin in real time; print its summary on exit",
+        help="back the servos with the MuJoCo twin in real time (goals, torque and Position P/D "
+        "gains from their registers); print its summary on exit",
     )
     parser.add_argument("--pty", action="store_true", required=True, help="serve on a pty")
     parser.add_argument("--json", action="store_true", help='print {"port": ...} and JSON summary')

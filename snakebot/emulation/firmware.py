@@ -98,6 +98,7 @@ def command(servo: VirtualServo) -> ServoCommand:
         max_velocity_rad_s=max_velocity,
         max_acceleration_rad_s2=acceleration if acceleration > 0 and not time_based else None,
         no_load_speed_rad_s=no_load,
+        position_gains=(get("position_p_gain"), get("position_i_gain"), get("position_d_gain")),
     )
 
 

@@ -52,7 +52,8 @@ class ServoCommand:
     """What the control table asks of the motor now, converted to SI in the motor's frame.
 
     Profile limits are None for "unlimited" (register value 0); `max_velocity_rad_s` already folds
-    in the Velocity Limit and the no-load speed.
+    in the Velocity Limit and the no-load speed. `position_gains` is the Position (P, I, D) Gain
+    registers as they are (register units), for a physics model of the position loop.
     """
 
     torque_enabled: bool
@@ -64,6 +65,7 @@ class ServoCommand:
     max_velocity_rad_s: float
     max_acceleration_rad_s2: float | None
     no_load_speed_rad_s: float
+    position_gains: tuple[int, int, int]
 
 
 class MotionModel(Protocol):

@@ -1,8 +1,10 @@
 """Hardware in the loop without hardware: emulated servos whose shafts are the twin's joints.
 
-Goal Position and Torque Enable, read from each virtual servo's control table, drive the MuJoCo
-twin of the same robot; Present Position/Velocity/Load come back from the twin. Time is the
-chain's: a pty server advances the chain by wall-clock time, so the twin runs in real time.
+Goal Position, Torque Enable and the Position P/D Gain registers, read from each virtual servo's
+control table, drive the MuJoCo twin of the same robot (its joint stiffness and damping follow
+the gains as `servo_dynamics` maps them; the twin has no I term, so Position I Gain is ignored);
+Present Position/Velocity/Load come back from the twin. Time is the chain's: a pty server advances
+the chain by wall-clock time, so the twin runs in real time.
 """
 
 from __future__ import annotations
@@ -11,19 +13,21 @@ import math
 
 import numpy as np
 
+from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.backend import TwinBackend
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
-from snakebot.emulation.motion import MotorState
+from snakebot.emulation.motion import MotorState, ServoCommand
 from snakebot.emulation.servo import VirtualServo
 
 
 class TwinMotion:
     """A `MotionModel` shared by every servo of the chain, backed by one `TwinBackend`.
 
-    The first servo's step of each chain advance applies all goals, steps the twin by the elapsed
-    time (whole physics steps; the remainder carries over) and writes every servo's state.
+    The first servo's step of each chain advance applies what changed in the control tables
+    (goals, torque, gains), steps the twin by the elapsed time (whole physics steps; the
+    remainder carries over) and writes every servo's state.
     """
 
     def __init__(self, robot: RobotConfig, twin: TwinBackend) -> None:
@@ -35,18 +39,25 @@ class TwinMotion:
         self._zero = np.array([j.zero_offset_rad for j in robot.joints])
         self._goal = np.zeros(robot.joint_count)
         self._torque = np.zeros(robot.joint_count, dtype=bool)
+        self._commands: dict[int, ServoCommand] = {}  # per joint, the command last applied
+        self._gains: dict[int, tuple[int, int, int]] = {}
         self._pending_s = 0.0
         self._leader: VirtualServo | None = None
         self._servos: dict[int, VirtualServo] = {}
         self.steps = 0
 
     def attach(self, chain: EmulatedChain) -> None:
-        """Remember the chain's servos (by joint) and start the scored window."""
+        """Remember the chain's servos (by joint), make the twin follow their registers from the
+        start (boot torque, factory gains), and start the scored window."""
         self._servos = {
             self._index[s.servo_id]: s for s in chain.servos if s.servo_id in self._index
         }
         self._leader = chain.servos[0]
         self.twin.set_torque(False)
+        self._torque[:] = False
+        self._commands.clear()
+        self._gains.clear()
+        self._read_tables()
         self.metrics.start(self.twin.read_state().time_s, self.twin.body_state())
         self._publish()
 
@@ -54,7 +65,7 @@ class TwinMotion:
         """Advance the twin once per chain advance (on the first servo's step)."""
         if servo is not self._leader:
             return
-        self._read_goals()
+        self._read_tables()
         self._pending_s += dt_s
         timestep = float(self.twin.model.opt.timestep)
         steps = math.floor(self._pending_s / timestep + 1e-9)
@@ -67,17 +78,33 @@ class TwinMotion:
         self.metrics.add(self._goal, state, self.twin.body_state(), steps * timestep)
         self._publish()
 
-    def _read_goals(self) -> None:
+    def _read_tables(self) -> None:
+        """Apply the goals, torque flags and gains of every servo whose table changed."""
+        goals_changed = torque_changed = False
+        new_gains: dict[tuple[int, int, int], list[int]] = {}
         for index, servo in self._servos.items():
-            command = servo.command()
+            command = servo.command()  # cached until the servo's memory changes
+            if command is self._commands.get(index):
+                continue
+            self._commands[index] = command
+            goals_changed = True
             # The servo's frame: motor = direction * (joint + zero offset); see DynamixelBackend.
             self._goal[index] = (
                 self._direction[index] * command.goal_position_rad - self._zero[index]
             )
-            self._torque[index] = command.torque_enabled
-        self.twin.set_joint_torque(self._torque)
-        goal = np.clip(self._goal, self.robot.lower_rad, self.robot.upper_rad)
-        self.twin.send_command_unchecked(goal)
+            if command.torque_enabled != self._torque[index]:
+                self._torque[index] = command.torque_enabled
+                torque_changed = True
+            if command.position_gains != self._gains.get(index):
+                self._gains[index] = command.position_gains
+                new_gains.setdefault(command.position_gains, []).append(index)
+        for (p, i, d), joints in new_gains.items():
+            self.twin.set_joint_gains(joints, ServoGains(p, i, d))
+        if torque_changed:
+            self.twin.set_joint_torque(self._torque)
+        if goals_changed:
+            goal = np.clip(self._goal, self.robot.lower_rad, self.robot.upper_rad)
+            self.twin.send_command_unchecked(goal)
 
     def _publish(self) -> None:
         state = self.twin.read_state()

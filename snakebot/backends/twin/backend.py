@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import mujoco
 import numpy as np
@@ -19,6 +20,9 @@ from snakebot.backends.twin.model_builder import (
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
+
+JointSelection = int | slice | Sequence[int] | np.ndarray
+"""Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""
 
 # MuJoCo answers instability by resetting the state and counting a warning, not with NaN.
 _BAD_WARNINGS = np.array(
@@ -53,7 +57,6 @@ class TwinBackend(Backend):
         self._friction = friction
         self._timestep_override = timestep_s
         self._realtime = realtime
-        self._gains = robot.gains
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
         self._pacer: Pacer | None = None
@@ -69,7 +72,11 @@ class TwinBackend(Backend):
         self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
         self._head_id = self.model.body(link_name(0)).id
-        self._apply_gains(self._gains, torque=True)
+        # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
+        self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
+        self._torque_mask = np.ones(self.joint_count, dtype=bool)
+        self._store_gains(slice(None), self.robot.gains)
+        self._apply_gains()
         self.data.ctrl[:] = 0.0
         hold_ctrl_history(self.model, self.data, self.data.ctrl)  # the straight pose's goals
         mujoco.mj_forward(self.model, self.data)
@@ -95,30 +102,47 @@ class TwinBackend(Backend):
         self.data.ctrl[:] = position_rad
 
     def _set_gains(self, gains: ServoGains) -> None:
-        self._gains = gains
-        self._apply_gains(gains, torque=self.torque_enabled)
+        self._store_gains(slice(None), gains)
+        self._apply_gains()
 
     def _set_torque(self, enabled: bool) -> None:
-        self._apply_gains(self._gains, torque=enabled)
+        self._torque_mask[:] = enabled
+        self._apply_gains()
 
-    def _apply_gains(self, gains: ServoGains, *, torque: bool | np.ndarray) -> None:
-        """Write kp/kv and joint damping; ``torque`` is one flag or one per joint."""
-        mask = np.broadcast_to(np.asarray(torque, dtype=bool), (self.joint_count,))
-        servo = servo_dynamics(self.robot.servo.physics, gains)
-        kp = np.where(mask, servo.stiffness_nm_per_rad, 0.0)
-        kv = np.where(mask, servo.actuator_kv(self.model.opt.timestep), 0.0)
-        self.model.actuator_gainprm[:, 0] = kp
-        self.model.actuator_biasprm[:, 1] = -kp
-        self.model.actuator_biasprm[:, 2] = -kv
-        # With torque off the H-bridge is open: no back-EMF braking, only gear friction remains.
-        limp = self.robot.servo.physics.viscous_damping_nms
-        self.model.dof_damping[self._dof_index] = np.where(mask, servo.joint_damping_nms, limp)
+    def set_joint_gains(self, joints: JointSelection, gains: ServoGains) -> None:
+        """Apply position-loop gains (servo register units) to some joints only.
+
+        ``joints`` is a joint index, a slice, indices, or a (N,) bool mask (numpy indexing; an
+        index out of range raises IndexError). Joints with torque off stay limp and take the
+        gains when torque comes on. The I gain is ignored: the twin's loop is PD.
+        """
+        self._require_connected()
+        self._store_gains(joints, gains)
+        self._apply_gains()
 
     def set_joint_torque(self, enabled: np.ndarray) -> None:
         """Torque on or off per joint (shape (N,) of bool), e.g. from emulated Torque Enable."""
         self._require_connected()
-        self._apply_gains(self._gains, torque=enabled)
+        self._torque_mask[:] = enabled
+        self._apply_gains()
         self.torque_enabled = bool(np.all(enabled))
+
+    def _store_gains(self, joints: JointSelection, gains: ServoGains) -> None:
+        servo = servo_dynamics(self.robot.servo.physics, gains)
+        self._kp[joints] = servo.stiffness_nm_per_rad
+        self._kv[joints] = servo.actuator_kv(float(self.model.opt.timestep))
+        self._damping[joints] = servo.joint_damping_nms
+
+    def _apply_gains(self) -> None:
+        """Write each joint's kp/kv and damping, or none where its torque is off."""
+        mask = self._torque_mask
+        kp = np.where(mask, self._kp, 0.0)
+        self.model.actuator_gainprm[:, 0] = kp
+        self.model.actuator_biasprm[:, 1] = -kp
+        self.model.actuator_biasprm[:, 2] = -np.where(mask, self._kv, 0.0)
+        # With torque off the H-bridge is open: no back-EMF braking, only gear friction remains.
+        limp = self.robot.servo.physics.viscous_damping_nms
+        self.model.dof_damping[self._dof_index] = np.where(mask, self._damping, limp)
 
     def send_command_unchecked(self, position_rad: np.ndarray) -> None:
         """Set goals (rad, (N,)) without the shape check: the emulator bridge's hot path."""

@@ -234,6 +234,13 @@ def test_operating_mode_change_resets_profile_and_gains(xl430: VirtualServo) -> 
     assert read(xl430, "profile_velocity") == 0 and read(xl430, "position_p_gain") == 640
 
 
+def test_command_carries_the_position_gains_and_changes_with_them(xl430: VirtualServo) -> None:
+    first = xl430.command()
+    assert first.position_gains == (640, 0, 4000) and xl430.command() is first  # cached
+    assert write(xl430, "position_d_gain", 300) == 0 and write(xl430, "position_i_gain", 5) == 0
+    assert xl430.command().position_gains == (640, 5, 300)
+
+
 def test_indirect_addresses_map_data_bytes(xl430: VirtualServo) -> None:
     first = xl430.table["indirect_address_1"].address
     for k in range(4):

@@ -1,0 +1,132 @@
+"""Twin-backed emulated servos obey their gain registers, written through the unmodified SDK."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator
+
+import dynamixel_sdk as dxl
+import numpy as np
+import pytest
+
+from snakebot.backends.base import ServoGains
+from snakebot.backends.twin.servo_model import servo_dynamics
+from snakebot.config import RobotConfig, load_robot
+from snakebot.emulation import EmulatedChain, registered
+from snakebot.emulation.physics import TwinMotion, make_twin_chain
+from snakebot.emulation.port import EmulatedPortHandler
+
+BAUD = 1_000_000
+XL430_FACTORY = ServoGains(position_p=640, position_i=0, position_d=4000)
+
+
+class Bus:
+    """The stock SDK on an emulated chain, addressed by control-table names."""
+
+    def __init__(self, chain: EmulatedChain, port: EmulatedPortHandler) -> None:
+        self.chain, self.port = chain, port
+        self.packet = dxl.PacketHandler(2.0)
+        self.table = chain.servos[0].table
+
+    def write(self, servo_id: int, key: str, value: int) -> None:
+        register = self.table[key]
+        send = {
+            1: self.packet.write1ByteTxRx,
+            2: self.packet.write2ByteTxRx,
+            4: self.packet.write4ByteTxRx,
+        }[register.size]
+        result, error = send(self.port, servo_id, register.address, value)
+        assert (result, error) == (dxl.COMM_SUCCESS, 0)
+
+    def present(self, servo_id: int) -> int:
+        ticks, result, _ = self.packet.read4ByteTxRx(
+            self.port, servo_id, self.table["present_position"].address
+        )
+        assert result == dxl.COMM_SUCCESS
+        return int(ticks)
+
+
+@pytest.fixture
+def robot() -> RobotConfig:
+    # Config gains unlike the factory's: the twin must follow the registers, not the file.
+    return dataclasses.replace(load_robot("snake8"), gains=ServoGains(1500, 0, 0))
+
+
+@pytest.fixture
+def twin_bus(robot: RobotConfig) -> Iterator[tuple[Bus, TwinMotion]]:
+    chain, motion = make_twin_chain(robot, BAUD)
+    with registered(chain) as url:
+        port = EmulatedPortHandler(url)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        yield Bus(chain, port), motion
+        port.closePort()
+
+
+def actuator_gains(motion: TwinMotion) -> tuple[np.ndarray, np.ndarray]:
+    """The twin's position actuators' kp and kv, shape (N,)."""
+    model = motion.twin.model
+    return model.actuator_gainprm[:, 0].copy(), -model.actuator_biasprm[:, 2].copy()
+
+
+def expected(robot: RobotConfig, gains: ServoGains, timestep_s: float) -> tuple[float, float]:
+    servo = servo_dynamics(robot.servo.physics, gains)
+    return servo.stiffness_nm_per_rad, servo.actuator_kv(timestep_s)
+
+
+def step_errors(bus: Bus, p_gains: dict[int, int], step_ticks: int, after_s: float) -> list[int]:
+    """Give servos their P gains, torque on, step their goals; goal - present after ``after_s``."""
+    for servo_id, p in p_gains.items():
+        bus.write(servo_id, "position_p_gain", p)
+    for servo_id in range(1, 9):
+        bus.write(servo_id, "torque_enable", 1)
+    goals = {servo_id: bus.present(servo_id) + step_ticks for servo_id in p_gains}
+    for servo_id, goal in goals.items():
+        bus.write(servo_id, "goal_position", goal)
+    bus.chain.advance(after_s)
+    return [goal - bus.present(servo_id) for servo_id, goal in goals.items()]
+
+
+def test_the_twin_starts_with_the_factory_gains_of_the_registers(
+    robot: RobotConfig, twin_bus: tuple[Bus, TwinMotion]
+) -> None:
+    bus, motion = twin_bus
+    kp, _ = actuator_gains(motion)
+    assert np.all(kp == 0.0)  # factory Torque Enable is off: limp
+    for servo_id in range(1, 9):
+        bus.write(servo_id, "torque_enable", 1)
+    kp, kv = actuator_gains(motion)
+    factory = expected(robot, XL430_FACTORY, float(motion.twin.model.opt.timestep))
+    assert kp == pytest.approx(np.full(8, factory[0]))
+    assert kv == pytest.approx(np.full(8, factory[1]))
+
+
+def test_a_low_position_p_gain_tracks_a_step_worse_than_a_high_one(
+    twin_bus: tuple[Bus, TwinMotion],
+) -> None:
+    bus, _ = twin_bus
+    # Joints 1 and 6 (IDs 2 and 7) mirror each other in the 8-joint chain.
+    low, high = step_errors(bus, {2: 100, 7: 2000}, step_ticks=200, after_s=0.2)
+    assert low > 150 and high < 30
+
+
+def test_equal_gains_on_mirrored_joints_track_alike(twin_bus: tuple[Bus, TwinMotion]) -> None:
+    bus, _ = twin_bus
+    first, second = step_errors(bus, {2: 640, 7: 640}, step_ticks=200, after_s=0.2)
+    assert abs(first - second) <= 5 and 30 < first < 150
+
+
+def test_gains_written_with_torque_off_wait_and_position_i_is_ignored(
+    robot: RobotConfig, twin_bus: tuple[Bus, TwinMotion]
+) -> None:
+    bus, motion = twin_bus
+    timestep = float(motion.twin.model.opt.timestep)
+    bus.write(3, "position_p_gain", 1200)
+    bus.write(3, "position_d_gain", 100)
+    kp, kv = actuator_gains(motion)
+    assert kp[2] == 0.0 and kv[2] == 0.0  # the joint stays limp until its torque comes on
+    bus.write(3, "torque_enable", 1)
+    kp, kv = actuator_gains(motion)
+    assert (kp[2], kv[2]) == pytest.approx(expected(robot, ServoGains(1200, 0, 100), timestep))
+    assert kp[1] == 0.0  # torque still off there
+    bus.write(3, "position_i_gain", 500)  # the twin's loop is PD: no I term
+    assert actuator_gains(motion)[0][2] == kp[2] and actuator_gains(motion)[1][2] == kv[2]
