@@ -241,9 +241,10 @@ class Registry(Generic[T]):
         try:
             entry.value = self._check(name, entry.load())
         except Exception as exc:  # a plugin may raise anything on import; keep it to its entry
+            origin = entry.origin.describe()
+            where = f"from {origin}" if entry.origin.kind == "plugin" else origin
             entry.failure = (
-                f"{self.kind} {name!r} from {entry.origin.describe()} failed to load: "
-                f"{type(exc).__name__}: {exc}"
+                f"{self.kind} {name!r} {where} failed to load: {type(exc).__name__}: {exc}"
             )
             raise self._error(entry.failure) from exc
         return entry.value
