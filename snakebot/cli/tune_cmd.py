@@ -12,7 +12,7 @@ from typing import Any
 from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError, SafetyLimitError
-from snakebot.gaits import parse_set_options
+from snakebot.gaits import get_spec, parse_set_options
 
 
 def add_parser(subparsers: Any) -> None:
@@ -43,7 +43,8 @@ def _add_gait_parser(commands: Any) -> None:
     )
     parser.add_argument(
         "--params",
-        help="comma-separated parameters to search; a+b ties two (default depends on the gait)",
+        help="comma-separated parameters to search; a+b ties two "
+        "(default: the gait's default search, see `snakebot gaits`)",
     )
     parser.add_argument(
         "--bounds",
@@ -90,7 +91,9 @@ def _add_gait_parser(commands: Any) -> None:
         help="batch: mujoco.batch threads (default); processes: a process pool",
     )
     parser.add_argument(
-        "--allow-roll", action="store_true", help="do not stop runs whose head turns upside down"
+        "--allow-roll",
+        action="store_true",
+        help="do not stop runs whose head turns upside down (automatic for gaits that roll over)",
     )
     parser.add_argument("--out", type=Path, help="write the best gait to this gait file (TOML)")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
@@ -134,7 +137,7 @@ def run_gait(args: argparse.Namespace) -> int:
         rate_hz=args.rate,
         workers=max(1, args.workers),
         engine=args.engine,
-        allow_roll=args.allow_roll or args.gait == "rolling",
+        allow_roll=args.allow_roll or get_spec(args.gait).rolls_over,
         friction=GroundFriction.parse(args.friction) if args.friction else None,
     )
     objective = objective_for(args.objective, args.heading, robot.body_length_m)

@@ -7,18 +7,23 @@ from snakebot.gaits.expr import parse_number
 from snakebot.gaits.gait_file import load_gait_file, save_gait_file
 from snakebot.gaits.keyframes import KeyframeGait
 from snakebot.gaits.registry import (
+    GAITS,
     GaitSpec,
     ParamSpec,
     gait_names,
+    gait_origin,
     get_spec,
     make_gait,
     parse_set_options,
+    register_gait,
     resolve_params,
 )
 from snakebot.gaits.serpenoid import SerpenoidGait
 from snakebot.gaits.simple import SimpleGait
+from snakebot.gaits.spec import ParamValues
 
 __all__ = [
+    "GAITS",
     "CompoundGait",
     "DftGait",
     "DftShiftGait",
@@ -26,15 +31,18 @@ __all__ = [
     "GaitSpec",
     "KeyframeGait",
     "ParamSpec",
+    "ParamValues",
     "SerpenoidGait",
     "SimpleGait",
     "dft_coefficients_from_pose",
     "gait_names",
+    "gait_origin",
     "get_spec",
     "load_gait_file",
     "make_gait",
     "parse_number",
     "parse_set_options",
+    "register_gait",
     "resolve_params",
     "save_gait_file",
     "scale_into_limits",

@@ -31,6 +31,13 @@ class Gait(abc.ABC):
         """Targets (N,) in rad for one control cycle; feedback gaits may use the measured pose."""
         return self.targets(time_s)
 
+    @property
+    def uses_measured_pose(self) -> bool:
+        """True when command() reads measured_rad (closed loop), so commands cannot be computed
+        ahead of the run. By default a gait that overrides command() is taken to use it; such a
+        gait overrides this property when it knows better (keyframes advanced by time)."""
+        return type(self).command is not Gait.command
+
     def reset(self) -> None:
         """Forget any internal state so the next command starts the gait afresh."""
         return None

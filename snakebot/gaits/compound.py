@@ -76,21 +76,43 @@ class CompoundGait(Gait):
         return shaped(np.where(n % 2 == 0, even, odd), scalar)
 
 
-_FIELDS = (
-    ("amplitude_even", "rad", "amplitude of the even (yaw) wave"),
-    ("amplitude_odd", "rad", "amplitude of the odd (pitch) wave"),
-    ("offset_even", "rad", "constant bias of the even joints (turning)"),
-    ("offset_odd", "rad", "constant bias of the odd joints"),
-    ("spatial_freq_even", "rad/joint", "phase step per joint index, even wave"),
-    ("spatial_freq_odd", "rad/joint", "phase step per joint index, odd wave"),
-    ("temporal_freq_even", "rad/s", "even wave frequency; > 0 sends it head -> tail"),
-    ("temporal_freq_odd", "rad/s", "odd wave frequency; > 0 sends it head -> tail"),
-    ("phase_shift", "rad", "odd wave lead over the even wave; its sign sets the direction"),
-    ("half_flip", FLAG_UNIT, "1: negate phase_shift for joints n >= N//2 (turn in place)"),
-    ("offset_split", FLAG_UNIT, "1: negate the offsets for joints n >= N//2"),
-)
-
 _PI = math.pi
+# Tuning bounds as serpenoid's: frequencies reach 3 Hz so the servo envelope, not the box, decides.
+_AMPLITUDE, _OFFSET, _SPATIAL, _TEMPORAL = (0.05, 1.2), (-0.3, 0.3), (0.1, _PI / 2), (0.5, 6 * _PI)
+_FIELDS: tuple[tuple[str, str, str, tuple[float, float] | None], ...] = (
+    ("amplitude_even", "rad", "amplitude of the even (yaw) wave", _AMPLITUDE),
+    ("amplitude_odd", "rad", "amplitude of the odd (pitch) wave", _AMPLITUDE),
+    ("offset_even", "rad", "constant bias of the even joints (turning)", _OFFSET),
+    ("offset_odd", "rad", "constant bias of the odd joints", _OFFSET),
+    ("spatial_freq_even", "rad/joint", "phase step per joint index, even wave", _SPATIAL),
+    ("spatial_freq_odd", "rad/joint", "phase step per joint index, odd wave", _SPATIAL),
+    ("temporal_freq_even", "rad/s", "even wave frequency; > 0 sends it head -> tail", _TEMPORAL),
+    ("temporal_freq_odd", "rad/s", "odd wave frequency; > 0 sends it head -> tail", _TEMPORAL),
+    (
+        "phase_shift",
+        "rad",
+        "odd wave lead over the even wave; its sign sets the direction",
+        (-_PI, _PI),
+    ),
+    ("half_flip", FLAG_UNIT, "1: negate phase_shift for joints n >= N//2 (turn in place)", None),
+    ("offset_split", FLAG_UNIT, "1: negate the offsets for joints n >= N//2", None),
+)
+# Both waves' spatial and temporal frequencies move together in a default search.
+_TIES = (
+    ("spatial_freq_even", "spatial_freq_odd"),
+    ("temporal_freq_even", "temporal_freq_odd"),
+)
+_SIDEWINDING_SEARCH = frozenset(
+    (
+        "amplitude_even",
+        "amplitude_odd",
+        "spatial_freq_even",
+        "spatial_freq_odd",
+        "temporal_freq_even",
+        "temporal_freq_odd",
+        "phase_shift",
+    )
+)
 _SIDEWINDING = {
     "amplitude_even": 0.6,
     "amplitude_odd": 0.6,
@@ -100,7 +122,7 @@ _SIDEWINDING = {
     "temporal_freq_odd": _PI,
     "phase_shift": _PI / 4,
 }
-_BASE = {name: 0.0 for name, _, _ in _FIELDS} | _SIDEWINDING
+_BASE = {name: 0.0 for name, _, _, _ in _FIELDS} | _SIDEWINDING
 
 PRESETS: dict[str, tuple[str, dict[str, float]]] = {
     "compound": (
@@ -170,13 +192,25 @@ PRESETS: dict[str, tuple[str, dict[str, float]]] = {
 }
 
 
+# What `tune gait` searches by default per preset (the others have no default search).
+_SEARCH: dict[str, frozenset[str]] = {
+    "compound": _SIDEWINDING_SEARCH,
+    "sidewinding": _SIDEWINDING_SEARCH,
+    "lateral_undulation": _SIDEWINDING_SEARCH - {"amplitude_odd", "phase_shift"},
+}
+
+
 def _factory(name: str) -> GaitSpec:
     summary, overrides = PRESETS[name]
     defaults = _BASE | overrides
-    params = tuple(ParamSpec(key, unit, defaults[key], doc) for key, unit, doc in _FIELDS)
+    searched = _SEARCH.get(name, frozenset())
+    params = tuple(
+        ParamSpec(key, unit, defaults[key], doc, bounds=bounds, tunable=key in searched)
+        for key, unit, doc, bounds in _FIELDS
+    )
 
     def build(joint_count: int, p: ParamValues, _lower: FloatArray, _upper: FloatArray) -> Gait:
-        numbers = {key: p.number(key) for key, unit, _ in _FIELDS if unit != FLAG_UNIT}
+        numbers = {key: p.number(key) for key, unit, _, _ in _FIELDS if unit != FLAG_UNIT}
         return CompoundGait(
             joint_count,
             half_flip=p.flag("half_flip"),
@@ -185,7 +219,14 @@ def _factory(name: str) -> GaitSpec:
             **numbers,
         )
 
-    return GaitSpec(name=name, summary=summary, params=params, factory=build)
+    return GaitSpec(
+        name=name,
+        summary=summary,
+        params=params,
+        factory=build,
+        ties=_TIES,
+        rolls_over=name == "rolling",
+    )
 
 
 SPECS = tuple(_factory(name) for name in PRESETS)

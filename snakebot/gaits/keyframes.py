@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -106,6 +107,11 @@ class KeyframeGait(Gait):
         return float(self._knots[-1])
 
     @property
+    def uses_measured_pose(self) -> bool:
+        """True with advance="error": command() waits for the measured pose to reach a keyframe."""
+        return self.advance == "error"
+
+    @property
     def keyframe_poses(self) -> FloatArray:
         """The cycle's keyframes (Q, N) in rad, mirrored ones included."""
         return self._cycle[:-1].copy()
@@ -177,6 +183,19 @@ def _build(joint_count: int, p: ParamValues, _lower: FloatArray, _upper: FloatAr
     )
 
 
+def _tuning_start(joint_count: int, fixed: Mapping[str, object]) -> dict[str, object]:
+    """Unless poses are fixed, start from half a mirrored cycle: the GA report's genome.
+
+    The first two of the default four S-curve poses, mirrored, give the same four keyframes and
+    half the genes.
+    """
+    params = dict(fixed)
+    if "poses" not in params:
+        params["poses"] = default_poses(joint_count)[: 2 * joint_count]
+        params.setdefault("mirror", 1.0)
+    return params
+
+
 SPEC = GaitSpec(
     name="keyframes",
     summary=(
@@ -184,8 +203,23 @@ SPEC = GaitSpec(
         "mirroring and error-based advance (GA pose-tracking report)."
     ),
     params=(
-        ParamSpec("poses", "rad", (), "P poses of N angles, flattened; empty = 4-pose S-curve"),
-        ParamSpec("durations", "s", (0.5,), "time from each keyframe to the next; 1 or P values"),
+        # +-pi/4: the GA report's 90 degree range, clipped to the joint limits when tuning.
+        ParamSpec(
+            "poses",
+            "rad",
+            (),
+            "P poses of N angles, flattened; empty = 4-pose S-curve",
+            bounds=(-math.pi / 4, math.pi / 4),
+            tunable=True,
+            joint_poses=True,
+        ),
+        ParamSpec(
+            "durations",
+            "s",
+            (0.5,),
+            "time from each keyframe to the next; 1 or P values",
+            bounds=(0.2, 1.5),
+        ),
         ParamSpec("interpolation", "", "cubic", "between keyframes", INTERPOLATIONS),
         ParamSpec("mirror", FLAG_UNIT, 0.0, "1: continue the cycle with the poses negated"),
         ParamSpec(
@@ -195,4 +229,5 @@ SPEC = GaitSpec(
         ParamSpec("timeout_s", "s", 2.0, "longest wait at a keyframe before advancing anyway"),
     ),
     factory=_build,
+    tuning_start=_tuning_start,
 )

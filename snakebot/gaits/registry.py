@@ -1,8 +1,12 @@
-"""Every gait by name: specs for --help, make_gait() for the runner, --set parsing for the CLI."""
+"""Every gait by name: specs for --help, make_gait() for the runner, --set parsing for the CLI.
+
+Gaits come from the built-ins below, from installed plugins (entry-point group
+``snakebot.gaits``, each entry naming a GaitSpec) and from register_gait(); the clash and
+failure rules are snakebot.plugins'.
+"""
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Mapping, Sequence
 
@@ -21,38 +25,70 @@ from snakebot.gaits.spec import (
     convert_value,
     expectation,
 )
+from snakebot.plugins import Origin, Registry
 
 __all__ = [
+    "GAITS",
     "GaitSpec",
     "ParamSpec",
     "gait_names",
+    "gait_origin",
     "get_spec",
     "make_gait",
     "parse_set_options",
+    "register_gait",
     "resolve_params",
 ]
 
 DEFAULT_LIMIT_RAD = math.pi / 2
+ENTRY_POINT_GROUP = "snakebot.gaits"
 
-_SPECS: dict[str, GaitSpec] = {
-    spec.name: spec
-    for spec in (serpenoid.SPEC, *compound.SPECS, *dft.SPECS, simple.SPEC, keyframes.SPEC)
-}
+
+def _check_spec(name: str, obj: object) -> GaitSpec:
+    if not isinstance(obj, GaitSpec):
+        raise TypeError(f"expected a snakebot.gaits.GaitSpec, got {type(obj).__name__}")
+    if obj.name != name:
+        raise ValueError(f"its GaitSpec is named {obj.name!r}; the names must match")
+    return obj
+
+
+GAITS: Registry[GaitSpec] = Registry(
+    "gait",
+    ENTRY_POINT_GROUP,
+    error=GaitError,
+    check=_check_spec,
+    builtins={
+        spec.name: spec
+        for spec in (serpenoid.SPEC, *compound.SPECS, *dft.SPECS, simple.SPEC, keyframes.SPEC)
+    },
+)
+
+
+def register_gait(spec: GaitSpec, *, replace: bool = False) -> None:
+    """Make gait ``spec.name`` available to make_gait, the CLI and the tuner in this process.
+
+    Raises GaitError when the name is taken (a built-in, a plugin or an earlier registration)
+    and ``replace`` is false; GAITS.unregister(name) undoes a registration.
+    """
+    if not isinstance(spec, GaitSpec):
+        raise GaitError(f"register_gait expects a GaitSpec, got {type(spec).__name__}")
+    GAITS.register(spec.name, spec, replace=replace)
 
 
 def gait_names() -> list[str]:
-    """Names of all registered gaits, sorted."""
-    return sorted(_SPECS)
+    """Names of all registered gaits, sorted (plugins included, even ones not imported yet)."""
+    return GAITS.names()
 
 
 def get_spec(name: str) -> GaitSpec:
-    """The spec of gait name; GaitError listing the known gaits otherwise."""
-    spec = _SPECS.get(name) if isinstance(name, str) else None
-    if spec is None:
-        close = difflib.get_close_matches(str(name), gait_names(), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise GaitError(f"unknown gait {name!r}{hint}; known gaits: {', '.join(gait_names())}")
-    return spec
+    """The spec of gait name; GaitError listing the known gaits otherwise, or saying why a
+    plugin's gait could not be loaded."""
+    return GAITS.get(name)
+
+
+def gait_origin(name: str) -> Origin:
+    """Where gait name comes from: built-in, a plugin (distribution, version) or runtime."""
+    return GAITS.origin(name)
 
 
 def resolve_params(name: str, params: Mapping[str, object] | None = None) -> dict[str, ParamValue]:

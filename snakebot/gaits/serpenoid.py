@@ -58,6 +58,8 @@ def _build(joint_count: int, p: ParamValues, _lower: FloatArray, _upper: FloatAr
     )
 
 
+# Tuning bounds: frequencies reach 3 Hz, past what the servos can play at useful amplitudes: the
+# envelope (the servo's speed), not the box, should decide how fast a gait can go.
 SPEC = GaitSpec(
     name="serpenoid",
     summary=(
@@ -65,10 +67,36 @@ SPEC = GaitSpec(
         "for planar (all-yaw) snakes; use lateral_undulation on yaw/pitch snakes."
     ),
     params=(
-        ParamSpec("amplitude", "rad", 0.4, "joint amplitude (0.4-0.6 rad on real robots)"),
-        ParamSpec("omega", "rad/s", math.pi, "temporal frequency (pi rad/s = 0.5 Hz)"),
-        ParamSpec("phase_lag", "rad", 0.7, "phase lag per joint; > 0 sends the wave head -> tail"),
-        ParamSpec("offset", "rad", 0.0, "constant bias on every joint; nonzero turns"),
+        ParamSpec(
+            "amplitude",
+            "rad",
+            0.4,
+            "joint amplitude (0.4-0.6 rad on real robots)",
+            bounds=(0.05, 1.2),
+        ),
+        ParamSpec(
+            "omega",
+            "rad/s",
+            math.pi,
+            "temporal frequency (pi rad/s = 0.5 Hz)",
+            bounds=(0.5, 6 * math.pi),
+            tunable=True,
+        ),
+        ParamSpec(
+            "phase_lag",
+            "rad",
+            0.7,
+            "phase lag per joint; > 0 sends the wave head -> tail",
+            bounds=(0.1, math.pi / 2),
+            tunable=True,
+        ),
+        ParamSpec(
+            "offset",
+            "rad",
+            0.0,
+            "constant bias on every joint; nonzero turns",
+            bounds=(-0.3, 0.3),
+        ),
     ),
     factory=_build,
 )

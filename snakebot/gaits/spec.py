@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import difflib
+import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 
@@ -18,13 +19,47 @@ FLAG_UNIT = "0/1"
 
 @dataclass(frozen=True)
 class ParamSpec:
-    """One gait parameter: name, unit ("rad", "rad/s", "0/1", ...), default and meaning."""
+    """One gait parameter: name, unit ("rad", "rad/s", "0/1", ...), default and meaning.
+
+    Tuning (``snakebot tune gait``): ``bounds`` is the default search range (low, high) in the
+    parameter's unit, for each element of a list parameter; ``tunable`` puts the parameter in
+    the gait's default search (it needs bounds). ``joint_poses`` marks a list of joint angles in
+    rad, N per pose, head to tail: the tuner clips its bounds to the robot's joint limits, and
+    the GA can evolve it pose by pose. Raises GaitError when these do not fit the parameter.
+    """
 
     name: str
     unit: str
     default: float | tuple[float, ...] | str
     doc: str
     choices: tuple[str, ...] = ()
+    _: KW_ONLY
+    bounds: tuple[float, float] | None = None
+    tunable: bool = False
+    joint_poses: bool = False
+
+    def __post_init__(self) -> None:
+        where = f"parameter {self.name!r}"
+        if self.bounds is not None:
+            try:
+                low, high = (float(v) for v in self.bounds)
+            except (TypeError, ValueError):
+                low = high = math.nan
+            if not (self.searchable and math.isfinite(low) and math.isfinite(high) and low < high):
+                raise GaitError(
+                    f"{where}: bounds must be finite (low, high) with low < high, on a number or "
+                    f"list parameter; got {self.bounds!r}"
+                )
+            object.__setattr__(self, "bounds", (low, high))
+        if self.tunable and self.bounds is None:
+            raise GaitError(f"{where}: a tunable parameter needs bounds (low, high)")
+        if self.joint_poses and self.kind != "list":
+            raise GaitError(f"{where}: joint_poses needs a list parameter")
+
+    @property
+    def searchable(self) -> bool:
+        """True for number and list parameters (not text, not 0/1 flags): the tuner can move it."""
+        return self.kind != "text" and self.unit != FLAG_UNIT
 
     @property
     def kind(self) -> str:
@@ -68,6 +103,7 @@ class ParamValues:
 
 
 GaitFactory = Callable[[int, ParamValues, FloatArray, FloatArray], Gait]
+TuningStart = Callable[[int, Mapping[str, object]], Mapping[str, object]]
 
 
 @dataclass(frozen=True)
@@ -75,17 +111,62 @@ class GaitSpec:
     """A registered gait: its name, a one-line summary, its parameters and how to build it.
 
     The factory receives N, the validated values and the joint limits (N,) in rad.
+
+    Tuning: the default search is every tunable parameter in declaration order, where each group
+    in ``ties`` (e.g. both waves' temporal frequencies) moves as one value. ``tuning_start(N,
+    fixed)`` gives the parameters a search starts from when the user fixed ``fixed`` (default:
+    ``fixed`` itself, the rest at their defaults). ``rolls_over``: the body turns over as it
+    moves, so tuning does not stop runs whose head is upside down. Raises GaitError when the
+    parameters or ties do not fit together.
     """
 
     name: str
     summary: str
     params: tuple[ParamSpec, ...]
     factory: GaitFactory = field(repr=False, compare=False)
+    _: KW_ONLY
+    ties: tuple[tuple[str, ...], ...] = ()
+    tuning_start: TuningStart | None = field(default=None, repr=False, compare=False)
+    rolls_over: bool = False
+
+    def __post_init__(self) -> None:
+        names = self.param_names
+        if not isinstance(self.name, str) or not self.name or len(set(names)) != len(names):
+            raise GaitError(
+                f"gait {self.name!r}: expected a non-empty name and distinct parameter names, "
+                f"got {', '.join(names)}"
+            )
+        tied: set[str] = set()
+        for group in self.ties:
+            params = [self.param(key) for key in group]
+            if (
+                len(group) < 2
+                or tied & set(group)
+                or any(p.kind != "number" or not p.searchable for p in params)
+                or len({p.tunable for p in params}) > 1
+            ):
+                raise GaitError(
+                    f"gait {self.name!r}: tie {'+'.join(group)} must join two or more distinct "
+                    f"number parameters, all tunable or none, each in at most one tie"
+                )
+            tied |= set(group)
 
     @property
     def param_names(self) -> tuple[str, ...]:
         """Parameter names in declaration order."""
         return tuple(p.name for p in self.params)
+
+    @property
+    def default_search(self) -> tuple[str, ...]:
+        """What ``tune gait`` searches without --params: tunable names, ties joined by "+"."""
+        out: list[str] = []
+        for param in self.params:
+            if param.tunable:
+                group = next((g for g in self.ties if param.name in g), (param.name,))
+                key = "+".join(group)
+                if key not in out:
+                    out.append(key)
+        return tuple(out)
 
     def param(self, name: str) -> ParamSpec:
         """The parameter called name; GaitError listing the valid names otherwise."""

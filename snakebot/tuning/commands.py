@@ -13,7 +13,7 @@ import numpy as np
 
 from snakebot.config.schema import RobotConfig
 from snakebot.control.safety import SafetyLayer
-from snakebot.gaits import Gait, KeyframeGait
+from snakebot.gaits import Gait
 from snakebot.tuning.trace import FloatArray
 
 
@@ -43,10 +43,8 @@ class BatchCommands(Protocol):
 
 
 def is_open_loop(gait: Gait) -> bool:
-    """True when ``gait.command`` ignores the measured pose."""
-    if isinstance(gait, KeyframeGait):
-        return gait.advance == "time"
-    return type(gait).command is Gait.command
+    """True when ``gait.command`` ignores the measured pose (as the gait declares)."""
+    return not gait.uses_measured_pose
 
 
 class GaitCommands:
@@ -81,7 +79,7 @@ class GaitCommands:
 
     @property
     def open_loop(self) -> bool:
-        """True unless a gait reacts to the measured pose (keyframes with error advance)."""
+        """True unless a gait uses the measured pose (keyframes with error advance, say)."""
         return all(is_open_loop(gait) for gait in self.gaits)
 
     def reset(self, measured_rad: FloatArray) -> None:

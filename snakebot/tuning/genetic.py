@@ -47,12 +47,17 @@ class GaSettings:
 def genetic_search(
     problem: GaitProblem, budget: int, seed: int, settings: GaSettings | None = None
 ) -> list[Generation]:
-    """Evolve keyframe poses for at most ``budget`` evaluations; the base poses are in the first
-    generation."""
+    """Evolve joint poses (keyframes') for at most ``budget`` evaluations; the base poses are in
+    the first generation. ConfigError unless every coordinate of the space is a pose angle."""
     cfg = settings or GaSettings()
     space = problem.space
-    if space.gait != "keyframes" or not all(d.index is not None for d in space.dims):
-        raise ConfigError("--method", "ga", "the GA evolves keyframe poses: --gait keyframes")
+    if not space.dims or not all(d.pose_angle for d in space.dims):
+        raise ConfigError(
+            "--method",
+            "ga",
+            "the GA evolves lists of joint poses: search only a gait's pose list "
+            "(e.g. --gait keyframes --params poses; `snakebot gaits` marks such parameters)",
+        )
     joints = problem.robot.joint_count
     if len(space.dims) % joints:
         raise ConfigError("--params", "poses", f"expected whole poses of {joints} angles")

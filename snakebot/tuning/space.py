@@ -2,7 +2,9 @@
 
 ``--params omega,phase_lag`` names number parameters; ``a+b`` ties two to one value (both
 temporal frequencies of a sidewinding gait); a list parameter (``poses``) contributes one
-dimension per element. ``--bounds omega=0.5:4*pi`` overrides the defaults below.
+dimension per element. Without ``--params`` the gait's own default search is used, and each
+parameter's declared bounds (snakebot.gaits.ParamSpec); ``--bounds omega=0.5:4*pi`` overrides
+them.
 """
 
 from __future__ import annotations
@@ -15,59 +17,26 @@ import numpy as np
 
 from snakebot.errors import ConfigError, GaitError
 from snakebot.gaits import get_spec, parse_number, resolve_params
-from snakebot.gaits.keyframes import default_poses
-from snakebot.gaits.spec import ParamValue
+from snakebot.gaits.spec import GaitSpec, ParamValue
 from snakebot.tuning.trace import FloatArray
 
-_SIDEWINDING = (
-    "amplitude_even",
-    "amplitude_odd",
-    "spatial_freq_even+spatial_freq_odd",
-    "temporal_freq_even+temporal_freq_odd",
-    "phase_shift",
-)
-DEFAULT_PARAMS: dict[str, tuple[str, ...]] = {
-    "serpenoid": ("omega", "phase_lag"),
-    "compound": _SIDEWINDING,
-    "sidewinding": _SIDEWINDING,
-    "lateral_undulation": (
-        "amplitude_even",
-        "spatial_freq_even+spatial_freq_odd",
-        "temporal_freq_even+temporal_freq_odd",
-    ),
-    "keyframes": ("poses",),
-}
 _PI = math.pi
-# Frequencies reach 3 Hz, past what the servos can play at useful amplitudes: the envelope (the
-# servo's speed), not the box, should decide how fast a gait can go.
-DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
-    "amplitude": (0.05, 1.2),
-    "amplitude_even": (0.05, 1.2),
-    "amplitude_odd": (0.05, 1.2),
-    "omega": (0.5, 6 * _PI),
-    "temporal_freq_even": (0.5, 6 * _PI),
-    "temporal_freq_odd": (0.5, 6 * _PI),
-    "phase_lag": (0.1, _PI / 2),
-    "spatial_freq_even": (0.1, _PI / 2),
-    "spatial_freq_odd": (0.1, _PI / 2),
-    "phase_shift": (-_PI, _PI),
-    "offset": (-0.3, 0.3),
-    "offset_even": (-0.3, 0.3),
-    "offset_odd": (-0.3, 0.3),
-    "poses": (-_PI / 4, _PI / 4),
-    "durations": (0.2, 1.5),
-}
 
 
 @dataclass(frozen=True)
 class Dim:
-    """One search coordinate: the parameters it sets (element ``index`` of a list) and bounds."""
+    """One search coordinate: the parameters it sets (element ``index`` of a list) and bounds.
+
+    ``pose_angle``: the coordinate is one joint angle of a list of joint poses (the GA crosses
+    such lists over pose by pose).
+    """
 
     name: str
     keys: tuple[str, ...]
     index: int | None
     lower: float
     upper: float
+    pose_angle: bool = False
 
 
 @dataclass(frozen=True)
@@ -120,16 +89,10 @@ class SearchSpace:
 
 
 def tuning_base(gait: str, joint_count: int, fixed: Mapping[str, object]) -> dict[str, ParamValue]:
-    """Gait defaults with ``fixed`` (``--set``) on top; keyframes default to a mirrored half cycle.
-
-    The GA report's genome is half a cycle mirrored: the first two of the default four S-curve
-    poses, mirrored, give the same four keyframes and half the genes.
-    """
-    params = dict(fixed)
-    if gait == "keyframes" and "poses" not in params:
-        params["poses"] = default_poses(joint_count)[: 2 * joint_count]
-        params.setdefault("mirror", 1.0)
-    return resolve_params(gait, params)
+    """Gait defaults with ``fixed`` (``--set``) on top, through the gait's own tuning start
+    (keyframes: a mirrored half cycle, the GA report's genome)."""
+    start = get_spec(gait).tuning_start
+    return resolve_params(gait, start(joint_count, fixed) if start is not None else fixed)
 
 
 def build_space(
@@ -139,9 +102,12 @@ def build_space(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     joint_limit_rad: float = _PI,
 ) -> SearchSpace:
-    """The space over ``params`` (default: DEFAULT_PARAMS of the gait) with ``bounds`` on top."""
+    """The space over ``params`` (default: the gait's default search) with ``bounds`` on top.
+
+    ``joint_limit_rad`` caps the declared bounds of joint-pose parameters (both signs).
+    """
     spec = get_spec(gait)
-    names = tuple(params) if params else DEFAULT_PARAMS.get(gait, ())
+    names = tuple(params) if params else spec.default_search
     if not names:
         numeric = [p.name for p in spec.params if p.kind == "number"]
         raise ConfigError(
@@ -159,15 +125,16 @@ def build_space(
                 param = spec.param(key)
             except GaitError as exc:
                 raise ConfigError("--params", name, str(exc)) from None
-            if param.kind == "text" or param.unit == "0/1" or key in used:
+            if not param.searchable or key in used:
                 raise ConfigError("--params", name, "expected distinct number or list parameters")
             used.add(key)
-        lower, upper = _bounds(name, keys, given, joint_limit_rad)
+        lower, upper = _bounds(spec, name, keys, given, joint_limit_rad)
         value = base[keys[0]]
         if isinstance(value, tuple):
             if len(keys) > 1 or not value:
                 raise ConfigError("--params", name, "a list parameter cannot be tied or empty")
-            dims += [Dim(f"{name}[{i}]", keys, i, lower, upper) for i in range(len(value))]
+            poses = spec.param(keys[0]).joint_poses
+            dims += [Dim(f"{name}[{i}]", keys, i, lower, upper, poses) for i in range(len(value))]
         else:
             dims.append(Dim(name, keys, None, lower, upper))
     unknown = set(given) - {d.name for d in dims} - used
@@ -197,15 +164,20 @@ def parse_bounds(items: Sequence[str]) -> dict[str, tuple[float, float]]:
 
 
 def _bounds(
-    name: str, keys: tuple[str, ...], given: Mapping[str, tuple[float, float]], limit: float
+    spec: GaitSpec,
+    name: str,
+    keys: tuple[str, ...],
+    given: Mapping[str, tuple[float, float]],
+    limit: float,
 ) -> tuple[float, float]:
     for key in (name, *keys):
         if key in given:
             return given[key]
-    if keys[0] not in DEFAULT_BOUNDS:
+    param = spec.param(keys[0])
+    if param.bounds is None:
         raise ConfigError("--bounds", name, f"no default bounds; pass --bounds {name}=LOW:HIGH")
-    lower, upper = DEFAULT_BOUNDS[keys[0]]
-    if keys[0] == "poses":
+    lower, upper = param.bounds
+    if param.joint_poses:
         lower, upper = max(lower, -limit), min(upper, limit)
     return lower, upper
 

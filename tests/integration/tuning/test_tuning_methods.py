@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from snakebot.cli.main import main
 from snakebot.config import load_robot
-from snakebot.gaits import load_gait_file
+from snakebot.gaits import GAITS, get_spec, load_gait_file, register_gait
 from snakebot.gaits.keyframes import default_poses
 from snakebot.tuning.objectives import objective_for
 from snakebot.tuning.problem import EvalPlan
@@ -109,3 +111,32 @@ def test_tuned_gait_file_replays_to_the_same_metrics(
         assert replay[key] == best[key]
     assert summary["best"]["value"] == pytest.approx(replay["displacement_m"][0] / 2.0)
     assert math.isfinite(summary["wall_s"])
+
+
+def test_ga_refuses_a_search_that_is_not_joint_poses(capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ["tune", "gait", "--gait", "serpenoid", "--method", "ga", "--budget", "2", "--quiet"]
+    assert main(argv) == 1
+    assert "the GA evolves lists of joint poses" in capsys.readouterr().err
+
+
+def _pose_cycle_start(joint_count: int, fixed: Mapping[str, object]) -> dict[str, object]:
+    return {"poses": default_poses(joint_count)[: 2 * joint_count], "mirror": 1.0, **fixed}
+
+
+def test_ga_evolves_any_gait_that_declares_a_list_of_joint_poses() -> None:
+    keyframes = get_spec("keyframes")
+    poses = replace(keyframes.param("poses"), bounds=(-0.5, 0.5))
+    spec = replace(
+        keyframes,
+        name="pose_cycle",
+        params=(poses, *keyframes.params[1:]),
+        tuning_start=_pose_cycle_start,
+    )
+    register_gait(spec)
+    try:
+        result = tune("pose_cycle", "ga", 6)
+    finally:
+        GAITS.unregister("pose_cycle")
+    assert result.space.names[0] == "poses[0]" and len(result.space.dims) == 16
+    assert result.space.upper.max() == 0.5
+    assert len(result.history) == 6 and result.generations[0].evaluations == 6

@@ -38,3 +38,16 @@ def test_cmaes_without_the_cma_package_says_how_to_install_it(
     monkeypatch.setitem(sys.modules, "cma", None)
     with pytest.raises(MissingDependencyError, match=r"pip install 'snakebot\[tune\]'"):
         require_cma()
+
+
+def test_a_batch_is_open_loop_unless_a_gait_uses_the_measured_pose() -> None:
+    robot = load_robot("snake8")
+    timed = [make_gait("serpenoid", 8), make_gait("keyframes", 8)]
+    assert GaitCommands(timed, robot, 0.01).open_loop
+    waiting = make_gait("keyframes", 8, {"advance": "error", "durations": (0.1,)})
+    batch = GaitCommands([make_gait("serpenoid", 8), waiting], robot, 0.01)
+    assert not batch.open_loop
+    far = np.full((2, 8), 0.0)
+    batch.reset(far)
+    targets = [batch(k, k * 0.01, far)[0][1] for k in range(40)]
+    assert np.array_equal(targets[-1], targets[-2])  # holds keyframe 1 until the pose is reached

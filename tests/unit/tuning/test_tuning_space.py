@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from snakebot.errors import ConfigError
+from snakebot.gaits import get_spec
 from snakebot.gaits.keyframes import default_poses
 from snakebot.tuning.feasibility import Violations
 from snakebot.tuning.objectives import COT_CAP, Objective, objective_for
@@ -84,3 +85,77 @@ def test_any_playable_gait_beats_any_unplayable_one() -> None:
     assert cot.loss(0.1, Violations()) < cot.loss(0.2, Violations())
     assert cot.loss(math.nan, Violations()) == COT_CAP < cot.loss(0.1, bad)
     assert cot.better(0.1, 0.2) and speed.better(0.2, 0.1) and not speed.better(math.nan, 0.0)
+
+
+_SIDEWINDING = (
+    "amplitude_even",
+    "amplitude_odd",
+    "spatial_freq_even+spatial_freq_odd",
+    "temporal_freq_even+temporal_freq_odd",
+    "phase_shift",
+)
+# The tables tuning/space.py hard-coded before each gait declared its own search and bounds.
+FORMER_SEARCH = {
+    "serpenoid": ("omega", "phase_lag"),
+    "compound": _SIDEWINDING,
+    "sidewinding": _SIDEWINDING,
+    "lateral_undulation": (
+        "amplitude_even",
+        "spatial_freq_even+spatial_freq_odd",
+        "temporal_freq_even+temporal_freq_odd",
+    ),
+    "keyframes": ("poses",),
+}
+FORMER_BOUNDS = {
+    "amplitude": (0.05, 1.2),
+    "amplitude_even": (0.05, 1.2),
+    "amplitude_odd": (0.05, 1.2),
+    "omega": (0.5, 6 * math.pi),
+    "temporal_freq_even": (0.5, 6 * math.pi),
+    "temporal_freq_odd": (0.5, 6 * math.pi),
+    "phase_lag": (0.1, math.pi / 2),
+    "spatial_freq_even": (0.1, math.pi / 2),
+    "spatial_freq_odd": (0.1, math.pi / 2),
+    "phase_shift": (-math.pi, math.pi),
+    "offset": (-0.3, 0.3),
+    "offset_even": (-0.3, 0.3),
+    "offset_odd": (-0.3, 0.3),
+    "poses": (-math.pi / 4, math.pi / 4),
+    "durations": (0.2, 1.5),
+}
+
+
+SHIPPED = (
+    "serpenoid",
+    "compound",
+    "lateral_undulation",
+    "sidewinding",
+    "rolling",
+    "linear_progression",
+    "turn_in_place",
+    "dft",
+    "dft_shift",
+    "simple",
+    "keyframes",
+)
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_gaits_declare_the_search_and_bounds_the_tuner_used_to_hard_code(
+    name: str,
+) -> None:
+    spec = get_spec(name)
+    assert spec.default_search == FORMER_SEARCH.get(name, ())
+    assert {p.name: p.bounds for p in spec.params if p.bounds} == {
+        p.name: FORMER_BOUNDS[p.name] for p in spec.params if p.name in FORMER_BOUNDS
+    }
+    assert spec.rolls_over == (name == "rolling")
+    assert [p.name for p in spec.params if p.joint_poses] == (
+        ["poses"] if name == "keyframes" else []
+    )
+
+
+def test_keyframe_tuning_starts_from_fixed_poses_as_a_full_cycle() -> None:
+    base = tuning_base("keyframes", 4, {"poses": (0.1,) * 12})
+    assert base["mirror"] == 0.0 and base["poses"] == (0.1,) * 12
+    assert tuning_base("keyframes", 4, {"mirror": 0})["poses"] == default_poses(4)[:8]
