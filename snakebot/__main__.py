@@ -4,8 +4,8 @@ import sys
 
 try:
     from snakebot.cli.main import entry_point
-except KeyboardInterrupt:  # Ctrl-C while Python imports the CLI: no traceback for that either
+
+    entry_point()
+except KeyboardInterrupt:  # Ctrl-C before entry_point's own handler is in place: no traceback
     print("snakebot: interrupted", file=sys.stderr)
     sys.exit(130)
-
-entry_point()
