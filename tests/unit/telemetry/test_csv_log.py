@@ -46,7 +46,7 @@ def test_unwritable_log_is_an_output_error(tmp_path: Path) -> None:
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
 def test_a_full_device_is_an_output_error_naming_it() -> None:
-    with pytest.raises(OutputError, match="^/dev/full: cannot write log file: No space left"):
+    with pytest.raises(OutputError, match=r"^/dev/full: cannot write log file: No space left"):
         CsvTelemetryWriter("/dev/full", 2)
 
 
