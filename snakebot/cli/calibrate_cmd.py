@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import add_robot_option, port_arg, positive_float, print_json
 from snakebot.config import load_robot
 from snakebot.setup import Link, SetupError, load_settings
 from snakebot.setup.calibrate import MAX_OFFSET_DEG, measure, refusals, write_offsets
@@ -22,7 +22,8 @@ def add_parser(subparsers: Any) -> None:
         "(joints[].zero_offset_rad; comments and layout kept). Homing Offset stays 0.",
     )
     add_robot_option(parser, default=None)
-    parser.add_argument("--port", help="serial port (default: the robot's bus.port)")
+    parser.add_argument("--port", type=port_arg,
+                        help="serial port (default: the robot's bus.port)")
     parser.add_argument("--max-offset-deg", type=positive_float, default=MAX_OFFSET_DEG,
                         help=f"refuse offsets beyond this (default {MAX_OFFSET_DEG:g})")
     parser.add_argument("--dry-run", action="store_true", help="show the offsets, write nothing")

@@ -9,6 +9,9 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from snakebot.config.ports import check_port
+from snakebot.errors import ConfigError
+
 
 def positive_float(text: str) -> float:
     """argparse type: a finite number > 0."""
@@ -19,6 +22,15 @@ def positive_float(text: str) -> float:
     if not (value > 0 and math.isfinite(value)):
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return value
+
+
+def port_arg(text: str) -> str:
+    """argparse type: a serial device path, or the emulator's ``dxlemu://NAME`` URL; any other
+    URL (``socket://``, ``spy://...?file=``) is a usage error saying why."""
+    try:
+        return check_port(text, source="--port")
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(exc.reason) from None
 
 
 def add_robot_option(parser: argparse.ArgumentParser, default: str | None = "snake8") -> None:

@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, print_json
+from snakebot.cli.common import add_robot_option, port_arg, print_json
 from snakebot.config import load_robot
 from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
 from snakebot.setup.console import confirm
@@ -41,7 +41,8 @@ def add_parser(subparsers: Any) -> None:
         "57600) and sets its ID and baud rate. Refuses if several servos answer or the ID is "
         "taken. Growing a chain: plug in one new servo at a time and pass --from 1.",
     )
-    assign.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    assign.add_argument("--port", type=port_arg, required=True,
+                        help="serial port, e.g. /dev/ttyUSB0 or COM3")
     assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
     assign.add_argument("--from", dest="from_id", type=servo_id_arg,
                         help="only the servo answering as this ID (default: the only servo)")
@@ -53,7 +54,7 @@ def add_parser(subparsers: Any) -> None:
 
 def _robot_and_port(parser: argparse.ArgumentParser) -> None:
     add_robot_option(parser, default=None)
-    parser.add_argument("--port", help="serial port (default: the robot's bus.port)")
+    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
 
 
 def servo_id_arg(text: str) -> int:

@@ -13,7 +13,7 @@ from types import FrameType
 from typing import Any
 
 from snakebot.backends.base import Backend
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import add_robot_option, port_arg, positive_float, print_json
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
@@ -64,7 +64,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--video", type=Path, help="render the twin to an MP4 file (offscreen)")
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
     parser.add_argument(
-        "--port", help="serial port for --backend dynamixel (default: robot config)"
+        "--port", type=port_arg, help="serial port for --backend dynamixel (default: robot config)"
     )
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")

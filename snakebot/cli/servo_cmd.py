@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from snakebot.backends.dynamixel.faults import decode_hardware_error
-from snakebot.cli.common import print_json
+from snakebot.cli.common import port_arg, print_json
 from snakebot.cli.config_cmd import servo_id_arg
 from snakebot.errors import BusError
 from snakebot.setup import Link, SetupError
@@ -45,7 +45,8 @@ def add_parser(subparsers: Any) -> None:
 
 
 def _port(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    parser.add_argument("--port", type=port_arg, required=True,
+                        help="serial port, e.g. /dev/ttyUSB0 or COM3")
     parser.add_argument("--baud", type=int, default=1_000_000,
                         help="the rate the servo listens at (default 1000000)")
 

@@ -7,7 +7,13 @@ import contextlib
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
+from snakebot.cli.common import (
+    add_robot_option,
+    port_arg,
+    positive_float,
+    print_json,
+    write_report,
+)
 from snakebot.config import load_robot
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
 from snakebot.errors import ConfigError
@@ -39,7 +45,7 @@ def add_parser(subparsers: Any) -> None:
     group = parser.add_argument_group("recording a log (--record)")
     group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
     group.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    group.add_argument("--port", help="serial port for --backend dynamixel")
+    group.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
     group.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
     group.add_argument(

@@ -9,7 +9,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
+from snakebot.cli.common import (
+    add_robot_option,
+    port_arg,
+    positive_float,
+    print_json,
+    write_report,
+)
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError, SafetyLimitError
 from snakebot.gaits import parse_set_options
@@ -182,7 +188,7 @@ def _add_gains_parser(commands: Any) -> None:
     )
     add_robot_option(parser)
     parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    parser.add_argument("--port", help="serial port for --backend dynamixel")
+    parser.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     parser.add_argument("--joints", help="joint indices to step-test, e.g. 0,3 (default all)")
     parser.add_argument(

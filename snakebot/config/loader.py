@@ -11,6 +11,7 @@ from typing import Any
 
 from snakebot.backends.base import ServoGains
 from snakebot.config.fields import Table
+from snakebot.config.ports import check_port
 from snakebot.config.schema import (
     MAX_ACTUATOR_DELAY_S,
     BusConfig,
@@ -154,7 +155,9 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
 
     bus_t = root.table("bus")
     bus = BusConfig(
-        port=bus_t.text("port", "/dev/ttyUSB0"),
+        port=check_port(
+            bus_t.text("port", "/dev/ttyUSB0"), source=path, key="bus.port", allow_emulator=False
+        ),
         baud=bus_t.integer("baud", 1_000_000, choices=BAUD_RATES),
         protocol=bus_t.number("protocol", 2.0),
     )
