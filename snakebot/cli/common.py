@@ -10,7 +10,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from snakebot.config.ports import check_port
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError, UsageError
 
 
 def positive_float(text: str) -> float:
@@ -33,14 +33,40 @@ def port_arg(text: str) -> str:
         raise argparse.ArgumentTypeError(exc.reason) from None
 
 
-def add_robot_option(parser: argparse.ArgumentParser, default: str | None = "snake8") -> None:
-    """``--robot NAME|FILE``."""
+SIM_ROBOT = "snake8"
+"""The robot the twin commands use when ``--robot`` is not given; hardware commands have none."""
+
+
+def add_robot_option(parser: argparse.ArgumentParser, *, hardware: str = "") -> None:
+    """``--robot NAME|FILE``, read back with :func:`robot_name`.
+
+    ``hardware`` says when the command drives real servos ("always", or e.g. "with --backend
+    dynamixel"); then there is no default for that case and the help says so.
+    """
+    if hardware == "always":
+        default = "required: no default robot on real servos"
+    elif hardware:
+        default = f"default {SIM_ROBOT} on the twin; required {hardware}"
+    else:
+        default = f"default {SIM_ROBOT}"
     parser.add_argument(
         "--robot",
-        default=default,
-        required=default is None,
-        help="robot name from firmware_configs/robots/ or a path to a robot .toml"
-        + (f" (default {default})" if default else ""),
+        help=f"robot name from firmware_configs/robots/ or a path to a robot .toml ({default})",
+    )
+
+
+def robot_name(args: argparse.Namespace, *, hardware: bool, what: str) -> str:
+    """``--robot``, or :data:`SIM_ROBOT` on the twin; UsageError (exit 2) when ``what`` drives
+    real servos and no robot was named."""
+    robot: str | None = args.robot
+    if robot is not None:
+        return robot
+    if not hardware:
+        return SIM_ROBOT
+    raise UsageError(
+        f"{what} drives real servos: name their robot with --robot NAME or --robot FILE. "
+        f"There is no default robot on hardware: {SIM_ROBOT}'s servo IDs, joint limits, zero "
+        "offsets and gains would move someone else's servos"
     )
 
 
@@ -55,7 +81,17 @@ def write_report(
     directory: Path, summary: dict[str, object], draw: Callable[[Path], Sequence[Path]]
 ) -> None:
     """Draw a command's plots into ``directory`` and write ``summary.json`` beside them; the
-    summary gains the list of plot paths."""
-    directory.mkdir(parents=True, exist_ok=True)
-    summary["plots"] = [str(path) for path in draw(directory)]
-    (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    summary gains the list of plot paths. OutputError naming the folder if it cannot be
+    written."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        summary["plots"] = [str(path) for path in draw(directory)]
+        (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    except OSError as exc:
+        raise OutputError(directory, f"cannot write the report: {os_reason(exc)}") from exc
+
+
+def os_reason(exc: OSError) -> str:
+    """What the operating system said, with the file it said it about."""
+    reason = exc.strerror or str(exc)
+    return f"{reason} ({exc.filename})" if exc.filename else reason

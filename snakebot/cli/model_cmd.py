@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot.backends.twin.model_builder import GroundFriction, add_actuators, build_spec
-from snakebot.cli.common import add_robot_option
+from snakebot.cli.common import add_robot_option, robot_name
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError
 
@@ -23,7 +23,7 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=False, what="model"))
     friction = GroundFriction.parse(args.friction) if args.friction else None
     spec = build_spec(robot, friction=friction)
     add_actuators(spec, robot)

@@ -13,7 +13,13 @@ from types import FrameType
 from typing import Any
 
 from snakebot.backends.base import Backend
-from snakebot.cli.common import add_robot_option, port_arg, positive_float, print_json
+from snakebot.cli.common import (
+    add_robot_option,
+    port_arg,
+    positive_float,
+    print_json,
+    robot_name,
+)
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
@@ -26,7 +32,7 @@ from snakebot.telemetry import CsvTelemetryWriter
 def add_parser(subparsers: Any) -> None:
     """Register the ``run`` command."""
     parser = subparsers.add_parser("run", help="run a gait on the twin (default) or the robot")
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument("--gait", help="gait name (see `snakebot gaits`; default serpenoid)")
     parser.add_argument(
         "--set",
@@ -126,7 +132,8 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
-    robot = load_robot(args.robot)
+    hardware = args.backend == "dynamixel"
+    robot = load_robot(robot_name(args, hardware=hardware, what="run --backend dynamixel"))
     gait_name, gait = build_gait(robot, args)
     plan = RunPlan(duration_s=args.duration, rate_hz=args.rate)
     backend = make_backend(robot, args)

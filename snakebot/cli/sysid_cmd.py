@@ -12,6 +12,7 @@ from snakebot.cli.common import (
     port_arg,
     positive_float,
     print_json,
+    robot_name,
     write_report,
 )
 from snakebot.config import load_robot
@@ -29,7 +30,7 @@ def add_parser(subparsers: Any) -> None:
         "[twin.servo]. With --record, first records a log: one joint held off the ground "
         "(--hold) and chirped, the others still.",
     )
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --record --backend dynamixel")
     parser.add_argument("logs", nargs="*", type=Path, metavar="LOG", help="telemetry CSV logs")
     parser.add_argument(
         "--params",
@@ -63,7 +64,10 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Record a log, or fit the twin to logs and write the result."""
-    robot = load_robot(args.robot)
+    hardware = args.record is not None and args.backend == "dynamixel"
+    robot = load_robot(
+        robot_name(args, hardware=hardware, what="sysid --record --backend dynamixel")
+    )
     if args.record is not None:
         return _record(robot, args)
     if not args.logs:

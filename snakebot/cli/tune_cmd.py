@@ -14,6 +14,7 @@ from snakebot.cli.common import (
     port_arg,
     positive_float,
     print_json,
+    robot_name,
     write_report,
 )
 from snakebot.config import load_robot
@@ -120,7 +121,7 @@ def run_gait(args: argparse.Namespace) -> int:
     from snakebot.tuning.space import build_space, parse_bounds, tuning_base
     from snakebot.tuning.tuner import DEFAULT_BUDGET, save_best_gait, tune_gait
 
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=False, what="tune gait"))
     fixed = parse_set_options(args.gait, args.set)
     base = tuning_base(args.gait, robot.joint_count, fixed)
     names = [p.strip() for p in args.params.split(",")] if args.params else None
@@ -186,7 +187,7 @@ def _add_gains_parser(commands: Any) -> None:
         "whose steps overshoot at most --max-overshoot and settle, and whose gait never holds "
         "a joint at its torque limit for long; writes it to the robot file's [gains].",
     )
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
     parser.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
@@ -220,14 +221,14 @@ def run_gains(args: argparse.Namespace) -> int:
     from snakebot.tuning.gains import GainTest
     from snakebot.tuning.progress import gain_line, gains_summary_text
 
-    robot = load_robot(args.robot)
+    hardware = args.backend == "dynamixel"
+    robot = load_robot(robot_name(args, hardware=hardware, what="tune gains --backend dynamixel"))
     joints = tuple(range(robot.joint_count))
     if args.joints:
         joints = tuple(_indices(args.joints, robot.joint_count))
     gait = args.gait or (
         "sidewinding" if any(j.axis == "pitch" for j in robot.joints) else "serpenoid"
     )
-    hardware = args.backend == "dynamixel"
     test = GainTest(
         joints=joints,
         gait=gait,
