@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import signal
+import os
 import sys
 import traceback
 import warnings
@@ -95,10 +95,10 @@ def _main(argv: Sequence[str] | None) -> int:
 def entry_point() -> None:
     """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
     try:
-        # A file-size limit (ulimit -f) would kill the process with SIGXFSZ mid-run, servos still
-        # energised; ignored, the write fails with EFBIG instead and the stop policy runs.
-        if hasattr(signal, "SIGXFSZ"):
-            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
+        # on Linux without a display only EGL renders --video offscreen (twin/video.py).
+        if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            os.environ.setdefault("MUJOCO_GL", "egl")
         warnings.showwarning = _show_warning
         code = main()
     except KeyboardInterrupt:

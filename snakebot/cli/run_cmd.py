@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
+import os
 import signal
 import sys
 import time
@@ -15,6 +17,7 @@ from typing import Any
 from snakebot.backends.base import Backend
 from snakebot.cli.common import (
     add_robot_option,
+    os_reason,
     port_arg,
     positive_float,
     print_json,
@@ -24,7 +27,7 @@ from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import Gait, load_gait_file, make_gait, parse_set_options
 from snakebot.telemetry import CsvTelemetryWriter
 
@@ -139,6 +142,13 @@ def run(args: argparse.Namespace) -> int:
     backend = make_backend(robot, args)
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     safety = SafetyLayer.for_robot(robot)
+    # Outputs open before the backend connects: one that cannot be written stops the run before
+    # a servo moves. Written rows stay on disk whatever ends the run.
+    if args.video:
+        if args.video.suffix.lower() not in VIDEO_SUFFIXES:
+            raise ConfigError("--video", str(args.video), "expected a video file name ending in "
+                              f"{', '.join(VIDEO_SUFFIXES)}")
+        check_writable(args.video, "video")
     with contextlib.ExitStack() as stack:
         log = (
             stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
@@ -170,9 +180,7 @@ def _cycle_hooks(
     from snakebot.backends.twin import TwinBackend
 
     if isinstance(backend, TwinBackend) and args.video:
-        from snakebot.backends.twin.video import VideoRecorder
-
-        hooks.append(stack.enter_context(VideoRecorder(backend, args.video, plan.rate_hz)))
+        hooks.append(stack.enter_context(VideoOutput(backend, args.video, plan.rate_hz)))
     if isinstance(backend, TwinBackend) and args.viewer:
         from snakebot.backends.twin.viewer import PassiveViewer
 
@@ -180,6 +188,61 @@ def _cycle_hooks(
     if not args.json and sys.stderr.isatty() and plan.duration_s >= 5:
         hooks.append(ProgressLine(plan))
     return hooks
+
+
+VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".webm", ".avi")
+
+
+def check_writable(path: Path, what: str) -> None:
+    """OutputError now if ``path`` cannot be written (its writer opens it only later)."""
+    try:
+        if path.is_dir():
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        if path.parent.exists() and not path.parent.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path.parent))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("ab"):
+            pass
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+class VideoOutput:
+    """The twin's VideoRecorder, its failures (the encoder, the file, offscreen rendering) as
+    OutputError naming the file."""
+
+    def __init__(self, backend: Any, path: Path, rate_hz: float) -> None:
+        from snakebot.backends.twin.video import VideoRecorder
+
+        self.path = path
+        with self._failures("cannot record the video"):
+            self._recorder = VideoRecorder(backend, path, rate_hz)
+
+    @contextlib.contextmanager
+    def _failures(self, what: str) -> Iterator[None]:
+        import mujoco
+
+        try:
+            yield
+        except (OSError, ValueError, RuntimeError) as exc:  # imageio / ffmpeg: format, pipe, disk
+            raise OutputError(self.path, f"{what}: {exc}") from exc
+        except mujoco.FatalError as exc:
+            raise OutputError(
+                self.path, f"{what}: no offscreen rendering ({exc}); on a machine without a "
+                "display set MUJOCO_GL=egl (or osmesa)"
+            ) from exc
+
+    def __call__(self, cycle: int, gait_time_s: float) -> None:
+        """Render and encode a frame when one is due."""
+        with self._failures("cannot write the video"):
+            self._recorder(cycle, gait_time_s)
+
+    def __enter__(self) -> VideoOutput:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        with self._failures("cannot finish the video"):
+            self._recorder.__exit__(None, None, None)
 
 
 def _chain(hooks: list[Any]) -> Any:

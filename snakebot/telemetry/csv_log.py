@@ -4,7 +4,8 @@ A returned ``write()`` is in the kernel's page cache, which survives a process c
 needs ``fsync``, which ``close`` does. Only a partially written last line can be torn; the reader
 drops it. (telemetry.md: CSV + per-record write lost 0 records under SIGKILL at 1 kHz.)
 
-A failed write (disk full, a file-size limit, a device like /dev/full) raises
+A failed write (disk full, a device like /dev/full, a file-size limit: CPython ignores SIGXFSZ,
+so ``ulimit -f`` fails the write with EFBIG instead of killing the process) raises
 :class:`~snakebot.errors.OutputError` naming the file; the rows before it stay on disk.
 """
 
@@ -42,6 +43,8 @@ class CsvTelemetryWriter:
         self.rows = 0
         self._fd: int | None = None
         try:
+            if self.path.parent.exists() and not self.path.parent.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, "Not a directory", str(self.path.parent))
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
             _write_all(self._fd, (",".join(column_names(joint_count)) + "\n").encode())
