@@ -11,10 +11,10 @@ from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_na
 from snakebot.cli.config_cmd import servo_id_arg
 from snakebot.config import load_robot
 from snakebot.errors import BusError
+from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
 from snakebot.setup.console import confirm
 from snakebot.setup.maintenance import factory_reset, reboot, servo_info
-from snakebot.setup.units import display
 
 
 def add_parser(subparsers: Any) -> None:
