@@ -6,7 +6,12 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from snakebot.backends.twin.model_builder import GroundFriction, add_actuators, build_spec
+from snakebot.backends.twin.model_builder import (
+    GroundFriction,
+    add_actuators,
+    build_spec,
+    compile_spec,
+)
 from snakebot.cli.common import add_robot_option, robot_name
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError
@@ -27,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     friction = GroundFriction.parse(args.friction) if args.friction else None
     spec = build_spec(robot, friction=friction)
     add_actuators(spec, robot)
-    spec.compile()
+    compile_spec(spec, robot)
     try:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(spec.to_xml())
