@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import dynamixel_sdk
@@ -28,10 +29,13 @@ pytestmark = [
 LOG_LIMIT_BYTES = 96_000  # about 1.5 s of snake12 telemetry at 100 Hz
 
 
-def limit_file_size() -> None:
-    import resource
+def file_size_limit(limit: int) -> Callable[[], None]:
+    def apply() -> None:
+        import resource
 
-    resource.setrlimit(resource.RLIMIT_FSIZE, (LOG_LIMIT_BYTES, LOG_LIMIT_BYTES))
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return apply
 
 
 def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
@@ -50,10 +54,10 @@ def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
         handler.closePort()
 
 
-def snakebot(*argv: str, limit: bool = False) -> subprocess.CompletedProcess[str]:
+def snakebot(*argv: str, limit: int | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "snakebot", *argv], capture_output=True, text=True, timeout=120,
-        preexec_fn=limit_file_size if limit else None,
+        preexec_fn=None if limit is None else file_size_limit(limit),
         env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
     )
 
@@ -67,7 +71,7 @@ def test_a_log_outgrowing_the_file_size_limit_stops_the_robot_by_its_stop_policy
     with emulator("--robot", str(robot)) as emu:
         run = snakebot("run", "--backend", "dynamixel", "--port", emu.port, "--robot", str(robot),
                        "--gait", "sidewinding", "--duration", "60", "--log", str(log), "--json",
-                       limit=True)
+                       limit=LOG_LIMIT_BYTES)
         torque = read_all(emu.port, 64, 1, range(1, 13))
         goals = read_all(emu.port, 116, 4, range(1, 13))
     assert run.returncode == 1, run.stderr
@@ -82,7 +86,19 @@ def test_a_log_outgrowing_the_file_size_limit_stops_the_robot_by_its_stop_policy
 
 def test_a_log_outgrowing_the_file_size_limit_on_the_twin(tmp_path: Path) -> None:
     log = tmp_path / "run.csv"
-    run = snakebot("run", "--duration", "60", "--log", str(log), limit=True)
+    run = snakebot("run", "--duration", "60", "--log", str(log), limit=LOG_LIMIT_BYTES)
     assert run.returncode == 1, run.stderr
     assert f"snakebot: error: {log}: cannot write telemetry row" in run.stderr
     assert read_log(log).values.shape[0] > 100
+
+
+def test_calibrate_that_cannot_write_leaves_the_robot_file_as_it_was(config_dir: Path) -> None:
+    robot = config_dir / "robots" / "snake12.toml"
+    before = robot.read_bytes()
+    with emulator("--robot", str(robot)) as emu:
+        run = snakebot("calibrate", "--robot", str(robot), "--port", emu.port, "--yes",
+                       limit=len(before) // 2)
+    assert run.returncode == 1, run.stderr
+    assert f"snakebot: error: {robot}: cannot write the offsets (File too large)" in run.stderr
+    assert robot.read_bytes() == before
+    assert sorted(p.name for p in robot.parent.iterdir()) == ["snake12.toml", "snake8.toml"]
