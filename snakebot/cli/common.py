@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
+import os
 import sys
+import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -22,6 +25,46 @@ def positive_float(text: str) -> float:
     if not (value > 0 and math.isfinite(value)):
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return value
+
+
+def finite_float(text: str) -> float:
+    """argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def bounded_float(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """argparse type: a number in [low, high] (``unit`` for the message)."""
+    where = f"{low:g} to {high:g}{' ' + unit if unit else ''}"
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a number from {where}, got {text!r}")
+        return value
+
+    parse.__name__ = "number"  # argparse names the type in its own messages
+    return parse
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
+RATE_HZ = bounded_float(0.1, 10_000.0, "Hz")
+"""argparse type of ``--rate``: a control rate from 0.1 Hz to 10 kHz."""
 
 
 def port_arg(text: str) -> str:
@@ -77,6 +120,41 @@ def print_json(payload: object) -> None:
     sys.stdout.flush()
 
 
+def check_writable(path: Path, what: str) -> None:
+    """OutputError now if file ``path`` cannot be written (its writer opens it only later).
+
+    Creates the file's folder; leaves the file as it was (absent stays absent).
+    """
+    try:
+        if path.is_dir():
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        _make_folder(path.parent)
+        existed = path.exists()
+        with path.open("ab"):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def check_folder(path: Path, what: str) -> None:
+    """OutputError now if files cannot be written into folder ``path`` (created if missing)."""
+    try:
+        _make_folder(path)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def _make_folder(path: Path) -> None:
+    for folder in (path, *path.parents):  # mkdir says "File exists" for a file in the way
+        if folder.exists() and not folder.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(folder))
+    path.mkdir(parents=True, exist_ok=True)
+
+
 def write_report(
     directory: Path, summary: dict[str, object], draw: Callable[[Path], Sequence[Path]]
 ) -> None:
@@ -84,7 +162,7 @@ def write_report(
     summary gains the list of plot paths. OutputError naming the folder if it cannot be
     written."""
     try:
-        directory.mkdir(parents=True, exist_ok=True)
+        _make_folder(directory)
         summary["plots"] = [str(path) for path in draw(directory)]
         (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
     except OSError as exc:

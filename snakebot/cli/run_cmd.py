@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import errno
-import os
 import signal
 import sys
 import time
@@ -16,8 +14,9 @@ from typing import Any
 
 from snakebot.backends.base import Backend
 from snakebot.cli.common import (
+    RATE_HZ,
     add_robot_option,
-    os_reason,
+    check_writable,
     port_arg,
     positive_float,
     print_json,
@@ -58,7 +57,7 @@ def add_parser(subparsers: Any) -> None:
         help="gait time in seconds, before the ramp-out (default 10)",
     )
     parser.add_argument(
-        "--rate", type=positive_float, default=100.0, help="control rate in Hz (default 100)"
+        "--rate", type=RATE_HZ, default=100.0, help="control rate in Hz (default 100)"
     )
     parser.add_argument(
         "--friction",
@@ -191,20 +190,6 @@ def _cycle_hooks(
 
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".webm", ".avi")
-
-
-def check_writable(path: Path, what: str) -> None:
-    """OutputError now if ``path`` cannot be written (its writer opens it only later)."""
-    try:
-        if path.is_dir():
-            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
-        if path.parent.exists() and not path.parent.is_dir():
-            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path.parent))
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with path.open("ab"):
-            pass
-    except OSError as exc:
-        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
 
 
 class VideoOutput:

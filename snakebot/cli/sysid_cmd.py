@@ -9,8 +9,12 @@ from typing import Any
 
 from snakebot.cli.common import (
     add_robot_option,
+    check_folder,
+    check_writable,
+    finite_float,
     port_arg,
     positive_float,
+    positive_int,
     print_json,
     robot_name,
     write_report,
@@ -38,8 +42,9 @@ def add_parser(subparsers: Any) -> None:
         help="parameters to fit, from stiffness,damping,armature,friction_loss,delay "
         f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s)",
     )
-    parser.add_argument("--workers", type=int, default=2, help="parallel replays (default 2)")
-    parser.add_argument("--max-evaluations", type=int, default=40, metavar="N")
+    parser.add_argument("--workers", type=positive_int, default=2,
+                        help="parallel replays (default 2)")
+    parser.add_argument("--max-evaluations", type=positive_int, default=40, metavar="N")
     parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -51,7 +56,7 @@ def add_parser(subparsers: Any) -> None:
     group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
     group.add_argument(
         "--hold",
-        type=float,
+        type=finite_float,
         default=0.5,
         metavar="RAD",
         help="angle to hold the joint at while it chirps (default 0.5)",
@@ -69,7 +74,10 @@ def run(args: argparse.Namespace) -> int:
         robot_name(args, hardware=hardware, what="sysid --record --backend dynamixel")
     )
     if args.record is not None:
+        check_writable(args.record, "log")
         return _record(robot, args)
+    if args.report is not None:
+        check_folder(args.report, "report")
     if not args.logs:
         raise ConfigError("LOG", "", "give one or more telemetry logs, or --record LOG")
     from snakebot.tuning.config_edit import set_table_values
