@@ -9,13 +9,12 @@ wanted values are checked with the Dynamixel backend's own connect checks, so wh
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from snakebot.backends.dynamixel.checks import LIMIT_KEYS, SETTINGS_KEYS, check_settings
 from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.config.fields import read_toml
 from snakebot.config.schema import JointConfig, RobotConfig
 from snakebot.config.servo_settings import GAIN_KEYS, Setting, parse_settings
 from snakebot.errors import ConfigError
@@ -59,14 +58,6 @@ class ChainSettings:
         return next(s for s in self.servos if s.servo_id == servo_id)
 
 
-def _read(path: Path) -> dict[str, Any]:
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise ConfigError(path, "", f"cannot read: {exc}") from exc
-
-
 def _derived(robot: RobotConfig, table: ServoTable, source: Path) -> dict[str, Setting]:
     try:
         baud_index = table.baud_index(robot.bus.baud)
@@ -82,8 +73,8 @@ def load_settings(robot: RobotConfig) -> ChainSettings:
     """The settings ``robot`` wants on each servo; ConfigError naming file and key if invalid."""
     table = table_for_model(robot.servo.name)
     servo_file = robot.servo.source
-    base = parse_settings(servo_file, "settings", _read(servo_file).get("settings", {}), table)
-    robot_data = _read(robot.source)
+    base = parse_settings(servo_file, "settings", read_toml(servo_file).get("settings", {}), table)
+    robot_data = read_toml(robot.source)
     overrides = parse_settings(robot.source, "settings", robot_data.get("settings", {}), table)
     raw_joints = robot_data.get("joints", [])
     derived = _derived(robot, table, robot.source)
