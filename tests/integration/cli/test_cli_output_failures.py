@@ -26,7 +26,9 @@ pytestmark = [
     pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals and rlimits need POSIX"),
 ]
 
-LOG_LIMIT_BYTES = 96_000  # about 1.5 s of snake12 telemetry at 100 Hz
+# About 0.7 s of snake12 telemetry at 100 Hz: long enough to be mid-gait, short enough that a
+# loaded machine rarely starves the emulator process of the time to answer before it.
+LOG_LIMIT_BYTES = 24_000
 
 
 def file_size_limit(limit: int) -> Callable[[], None]:
@@ -39,6 +41,9 @@ def file_size_limit(limit: int) -> Callable[[], None]:
 
 
 def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
+    """One register of every servo, through the stock SDK. A read is tried up to five times: the
+    emulator is another process, which a loaded machine may not schedule within the SDK's
+    34 ms reply timeout."""
     handler = dynamixel_sdk.PortHandler(port)
     assert handler.openPort() and handler.setBaudRate(1_000_000)
     packets = dynamixel_sdk.PacketHandler(2.0)
@@ -46,8 +51,11 @@ def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
     try:
         values = []
         for servo_id in ids:
-            value, result, _ = read(handler, servo_id, address)
-            assert result == dynamixel_sdk.COMM_SUCCESS
+            for _ in range(5):
+                value, result, _ = read(handler, servo_id, address)
+                if result == dynamixel_sdk.COMM_SUCCESS:
+                    break
+            assert result == dynamixel_sdk.COMM_SUCCESS, packets.getTxRxResult(result)
             values.append(value)
         return values
     finally:
@@ -80,7 +88,7 @@ def test_a_log_outgrowing_the_file_size_limit_stops_the_robot_by_its_stop_policy
     assert torque == [1 if policy == "hold" else 0] * 12
     assert max(abs(g - 2048) for g in goals) <= 2  # ramped to the straight pose first
     data = read_log(log)  # every row up to the limit is there, only the last one torn
-    assert data.values.shape[0] > 100
+    assert data.values.shape[0] > 50
     np.testing.assert_array_equal(data.column("cycle"), np.arange(data.values.shape[0]))
 
 
@@ -89,7 +97,7 @@ def test_a_log_outgrowing_the_file_size_limit_on_the_twin(tmp_path: Path) -> Non
     run = snakebot("run", "--duration", "60", "--log", str(log), limit=LOG_LIMIT_BYTES)
     assert run.returncode == 1, run.stderr
     assert f"snakebot: error: {log}: cannot write telemetry row" in run.stderr
-    assert read_log(log).values.shape[0] > 100
+    assert read_log(log).values.shape[0] > 50
 
 
 def test_calibrate_that_cannot_write_leaves_the_robot_file_as_it_was(config_dir: Path) -> None:
