@@ -64,6 +64,8 @@ CASES = [
     bad("model", "--out", "/dev/full", names=("/dev/full", "No space left")),
     bad("model", "--robot", "{heavy}", "--out", "{tmp}/m.xml", names=("{heavy}", "link.mass_kg")),
     bad("model", "--friction", "1", "--out", "{tmp}/m.xml", names=("--friction",)),
+    bad("model", "--robot", "{settings}", "--out", "{tmp}/m.xml",
+        names=("{settings}", "settings.bogus")),
     # gaits
     bad("gaits", "moonwalk", names=("moonwalk",)),
     # emulate (refused before it serves)
