@@ -1,5 +1,11 @@
 """``python -m snakebot`` runs the command-line interface."""
 
-from snakebot.cli.main import entry_point
+import sys
 
-entry_point()
+try:
+    from snakebot.cli.main import entry_point
+
+    entry_point()
+except KeyboardInterrupt:  # Ctrl-C before entry_point's own handler is in place: no traceback
+    print("snakebot: interrupted", file=sys.stderr)
+    sys.exit(130)

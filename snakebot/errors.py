@@ -76,3 +76,23 @@ class ServoFaultError(BackendError):
 
 class MissingDependencyError(SnakebotError, ImportError):
     """An optional dependency is not installed; the message carries the install command."""
+
+
+class UsageError(SnakebotError):
+    """The command line asks for something it may not (exit 2, like argparse's own errors).
+
+    For rules argparse cannot express, e.g. a hardware backend without an explicit ``--robot``.
+    """
+
+
+class OutputError(SnakebotError):
+    """An output file (telemetry log, video, report, exported model) cannot be written.
+
+    ``path`` is the file, ``reason`` what the operating system said. Whatever was written before
+    the failure stays on disk.
+    """
+
+    def __init__(self, path: str | Path, reason: str) -> None:
+        self.path = str(path)
+        self.reason = reason
+        super().__init__(f"{self.path}: {reason}")

@@ -6,7 +6,13 @@ import argparse
 import math
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import (
+    add_robot_option,
+    port_arg,
+    positive_float,
+    print_json,
+    robot_name,
+)
 from snakebot.config import load_robot
 from snakebot.setup import Link, SetupError, load_settings
 from snakebot.setup.calibrate import MAX_OFFSET_DEG, measure, refusals, write_offsets
@@ -21,8 +27,9 @@ def add_parser(subparsers: Any) -> None:
         "position, shows the zero offsets and, once you confirm, writes them into the robot file "
         "(joints[].zero_offset_rad; comments and layout kept). Homing Offset stays 0.",
     )
-    add_robot_option(parser, default=None)
-    parser.add_argument("--port", help="serial port (default: the robot's bus.port)")
+    add_robot_option(parser, hardware="always")
+    parser.add_argument("--port", type=port_arg,
+                        help="serial port (default: the robot's bus.port)")
     parser.add_argument("--max-offset-deg", type=positive_float, default=MAX_OFFSET_DEG,
                         help=f"refuse offsets beyond this (default {MAX_OFFSET_DEG:g})")
     parser.add_argument("--dry-run", action="store_true", help="show the offsets, write nothing")
@@ -33,7 +40,7 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Measure, show, check, confirm, write."""
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=True, what="calibrate"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
     with Link(port, chain.baud, model=robot.servo.name) as link:

@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
+import os
 import sys
+import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
+
+from snakebot.config.ports import check_port
+from snakebot.errors import ConfigError, OutputError, UsageError
 
 
 def positive_float(text: str) -> float:
@@ -21,14 +27,89 @@ def positive_float(text: str) -> float:
     return value
 
 
-def add_robot_option(parser: argparse.ArgumentParser, default: str | None = "snake8") -> None:
-    """``--robot NAME|FILE``."""
+def finite_float(text: str) -> float:
+    """argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def bounded_float(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """argparse type: a number in [low, high] (``unit`` for the message)."""
+    where = f"{low:g} to {high:g}{' ' + unit if unit else ''}"
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a number from {where}, got {text!r}")
+        return value
+
+    parse.__name__ = "number"  # argparse names the type in its own messages
+    return parse
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
+RATE_HZ = bounded_float(0.1, 10_000.0, "Hz")
+"""argparse type of ``--rate``: a control rate from 0.1 Hz to 10 kHz."""
+
+
+def port_arg(text: str) -> str:
+    """argparse type: a serial device path, or the emulator's ``dxlemu://NAME`` URL; any other
+    URL (``socket://``, ``spy://...?file=``) is a usage error saying why."""
+    try:
+        return check_port(text, source="--port")
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(exc.reason) from None
+
+
+SIM_ROBOT = "snake8"
+"""The robot the twin commands use when ``--robot`` is not given; hardware commands have none."""
+
+
+def add_robot_option(parser: argparse.ArgumentParser, *, hardware: str = "") -> None:
+    """``--robot NAME|FILE``, read back with :func:`robot_name`.
+
+    ``hardware`` says when the command drives real servos ("always", or e.g. "with --backend
+    dynamixel"); then there is no default for that case and the help says so.
+    """
+    if hardware == "always":
+        default = "required: no default robot on real servos"
+    elif hardware:
+        default = f"default {SIM_ROBOT} on the twin; required {hardware}"
+    else:
+        default = f"default {SIM_ROBOT}"
     parser.add_argument(
         "--robot",
-        default=default,
-        required=default is None,
-        help="robot name from firmware_configs/robots/ or a path to a robot .toml"
-        + (f" (default {default})" if default else ""),
+        help=f"robot name from firmware_configs/robots/ or a path to a robot .toml ({default})",
+    )
+
+
+def robot_name(args: argparse.Namespace, *, hardware: bool, what: str) -> str:
+    """``--robot``, or :data:`SIM_ROBOT` on the twin; UsageError (exit 2) when ``what`` drives
+    real servos and no robot was named."""
+    robot: str | None = args.robot
+    if robot is not None:
+        return robot
+    if not hardware:
+        return SIM_ROBOT
+    raise UsageError(
+        f"{what} drives real servos: name their robot with --robot NAME or --robot FILE. "
+        f"There is no default robot on hardware: {SIM_ROBOT}'s servo IDs, joint limits, zero "
+        "offsets and gains would move someone else's servos"
     )
 
 
@@ -39,11 +120,56 @@ def print_json(payload: object) -> None:
     sys.stdout.flush()
 
 
+def check_writable(path: Path, what: str) -> None:
+    """OutputError now if file ``path`` cannot be written (its writer opens it only later).
+
+    Creates the file's folder; leaves the file as it was (absent stays absent).
+    """
+    try:
+        if path.is_dir():
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        _make_folder(path.parent)
+        existed = path.exists()
+        with path.open("ab"):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def check_folder(path: Path, what: str) -> None:
+    """OutputError now if files cannot be written into folder ``path`` (created if missing)."""
+    try:
+        _make_folder(path)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def _make_folder(path: Path) -> None:
+    for folder in (path, *path.parents):  # mkdir says "File exists" for a file in the way
+        if folder.exists() and not folder.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(folder))
+    path.mkdir(parents=True, exist_ok=True)
+
+
 def write_report(
     directory: Path, summary: dict[str, object], draw: Callable[[Path], Sequence[Path]]
 ) -> None:
     """Draw a command's plots into ``directory`` and write ``summary.json`` beside them; the
-    summary gains the list of plot paths."""
-    directory.mkdir(parents=True, exist_ok=True)
-    summary["plots"] = [str(path) for path in draw(directory)]
-    (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    summary gains the list of plot paths. OutputError naming the folder if it cannot be
+    written."""
+    try:
+        _make_folder(directory)
+        summary["plots"] = [str(path) for path in draw(directory)]
+        (directory / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    except OSError as exc:
+        raise OutputError(directory, f"cannot write the report: {os_reason(exc)}") from exc
+
+
+def os_reason(exc: OSError) -> str:
+    """What the operating system said, with the file it said it about."""
+    reason = exc.strerror or str(exc)
+    return f"{reason} ({exc.filename})" if exc.filename else reason

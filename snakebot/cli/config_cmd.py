@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, print_json
+from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_name
 from snakebot.config import load_robot
 from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
 from snakebot.setup.console import confirm
@@ -41,19 +41,18 @@ def add_parser(subparsers: Any) -> None:
         "57600) and sets its ID and baud rate. Refuses if several servos answer or the ID is "
         "taken. Growing a chain: plug in one new servo at a time and pass --from 1.",
     )
-    assign.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    _robot_and_port(assign)
     assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
     assign.add_argument("--from", dest="from_id", type=servo_id_arg,
                         help="only the servo answering as this ID (default: the only servo)")
-    assign.add_argument("--baud", type=int, help="baud rate to set (default: the robot's "
-                        "bus.baud with --robot, else 1000000)")
-    assign.add_argument("--robot", help="take the baud rate from this robot")
+    assign.add_argument("--baud", type=int,
+                        help="baud rate to set (default: the robot's bus.baud)")
     assign.set_defaults(handler=run_assign)
 
 
 def _robot_and_port(parser: argparse.ArgumentParser) -> None:
-    add_robot_option(parser, default=None)
-    parser.add_argument("--port", help="serial port (default: the robot's bus.port)")
+    add_robot_option(parser, hardware="always")
+    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
 
 
 def servo_id_arg(text: str) -> int:
@@ -77,7 +76,7 @@ def _table(diff: ChainDiff) -> list[str]:
 
 def run_diff(args: argparse.Namespace) -> int:
     """Print the differences; 0 when none, 1 when some."""
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=True, what="config diff"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
     with Link(port, chain.baud, model=robot.servo.name) as link:
@@ -105,7 +104,7 @@ def run_diff(args: argparse.Namespace) -> int:
 
 def run_apply(args: argparse.Namespace) -> int:
     """Plan, confirm, write, verify; the final diff must come out empty."""
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=True, what="config apply"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
     with Link(port, chain.baud, model=robot.servo.name) as link:
@@ -139,11 +138,13 @@ def run_apply(args: argparse.Namespace) -> int:
 
 def run_assign(args: argparse.Namespace) -> int:
     """Find the lone servo, set its ID and baud rate, verify."""
-    baud = args.baud or (load_robot(args.robot).bus.baud if args.robot else 1_000_000)
+    robot = load_robot(robot_name(args, hardware=True, what="config assign-id"))
+    baud = args.baud or robot.bus.baud
+    port = args.port or robot.bus.port
     where = f"ID {args.from_id}" if args.from_id is not None else "the servo"
     print(f"searching for {where} at {', '.join(map(str, SEARCH_BAUDS))} baud ...",
           file=sys.stderr, flush=True)
-    with Link(args.port, SEARCH_BAUDS[0]) as link:
+    with Link(port, SEARCH_BAUDS[0], model=robot.servo.name) as link:
         result = assign_id(link, to_id=args.to, baud=baud, from_id=args.from_id)
     found = result.found
     if not result.changed:

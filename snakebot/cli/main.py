@@ -1,13 +1,14 @@
 """``snakebot`` command line: ``main(argv) -> int``; exit codes are decided here and only here.
 
-Exit codes: 0 success, 1 a user-fixable error (bad config, bus failure, servo fault), 2 usage,
-3 a bug in snakebot, 130 interrupted.
+Exit codes: 0 success, 1 a user-fixable error (bad config, unwritable output, bus failure, servo
+fault), 2 usage, 3 a bug in snakebot, 130 interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import traceback
 import warnings
@@ -15,7 +16,7 @@ from collections.abc import Sequence
 from typing import TextIO
 
 from snakebot import __version__
-from snakebot.errors import SnakebotError
+from snakebot.errors import SnakebotError, UsageError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
 COMMANDS = (
@@ -52,7 +53,19 @@ def _show_warning(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit code."""
+    """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit code.
+
+    Ctrl-C at any point, building the parser (which imports every command) included, ends with
+    ``snakebot: interrupted`` and 130, never a traceback.
+    """
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("snakebot: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -60,9 +73,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         return int(args.handler(args))
-    except KeyboardInterrupt:
-        print("snakebot: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except UsageError as exc:
+        print(f"snakebot {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
     except SnakebotError as exc:
         if args.debug:
             traceback.print_exc()
@@ -81,5 +94,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def entry_point() -> None:
     """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
-    warnings.showwarning = _show_warning
-    sys.exit(main())
+    try:
+        # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
+        # on Linux without a display only EGL renders --video offscreen (twin/video.py).
+        if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            os.environ.setdefault("MUJOCO_GL", "egl")
+        warnings.showwarning = _show_warning
+        code = main()
+    except KeyboardInterrupt:
+        print("snakebot: interrupted", file=sys.stderr)
+        code = EXIT_INTERRUPTED
+    sys.exit(code)

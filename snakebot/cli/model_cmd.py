@@ -6,10 +6,15 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from snakebot.backends.twin.model_builder import GroundFriction, add_actuators, build_spec
-from snakebot.cli.common import add_robot_option
+from snakebot.backends.twin.model_builder import (
+    GroundFriction,
+    add_actuators,
+    build_spec,
+    compile_spec,
+)
+from snakebot.cli.common import add_robot_option, check_writable, os_reason, robot_name
 from snakebot.config import load_robot
-from snakebot.errors import ConfigError
+from snakebot.errors import OutputError
 
 
 def add_parser(subparsers: Any) -> None:
@@ -23,15 +28,15 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=False, what="model"))
+    check_writable(args.out, "model")
     friction = GroundFriction.parse(args.friction) if args.friction else None
     spec = build_spec(robot, friction=friction)
     add_actuators(spec, robot)
-    spec.compile()
+    compile_spec(spec, robot)
     try:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(spec.to_xml())
     except OSError as exc:
-        raise ConfigError(args.out, "", f"cannot write: {exc.strerror}") from exc
+        raise OutputError(args.out, f"cannot write the model: {os_reason(exc)}") from exc
     print(f"wrote {args.out} ({robot.name}: {robot.joint_count} joints)")
     return 0

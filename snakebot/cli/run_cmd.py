@@ -13,12 +13,20 @@ from types import FrameType
 from typing import Any
 
 from snakebot.backends.base import Backend
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import (
+    RATE_HZ,
+    add_robot_option,
+    check_writable,
+    port_arg,
+    positive_float,
+    print_json,
+    robot_name,
+)
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import Gait, load_gait_file, make_gait, parse_set_options
 from snakebot.telemetry import CsvTelemetryWriter
 
@@ -26,7 +34,7 @@ from snakebot.telemetry import CsvTelemetryWriter
 def add_parser(subparsers: Any) -> None:
     """Register the ``run`` command."""
     parser = subparsers.add_parser("run", help="run a gait on the twin (default) or the robot")
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument("--gait", help="gait name (see `snakebot gaits`; default serpenoid)")
     parser.add_argument(
         "--set",
@@ -49,7 +57,7 @@ def add_parser(subparsers: Any) -> None:
         help="gait time in seconds, before the ramp-out (default 10)",
     )
     parser.add_argument(
-        "--rate", type=positive_float, default=100.0, help="control rate in Hz (default 100)"
+        "--rate", type=RATE_HZ, default=100.0, help="control rate in Hz (default 100)"
     )
     parser.add_argument(
         "--friction",
@@ -64,7 +72,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--video", type=Path, help="render the twin to an MP4 file (offscreen)")
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
     parser.add_argument(
-        "--port", help="serial port for --backend dynamixel (default: robot config)"
+        "--port", type=port_arg, help="serial port for --backend dynamixel (default: robot config)"
     )
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
@@ -126,12 +134,20 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
-    robot = load_robot(args.robot)
+    hardware = args.backend == "dynamixel"
+    robot = load_robot(robot_name(args, hardware=hardware, what="run --backend dynamixel"))
     gait_name, gait = build_gait(robot, args)
     plan = RunPlan(duration_s=args.duration, rate_hz=args.rate)
     backend = make_backend(robot, args)
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     safety = SafetyLayer.for_robot(robot)
+    # Outputs open before the backend connects: one that cannot be written stops the run before
+    # a servo moves. Written rows stay on disk whatever ends the run.
+    if args.video:
+        if args.video.suffix.lower() not in VIDEO_SUFFIXES:
+            raise ConfigError("--video", str(args.video), "expected a video file name ending in "
+                              f"{', '.join(VIDEO_SUFFIXES)}")
+        check_writable(args.video, "video")
     with contextlib.ExitStack() as stack:
         log = (
             stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
@@ -163,9 +179,7 @@ def _cycle_hooks(
     from snakebot.backends.twin import TwinBackend
 
     if isinstance(backend, TwinBackend) and args.video:
-        from snakebot.backends.twin.video import VideoRecorder
-
-        hooks.append(stack.enter_context(VideoRecorder(backend, args.video, plan.rate_hz)))
+        hooks.append(stack.enter_context(VideoOutput(backend, args.video, plan.rate_hz)))
     if isinstance(backend, TwinBackend) and args.viewer:
         from snakebot.backends.twin.viewer import PassiveViewer
 
@@ -173,6 +187,47 @@ def _cycle_hooks(
     if not args.json and sys.stderr.isatty() and plan.duration_s >= 5:
         hooks.append(ProgressLine(plan))
     return hooks
+
+
+VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".webm", ".avi")
+
+
+class VideoOutput:
+    """The twin's VideoRecorder, its failures (the encoder, the file, offscreen rendering) as
+    OutputError naming the file."""
+
+    def __init__(self, backend: Any, path: Path, rate_hz: float) -> None:
+        from snakebot.backends.twin.video import VideoRecorder
+
+        self.path = path
+        with self._failures("cannot record the video"):
+            self._recorder = VideoRecorder(backend, path, rate_hz)
+
+    @contextlib.contextmanager
+    def _failures(self, what: str) -> Iterator[None]:
+        import mujoco
+
+        try:
+            yield
+        except (OSError, ValueError, RuntimeError) as exc:  # imageio / ffmpeg: format, pipe, disk
+            raise OutputError(self.path, f"{what}: {exc}") from exc
+        except mujoco.FatalError as exc:
+            raise OutputError(
+                self.path, f"{what}: no offscreen rendering ({exc}); on a machine without a "
+                "display set MUJOCO_GL=egl (or osmesa)"
+            ) from exc
+
+    def __call__(self, cycle: int, gait_time_s: float) -> None:
+        """Render and encode a frame when one is due."""
+        with self._failures("cannot write the video"):
+            self._recorder(cycle, gait_time_s)
+
+    def __enter__(self) -> VideoOutput:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        with self._failures("cannot finish the video"):
+            self._recorder.__exit__(None, None, None)
 
 
 def _chain(hooks: list[Any]) -> Any:

@@ -7,13 +7,14 @@ import sys
 from typing import Any
 
 from snakebot.backends.dynamixel.faults import decode_hardware_error
-from snakebot.cli.common import print_json
+from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_name
 from snakebot.cli.config_cmd import servo_id_arg
+from snakebot.config import load_robot
 from snakebot.errors import BusError
+from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
 from snakebot.setup.console import confirm
 from snakebot.setup.maintenance import factory_reset, reboot, servo_info
-from snakebot.setup.units import display
 
 
 def add_parser(subparsers: Any) -> None:
@@ -45,14 +46,24 @@ def add_parser(subparsers: Any) -> None:
 
 
 def _port(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
-    parser.add_argument("--baud", type=int, default=1_000_000,
-                        help="the rate the servo listens at (default 1000000)")
+    add_robot_option(parser, hardware="always")
+    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
+    parser.add_argument("--baud", type=int,
+                        help="the rate the servo listens at (default: the robot's bus.baud)")
+
+
+def _link(args: argparse.Namespace, what: str) -> Link:
+    """The robot's port at its baud rate (or --port/--baud), in its servo model's table; sets
+    ``args.port`` and ``args.baud`` to what it opens."""
+    robot = load_robot(robot_name(args, hardware=True, what=f"servo {what}"))
+    args.port = args.port or robot.bus.port
+    args.baud = args.baud or robot.bus.baud
+    return Link(args.port, args.baud, model=robot.servo.name)
 
 
 def run_reboot(args: argparse.Namespace) -> int:
     """Reboot one servo or all; exit 1 if a hardware error stays latched."""
-    with Link(args.port, args.baud) as link:
+    with _link(args, "reboot") as link:
         bus = link.bus
         ids = sorted(bus.broadcast_ping()) if args.all else [args.id]
         if not ids:
@@ -81,9 +92,10 @@ def run_reboot(args: argparse.Namespace) -> int:
 
 def run_reset(args: argparse.Namespace) -> int:
     """Factory-reset one servo after checking it will not collide with another."""
+    link = _link(args, "reset")  # nothing opens before the with
     if not args.yes:
         raise SetupError(f"servo reset erases every setting of servo {args.id}: add --yes")
-    with Link(args.port, args.baud) as link:
+    with link:
         if link.ping_clean(args.id, args.baud) is None:
             raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
                            f"scan --port {args.port} --all-bauds` shows where the servos are")
@@ -102,7 +114,7 @@ def run_reset(args: argparse.Namespace) -> int:
 
 def run_info(args: argparse.Namespace) -> int:
     """Print one servo's model, firmware, health and control table with units."""
-    with Link(args.port, args.baud) as link:
+    with _link(args, "info") as link:
         info = servo_info(link, args.id, args.baud)
     table = info.table
     rows = []

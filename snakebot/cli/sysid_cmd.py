@@ -7,7 +7,18 @@ import contextlib
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
+from snakebot.cli.common import (
+    add_robot_option,
+    check_folder,
+    check_writable,
+    finite_float,
+    port_arg,
+    positive_float,
+    positive_int,
+    print_json,
+    robot_name,
+    write_report,
+)
 from snakebot.config import load_robot
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
 from snakebot.errors import ConfigError
@@ -23,7 +34,7 @@ def add_parser(subparsers: Any) -> None:
         "[twin.servo]. With --record, first records a log: one joint held off the ground "
         "(--hold) and chirped, the others still.",
     )
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --record --backend dynamixel")
     parser.add_argument("logs", nargs="*", type=Path, metavar="LOG", help="telemetry CSV logs")
     parser.add_argument(
         "--params",
@@ -31,20 +42,21 @@ def add_parser(subparsers: Any) -> None:
         help="parameters to fit, from stiffness,damping,armature,friction_loss,delay "
         f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s)",
     )
-    parser.add_argument("--workers", type=int, default=2, help="parallel replays (default 2)")
-    parser.add_argument("--max-evaluations", type=int, default=40, metavar="N")
+    parser.add_argument("--workers", type=positive_int, default=2,
+                        help="parallel replays (default 2)")
+    parser.add_argument("--max-evaluations", type=positive_int, default=40, metavar="N")
     parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     group = parser.add_argument_group("recording a log (--record)")
     group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
     group.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    group.add_argument("--port", help="serial port for --backend dynamixel")
+    group.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
     group.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
     group.add_argument(
         "--hold",
-        type=float,
+        type=finite_float,
         default=0.5,
         metavar="RAD",
         help="angle to hold the joint at while it chirps (default 0.5)",
@@ -57,9 +69,15 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Record a log, or fit the twin to logs and write the result."""
-    robot = load_robot(args.robot)
+    hardware = args.record is not None and args.backend == "dynamixel"
+    robot = load_robot(
+        robot_name(args, hardware=hardware, what="sysid --record --backend dynamixel")
+    )
     if args.record is not None:
+        check_writable(args.record, "log")
         return _record(robot, args)
+    if args.report is not None:
+        check_folder(args.report, "report")
     if not args.logs:
         raise ConfigError("LOG", "", "give one or more telemetry logs, or --record LOG")
     from snakebot.tuning.config_edit import set_table_values

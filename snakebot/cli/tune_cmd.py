@@ -9,7 +9,20 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, positive_float, print_json, write_report
+from snakebot.cli.common import (
+    RATE_HZ,
+    add_robot_option,
+    bounded_float,
+    check_folder,
+    check_writable,
+    finite_float,
+    port_arg,
+    positive_float,
+    positive_int,
+    print_json,
+    robot_name,
+    write_report,
+)
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError, SafetyLimitError
 from snakebot.gaits import get_spec, parse_set_options
@@ -56,7 +69,7 @@ def _add_gait_parser(commands: Any) -> None:
     parser.add_argument("--objective", choices=OBJECTIVES, default="speed")
     parser.add_argument(
         "--heading",
-        type=float,
+        type=finite_float,
         default=0.0,
         metavar="DEG",
         help="world direction for speed_toward_heading (0 = +x, the head's start direction)",
@@ -64,14 +77,14 @@ def _add_gait_parser(commands: Any) -> None:
     parser.add_argument("--method", choices=METHODS, default="cmaes")
     parser.add_argument(
         "--budget",
-        type=int,
+        type=positive_int,
         help="most evaluations (default: "
         + ", ".join(f"{m} {n}" for m, n in DEFAULT_BUDGET.items())
         + ")",
     )
     parser.add_argument(
         "--workers",
-        type=int,
+        type=positive_int,
         default=min(2, os.cpu_count() or 1),
         help="parallel simulations (default: 2, or 1 on a 1-core machine)",
     )
@@ -82,7 +95,7 @@ def _add_gait_parser(commands: Any) -> None:
         default=10.0,
         help="seconds per evaluation, as `snakebot run --duration` (default 10)",
     )
-    parser.add_argument("--rate", type=positive_float, default=100.0, help="control rate in Hz")
+    parser.add_argument("--rate", type=RATE_HZ, default=100.0, help="control rate in Hz")
     parser.add_argument("--friction", metavar="AXIAL,LATERAL", help="override the ground model")
     parser.add_argument(
         "--engine",
@@ -117,7 +130,8 @@ def run_gait(args: argparse.Namespace) -> int:
     from snakebot.tuning.space import build_space, parse_bounds, tuning_base
     from snakebot.tuning.tuner import DEFAULT_BUDGET, save_best_gait, tune_gait
 
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=False, what="tune gait"))
+    _check_outputs(args)
     fixed = parse_set_options(args.gait, args.set)
     base = tuning_base(args.gait, robot.joint_count, fixed)
     names = [p.strip() for p in args.params.split(",")] if args.params else None
@@ -183,9 +197,9 @@ def _add_gains_parser(commands: Any) -> None:
         "whose steps overshoot at most --max-overshoot and settle, and whose gait never holds "
         "a joint at its torque limit for long; writes it to the robot file's [gains].",
     )
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    parser.add_argument("--port", help="serial port for --backend dynamixel")
+    parser.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     parser.add_argument("--joints", help="joint indices to step-test, e.g. 0,3 (default all)")
     parser.add_argument(
@@ -198,8 +212,10 @@ def _add_gains_parser(commands: Any) -> None:
         metavar="RAD",
         help="step size (default 0.2 rad on sim, 0.1 rad on hardware)",
     )
-    parser.add_argument("--max-overshoot", type=float, default=0.10, metavar="FRACTION")
-    parser.add_argument("--budget", type=int, help="candidates (default 20 sim, 9 hardware)")
+    parser.add_argument("--max-overshoot", type=bounded_float(0.0, 1.0), default=0.10,
+                        metavar="FRACTION")
+    parser.add_argument("--budget", type=positive_int,
+                        help="candidates (default 20 sim, 9 hardware)")
     parser.add_argument(
         "--i-values",
         help="Position I values to try, e.g. 0,100 (default: "
@@ -217,14 +233,15 @@ def run_gains(args: argparse.Namespace) -> int:
     from snakebot.tuning.gains import GainTest
     from snakebot.tuning.progress import gain_line, gains_summary_text
 
-    robot = load_robot(args.robot)
+    hardware = args.backend == "dynamixel"
+    robot = load_robot(robot_name(args, hardware=hardware, what="tune gains --backend dynamixel"))
+    _check_outputs(args)
     joints = tuple(range(robot.joint_count))
     if args.joints:
-        joints = tuple(_indices(args.joints, robot.joint_count))
+        joints = tuple(_indices("--joints", args.joints, robot.joint_count))
     gait = args.gait or (
         "sidewinding" if any(j.axis == "pitch" for j in robot.joints) else "serpenoid"
     )
-    hardware = args.backend == "dynamixel"
     test = GainTest(
         joints=joints,
         gait=gait,
@@ -236,7 +253,7 @@ def run_gains(args: argparse.Namespace) -> int:
         from snakebot.tuning.plots import pyplot
 
         pyplot()
-    i_values = _indices(args.i_values, 16384) if args.i_values else []
+    i_values = _indices("--i-values", args.i_values, 16384) if args.i_values else []
     budget = args.budget or (9 if hardware else 20)
 
     def progress(done: int, total: int, score: Any, best: Any) -> None:
@@ -280,12 +297,20 @@ def _gain_session(robot: Any, args: argparse.Namespace, stack: contextlib.ExitSt
     return lambda: held(backend)
 
 
-def _indices(text: str, count: int) -> list[int]:
+def _indices(option: str, text: str, count: int) -> list[int]:
     try:
         values = [int(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise ConfigError("--joints", text, "expected comma-separated integers") from None
+        raise ConfigError(option, text, "expected comma-separated integers") from None
     bad = [v for v in values if not 0 <= v < count]
     if bad or not values:
-        raise ConfigError("--joints", text, f"expected integers in 0..{count - 1}")
+        raise ConfigError(option, text, f"expected integers in 0..{count - 1}")
     return values
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse an unwritable --out or --report before any tuning (which takes minutes)."""
+    if getattr(args, "out", None) is not None:
+        check_writable(args.out, "gait file")
+    if args.report is not None:
+        check_folder(args.report, "report")

@@ -1,13 +1,34 @@
-"""Strict reading of one TOML table: typed fields, ranges, and unknown-key errors with key paths."""
+"""Strict reading of TOML files and tables: typed fields, ranges, unknown keys, key-path errors."""
 
 from __future__ import annotations
 
 import math
+import tomllib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from snakebot.config.bounds import Bounds
 from snakebot.errors import ConfigError
+
+
+def read_toml(path: Path) -> dict[str, Any]:
+    """A TOML file's top-level table; ConfigError naming the file if it cannot be read, is not
+    UTF-8 text (a binary file, another encoding) or is not valid TOML."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(path, "", f"cannot read: {exc.strerror or exc}") from exc
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason}); a config file is TOML text"
+        ) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(path, "", f"not valid TOML: {exc}") from exc
 
 
 class Table:
@@ -46,14 +67,19 @@ class Table:
         minimum: float | None = None,
         maximum: float | None = None,
         positive: bool = False,
+        within: Bounds | None = None,
     ) -> float:
-        """A finite float within the given bounds."""
+        """A finite float within the given bounds (``within``: a documented range)."""
         value = self._get(key, _REQUIRED if default is None else default)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(key, f"expected a number, got {value!r}")
         value = float(value)
         if not math.isfinite(value):
             raise self.error(key, f"expected a finite number, got {value!r}")
+        if within is not None and not within.contains(value):
+            raise self.error(
+                key, f"expected a number in {within.describe()} ({within.why}), got {value!r}"
+            )
         if positive and value <= 0:
             raise self.error(key, f"expected a positive number, got {value!r}")
         if minimum is not None and value < minimum:
@@ -70,11 +96,16 @@ class Table:
         minimum: int | None = None,
         maximum: int | None = None,
         choices: Sequence[int] | None = None,
+        within: Bounds | None = None,
     ) -> int:
-        """An integer within the given bounds or choices."""
+        """An integer within the given bounds or choices (``within``: a documented range)."""
         value = self._get(key, _REQUIRED if default is None else default)
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.error(key, f"expected an integer, got {value!r}")
+        if within is not None and not within.contains(value):
+            raise self.error(
+                key, f"expected an integer in {within.describe()} ({within.why}), got {value!r}"
+            )
         if choices is not None and value not in choices:
             raise self.error(key, f"expected one of {list(choices)}, got {value!r}")
         if minimum is not None and value < minimum:
@@ -84,10 +115,14 @@ class Table:
         return value
 
     def text(self, key: str, default: Any = None, *, choices: Sequence[str] | None = None) -> str:
-        """A string, optionally one of ``choices``."""
+        """A non-empty string without control characters, optionally one of ``choices``."""
         value = self._get(key, _REQUIRED if default is None else default)
         if not isinstance(value, str):
             raise self.error(key, f"expected a string, got {value!r}")
+        if not value.strip():
+            raise self.error(key, f"expected a non-empty string, got {value!r}")
+        if any(ord(ch) < 0x20 or ord(ch) == 0x7F for ch in value):
+            raise self.error(key, f"expected a string without control characters, got {value!r}")
         if choices is not None and value not in choices:
             raise self.error(key, f"expected one of {list(choices)}, got {value!r}")
         return value
@@ -110,6 +145,10 @@ class Table:
                 raise ConfigError(self.source, f"{self._key(key)}[{index}]", "expected a table")
             out.append(Table(self.source, item, f"{self._key(key)}[{index}]"))
         return out
+
+    def mark_read(self, *keys: str) -> None:
+        """Count ``keys`` as read (another reader validates them)."""
+        self._seen.update(keys)
 
     def done(self) -> None:
         """Reject keys nobody read: a typo must not be silently ignored."""

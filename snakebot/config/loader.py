@@ -2,27 +2,35 @@
 
 from __future__ import annotations
 
-import math
 import os
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from snakebot.backends.base import ServoGains
-from snakebot.config.fields import Table
+from snakebot.config import bounds
+from snakebot.config.fields import Table, read_toml
+from snakebot.config.ports import check_port
 from snakebot.config.schema import (
-    MAX_ACTUATOR_DELAY_S,
     BusConfig,
     JointConfig,
     LinkConfig,
     RobotConfig,
     SafetyConfig,
     ServoModel,
-    ServoPhysics,
     TwinConfig,
 )
+from snakebot.config.servo_file import (
+    find_servo_file,
+    parse_gains,
+    parse_servo_file,
+    servo_file_name,
+    servo_table,
+)
+from snakebot.config.servo_settings import parse_settings
 from snakebot.errors import ConfigError
+from snakebot.servo_tables import ServoTable
+
+__all__ = ["BAUD_RATES", "load_robot", "load_servo_model", "robot_names", "servo_file_name"]
 
 BAUD_RATES = (9600, 57600, 115200, 1_000_000, 2_000_000, 3_000_000, 4_000_000, 4_500_000)
 
@@ -64,97 +72,56 @@ def resolve_robot_path(name_or_path: str | Path) -> Path:
     )
 
 
-def _read_toml(path: Path) -> dict[str, Any]:
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except OSError as exc:
-        raise ConfigError(path, "", f"cannot read: {exc.strerror}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(path, "", f"not valid TOML: {exc}") from exc
-
-
-def servo_file_name(model: str) -> str:
-    """File stem of a servo model: ``XL430-W250`` -> ``xl430-w250``."""
-    return model.strip().lower().replace("_", "-")
-
-
 def load_servo_model(model: str, robot_path: Path) -> ServoModel:
     """Read ``servos/<model>.toml`` beside the robot's folder (or on the search path)."""
-    stem = servo_file_name(model)
     folders = [robot_path.resolve().parent.parent, *config_search_path()]
-    for folder in folders:
-        path = folder / "servos" / f"{stem}.toml"
-        if path.is_file():
-            return _parse_servo(path)
-    raise ConfigError(robot_path, "servo", f"no servo file servos/{stem}.toml for model {model!r}")
-
-
-def _parse_servo(path: Path) -> ServoModel:
-    root = Table(path, _read_toml(path))
-    name = root.text("model")
-    model_number = root.integer("model_number", minimum=0)
-    phys = root.table("physics")
-    physics = ServoPhysics(
-        stall_torque_nm=phys.number("stall_torque_nm", positive=True),
-        no_load_speed_rad_s=phys.number("no_load_speed_rad_s", positive=True),
-        nominal_voltage_v=phys.number("nominal_voltage_v", positive=True),
-        supply_voltage_v=phys.number("supply_voltage_v", positive=True),
-        armature_kgm2=phys.number("armature_kgm2", minimum=0.0),
-        friction_loss_nm=phys.number("friction_loss_nm", minimum=0.0),
-        viscous_damping_nms=phys.number("viscous_damping_nms", minimum=0.0),
-        ticks_per_rev=phys.integer("ticks_per_rev", minimum=1),
-        pwm_limit=phys.integer("pwm_limit", minimum=1),
-        d_gain_loop_period_s=phys.number("d_gain_loop_period_s", positive=True),
-    )
-    phys.done()
-    gains = _parse_gains(root.table("default_gains"))
-    # Later sections (settings to flash) are read by the servo-setup tools, not here.
-    root._seen.update(k for k in root.data if k not in root._seen)
-    return ServoModel(name, model_number, physics, gains, path)
-
-
-def _parse_gains(table: Table) -> ServoGains:
-    gains = ServoGains(
-        position_p=table.integer("position_p", minimum=0, maximum=16383),
-        position_i=table.integer("position_i", 0, minimum=0, maximum=16383),
-        position_d=table.integer("position_d", 0, minimum=0, maximum=16383),
-    )
-    table.done()
-    return gains
+    return parse_servo_file(find_servo_file(model, folders, robot_path))
 
 
 def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
     """``[twin.servo]``: servo parameters fitted by ``snakebot sysid``; the twin uses them."""
     physics = servo.physics
+
+    def number(key: str, default: float | None) -> float:
+        return table.number(key, default, within=bounds.ROBOT[f"twin.servo.{key}"])
+
     fitted = replace(
         physics,
-        stiffness_scale=table.number("stiffness_scale", 1.0, positive=True),
-        damping_nms=table.number("damping_nms", -1.0) if table.has("damping_nms") else None,
-        armature_kgm2=table.number("armature_kgm2", physics.armature_kgm2, minimum=0.0),
-        friction_loss_nm=table.number("friction_loss_nm", physics.friction_loss_nm, minimum=0.0),
+        stiffness_scale=number("stiffness_scale", 1.0),
+        damping_nms=number("damping_nms", None) if table.has("damping_nms") else None,
+        armature_kgm2=number("armature_kgm2", physics.armature_kgm2),
+        friction_loss_nm=number("friction_loss_nm", physics.friction_loss_nm),
         actuator_delay_s=(
-            table.number("actuator_delay_s", minimum=0.0, maximum=MAX_ACTUATOR_DELAY_S)
-            if table.has("actuator_delay_s")
-            else None
+            number("actuator_delay_s", None) if table.has("actuator_delay_s") else None
         ),
     )
-    if fitted.damping_nms is not None and fitted.damping_nms < 0:
-        raise table.error("damping_nms", f"expected a number >= 0, got {fitted.damping_nms}")
     table.done()
     return replace(servo, physics=fitted)
 
 
 def load_robot(name_or_path: str | Path) -> RobotConfig:
-    """Load and validate a robot by name (``snake8``) or path; errors name file and key path."""
+    """Load and validate a robot by name (``snake8``) or path.
+
+    Every key of the robot file and of its servo file is checked (ranges in
+    snakebot.config.bounds, settings against the servo's control table); ConfigError names the
+    file and the key path of the first problem, including a key that is not known.
+    """
     path = resolve_robot_path(name_or_path)
-    root = Table(path, _read_toml(path))
+    root = Table(path, read_toml(path))
+    limits = bounds.ROBOT
+
+    def number(table: Table, key: str, default: float | None = None) -> float:
+        return table.number(key, default, within=limits[f"{table.path}.{key}"])
+
     name = root.text("name", path.stem)
     servo = load_servo_model(root.text("servo"), path)
+    control_table = servo_table(servo.name, servo.source)
 
     bus_t = root.table("bus")
     bus = BusConfig(
-        port=bus_t.text("port", "/dev/ttyUSB0"),
+        port=check_port(
+            bus_t.text("port", "/dev/ttyUSB0"), source=path, key="bus.port", allow_emulator=False
+        ),
         baud=bus_t.integer("baud", 1_000_000, choices=BAUD_RATES),
         protocol=bus_t.number("protocol", 2.0),
     )
@@ -164,9 +131,9 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
 
     link_t = root.table("link")
     link = LinkConfig(
-        length_m=link_t.number("length_m", positive=True, maximum=1.0),
-        radius_m=link_t.number("radius_m", positive=True),
-        mass_kg=link_t.number("mass_kg", positive=True),
+        length_m=number(link_t, "length_m"),
+        radius_m=number(link_t, "radius_m"),
+        mass_kg=number(link_t, "mass_kg"),
     )
     if 2 * link.radius_m >= link.length_m:
         raise link_t.error(
@@ -176,69 +143,90 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         )
     link_t.done()
 
-    joints = _parse_joints(root)
-    gains = _parse_gains(root.table("gains")) if root.has("gains") else servo.default_gains
-    if not root.has("gains"):
-        root._seen.add("gains")
+    joints = _parse_joints(root, control_table)
+    gains = parse_gains(root.table("gains")) if root.has("gains") else servo.default_gains
+    root.mark_read("gains")
 
     safety_t = root.table("safety", required=False)
     safety = SafetyConfig(
-        ramp_s=safety_t.number("ramp_s", 1.0, minimum=0.0),
-        max_speed_fraction=safety_t.number("max_speed_fraction", 0.9, positive=True, maximum=1.0),
+        ramp_s=number(safety_t, "ramp_s", 1.0),
+        max_speed_fraction=number(safety_t, "max_speed_fraction", 0.9),
         stop_policy=safety_t.text("stop_policy", "hold", choices=("hold", "limp")),  # type: ignore[arg-type]
     )
     safety_t.done()
 
     twin_t = root.table("twin", required=False)
     twin = TwinConfig(
-        timestep_s=twin_t.number("timestep_s", 0.002, positive=True, maximum=0.02),
+        timestep_s=number(twin_t, "timestep_s", 0.002),
         ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
-        axial_friction=twin_t.number("axial_friction", 1.0, minimum=0.0),
-        lateral_friction=twin_t.number("lateral_friction", 1.0, minimum=0.0),
+        axial_friction=number(twin_t, "axial_friction", 1.0),
+        lateral_friction=number(twin_t, "lateral_friction", 1.0),
     )
     servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
     twin_t.done()
-    root._seen.add("settings")  # servo settings overrides, read by snakebot.setup
+    # Servo settings for the whole chain; merged per servo and checked against the backend's
+    # connect checks by snakebot.setup (config diff/apply, calibrate).
+    parse_settings(path, "settings", root.data.get("settings", {}), control_table)
+    root.mark_read("settings")
     root.done()
     return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin)
 
 
-def _parse_joints(root: Table) -> tuple[JointConfig, ...]:
+def _joint_fields(table: Table) -> dict[str, Any]:
+    """The per-joint fields present in ``table`` (a joint, or ``[joint_defaults]``), checked."""
+    fields: dict[str, Any] = {}
+    for key in ("servo_id", "axis", "zero_offset_rad", "direction", "lower_rad", "upper_rad"):
+        if not table.has(key):
+            continue
+        if key == "axis":
+            fields[key] = table.text(key, choices=("yaw", "pitch"))
+        elif key == "direction":
+            fields[key] = table.integer(key, choices=(1, -1))
+        elif key == "servo_id":
+            fields[key] = table.integer(key, within=bounds.ROBOT["joints[].servo_id"])
+        else:
+            fields[key] = table.number(key, within=bounds.ROBOT[f"joints[].{key}"])
+    return fields
+
+
+def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, ...]:
+    # Defaults are checked where they are written, so an error names joint_defaults.<key>.
     defaults_t = root.table("joint_defaults", required=False)
-    defaults = {key: defaults_t.data[key] for key in defaults_t.data}
-    defaults_t._seen.update(defaults)
-    allowed = {"axis", "zero_offset_rad", "direction", "lower_rad", "upper_rad"}
-    for key in defaults:
-        if key not in allowed:
-            raise defaults_t.error(
-                key, f"unknown key (known keys here: {', '.join(sorted(allowed))})"
-            )
+    defaults = _joint_fields(defaults_t)
+    if "servo_id" in defaults:
+        raise defaults_t.error("servo_id", "every joint has its own servo_id; set it per joint")
+    defaults_t.done()
     joints = []
     seen_ids: dict[int, int] = {}
     items = root.tables("joints")
-    if not 2 <= len(items) <= 64:
-        raise root.error("joints", f"expected 2 to 64 joints, got {len(items)}")
+    fewest, most = bounds.JOINT_COUNT
+    if not fewest <= len(items) <= most:
+        raise root.error("joints", f"expected {fewest} to {most} joints, got {len(items)}")
     for index, item in enumerate(items):
-        merged = Table(item.source, {**defaults, **item.data}, item.path)
-        servo_id = merged.integer("servo_id", minimum=0, maximum=252)
+        fields = {**defaults, **_joint_fields(item)}
+        for key in ("servo_id", "axis", "lower_rad", "upper_rad"):
+            if key not in fields:
+                raise item.error(key, "missing (required; lower_rad, upper_rad and axis may come "
+                                 "from [joint_defaults])")
+        servo_id = fields["servo_id"]
         if servo_id in seen_ids:
-            raise merged.error(
+            raise item.error(
                 "servo_id", f"servo ID {servo_id} is already used by joints[{seen_ids[servo_id]}]"
             )
         seen_ids[servo_id] = index
         joint = JointConfig(
             servo_id=servo_id,
-            axis=merged.text("axis", choices=("yaw", "pitch")),  # type: ignore[arg-type]
-            zero_offset_rad=merged.number(
-                "zero_offset_rad", 0.0, minimum=-math.pi, maximum=math.pi
-            ),
-            direction=merged.integer("direction", 1, choices=(1, -1)),
-            lower_rad=merged.number("lower_rad", minimum=-math.pi, maximum=0.0),
-            upper_rad=merged.number("upper_rad", minimum=0.0, maximum=math.pi),
+            axis=fields["axis"],
+            zero_offset_rad=fields.get("zero_offset_rad", 0.0),
+            direction=fields.get("direction", 1),
+            lower_rad=fields["lower_rad"],
+            upper_rad=fields["upper_rad"],
         )
         if joint.upper_rad - joint.lower_rad <= 0:
-            raise merged.error("upper_rad", "expected upper_rad > lower_rad")
-        merged._seen.add("settings")  # per-joint servo settings, read by snakebot.setup
-        merged.done()
+            raise item.error("upper_rad", "expected upper_rad > lower_rad")
+        parse_settings(Path(root.source), f"{item.path}.settings", item.data.get("settings", {}),
+                       control_table)
+        item.mark_read("settings")
+        item.done()
         joints.append(joint)
     return tuple(joints)

@@ -17,7 +17,7 @@ from snakebot.backends.dynamixel.checks import check_settings
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 from snakebot.setup.errors import SetupError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings
@@ -109,7 +109,11 @@ def write_offsets(robot: RobotConfig, zeros: Sequence[JointZero]) -> None:
                              [format_float(z.new_offset_rad) for z in zeros])
     except ValueError as exc:
         raise ConfigError(path, "joints", str(exc)) from None
-    write_atomic(path, text)
+    try:
+        write_atomic(path, text)
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the offsets ({exc.strerror or exc}); the file is "
+                          "unchanged") from exc
     try:
         loaded = load_robot(path)
         ok = all(math.isclose(j.zero_offset_rad, float(format_float(z.new_offset_rad)))

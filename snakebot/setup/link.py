@@ -1,8 +1,9 @@
 """One serial port for the setup tools: a DynamixelBus whose baud rate they switch, raw probes.
 
-Ports with a URL scheme (``dxlemu://bus0`` for the in-process emulator, ``spy:///dev/ttyUSB0?
-file=dump.txt`` for a traffic dump) open through pyserial's ``serial_for_url``; device paths
-(``/dev/ttyUSB0``, ``COM3``) through the SDK's own port handler.
+Device paths (``/dev/ttyUSB0``, ``COM3``) open through the SDK's own port handler, the emulator's
+``dxlemu://NAME`` URLs through pyserial's ``serial_for_url``. Any other URL is refused before
+anything opens (snakebot.config.ports, checked by DynamixelBus): ``socket://`` would connect to a
+host, ``spy://...?file=`` truncate a file.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from types import TracebackType
 from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError
+from snakebot.config.ports import url_scheme
 from snakebot.errors import BusError
 
 SEARCH_BAUDS = (57600, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
@@ -22,8 +24,8 @@ SEARCH_BAUDS = (57600, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 
 
 def port_handler_factory(port: str) -> sdk.PortHandlerFactory:
-    """The SDK port handler class for ``port``: pyserial URLs via the emulator's handler."""
-    if "://" in port:
+    """The SDK port handler class for ``port``: ``dxlemu://`` URLs via the emulator's handler."""
+    if url_scheme(port) is not None:
         from snakebot.emulation.port import EmulatedPortHandler
 
         return EmulatedPortHandler
@@ -77,11 +79,16 @@ class Link:
     def __init__(self, port: str, baud: int, *, model: str | int = "XL430-W250",
                  retries: int = 2) -> None:
         self.port = port
-        self.handler = port_handler_factory(port)(port)
+        self.handler: sdk.PortHandlerLike
+        # The bus checks the port (snakebot.config.ports) before it builds the handler.
         self.bus = DynamixelBus(port, baud, model=model, retries=retries,
-                                port_handler_factory=lambda _name: self.handler)
+                                port_handler_factory=self._make_handler)
         self._raw = sdk.SdkLink(self.handler, 2.0)
         self._open = False
+
+    def _make_handler(self, port: str) -> sdk.PortHandlerLike:
+        self.handler = port_handler_factory(port)(port)
+        return self.handler
 
     def __enter__(self) -> Link:
         self.at(self.bus.baud)

@@ -3,10 +3,16 @@
 A returned ``write()`` is in the kernel's page cache, which survives a process crash; a power cut
 needs ``fsync``, which ``close`` does. Only a partially written last line can be torn; the reader
 drops it. (telemetry.md: CSV + per-record write lost 0 records under SIGKILL at 1 kHz.)
+
+A failed write (disk full, a device like /dev/full, a file-size limit: CPython ignores SIGXFSZ,
+so ``ulimit -f`` fails the write with EFBIG instead of killing the process) raises
+:class:`~snakebot.errors.OutputError` naming the file; the rows before it stay on disk.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,7 +20,7 @@ from types import TracebackType
 
 import numpy as np
 
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 
 
 def column_names(joint_count: int) -> list[str]:
@@ -26,20 +32,27 @@ def column_names(joint_count: int) -> list[str]:
 
 
 class CsvTelemetryWriter:
-    """Appends one row per control cycle to ``path`` (created or truncated)."""
+    """Appends one row per control cycle to ``path`` (created or truncated).
+
+    OutputError naming the file if it cannot be created or a write fails.
+    """
 
     def __init__(self, path: str | Path, joint_count: int) -> None:
         self.path = Path(path)
         self.joint_count = joint_count
+        self.rows = 0
+        self._fd: int | None = None
         try:
+            if self.path.parent.exists() and not self.path.parent.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, "Not a directory", str(self.path.parent))
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fd: int | None = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            _write_all(self._fd, (",".join(column_names(joint_count)) + "\n").encode())
         except OSError as exc:
-            raise ConfigError(str(path), "", f"cannot write log file: {exc.strerror}") from exc
+            self._close_quietly()
+            raise OutputError(self.path, f"cannot write log file: {_reason(exc)}") from exc
         values = 4 * joint_count + 3
         self._format = "%.6f,%d," + ",".join(["%.6g"] * values) + "\n"
-        os.write(self._fd, (",".join(column_names(joint_count)) + "\n").encode())
-        self.rows = 0
 
     def write(
         self,
@@ -56,15 +69,34 @@ class CsvTelemetryWriter:
             raise ValueError(f"telemetry log {self.path} is closed")
         com_values = _NAN3 if com is None else com
         row = np.concatenate((command, position, velocity, effort, com_values)).tolist()
-        os.write(self._fd, (self._format % (time_s, cycle, *row)).encode())
+        try:
+            _write_all(self._fd, (self._format % (time_s, cycle, *row)).encode())
+        except OSError as exc:
+            raise OutputError(
+                self.path,
+                f"cannot write telemetry row {self.rows}: {_reason(exc)}; the {self.rows} rows "
+                "before it are on disk",
+            ) from exc
         self.rows += 1
 
     def close(self) -> None:
-        """Flush to disk and close; idempotent."""
-        if self._fd is not None:
+        """Flush to disk and close; idempotent. OutputError if the flush fails (the file is
+        closed all the same)."""
+        if self._fd is None:
+            return
+        try:
             os.fsync(self._fd)
-            os.close(self._fd)
-            self._fd = None
+        except OSError as exc:
+            if exc.errno not in (errno.EINVAL, errno.EROFS):  # a pipe or device: nothing to sync
+                self._close_quietly()
+                raise OutputError(self.path, f"cannot flush log file: {_reason(exc)}") from exc
+        self._close_quietly()
+
+    def _close_quietly(self) -> None:
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            with contextlib.suppress(OSError):
+                os.close(fd)
 
     def __enter__(self) -> CsvTelemetryWriter:
         return self
@@ -81,15 +113,32 @@ class CsvTelemetryWriter:
 _NAN3 = np.full(3, np.nan)
 
 
+def _write_all(fd: int, data: bytes) -> None:
+    # A write cut short (a file-size limit reached mid-row) is retried so that the error of the
+    # next attempt surfaces; the reader drops the torn row it leaves.
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or str(exc)
+
+
 @dataclass(frozen=True)
 class TelemetryLog:
-    """A log read back: column names and a (rows, columns) float array."""
+    """A log read back: column names and a (rows, columns) float array; ``source`` its file."""
 
     columns: list[str]
     values: np.ndarray
+    source: str = ""
 
     def column(self, name: str) -> np.ndarray:
-        """One column by name."""
+        """One column by name; ConfigError naming the file if the log has no such column."""
+        if name not in self.columns:
+            raise ConfigError(
+                self.source or "telemetry log", name, "missing column (not a snakebot log?)"
+            )
         return self.values[:, self.columns.index(name)]
 
     def joints(self, prefix: str) -> np.ndarray:
@@ -99,14 +148,44 @@ class TelemetryLog:
 
 
 def read_log(path: str | Path) -> TelemetryLog:
-    """Read a telemetry CSV, dropping a torn last line left by a killed writer."""
-    text = Path(path).read_text()
+    """Read a telemetry CSV, dropping a torn last line left by a killed writer.
+
+    ConfigError naming the file (and the line and column) if it cannot be read, is not UTF-8
+    text, or holds a value that is not a number.
+    """
+    source = str(path)
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise ConfigError(source, "", f"cannot read telemetry log: {_reason(exc)}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            source, "", f"not a telemetry log: not UTF-8 text (byte {exc.start}: {exc.reason})"
+        ) from None
     lines = text.split("\n")
-    if not lines or not lines[0]:
-        raise ConfigError(str(path), "", "empty telemetry log (no header)")
+    if not lines[0]:
+        raise ConfigError(source, "", "empty telemetry log (no header)")
     columns = lines[0].split(",")
     # The last element is "" after a complete file, or a line torn by a kill: drop it either way.
-    rows = [line.split(",") for line in lines[1:-1] if line]
-    rows = [r for r in rows if len(r) == len(columns)]
-    values = np.array(rows, dtype=float).reshape(len(rows), len(columns))
-    return TelemetryLog(columns, values)
+    rows = [(number, line.split(",")) for number, line in enumerate(lines[1:-1], 2) if line]
+    rows = [(number, cells) for number, cells in rows if len(cells) == len(columns)]
+    values = np.empty((len(rows), len(columns)))
+    for index, (number, cells) in enumerate(rows):
+        try:
+            values[index] = [float(cell) for cell in cells]
+        except ValueError:
+            column, cell = next(
+                (c, v) for c, v in zip(columns, cells, strict=True) if not _is_number(v)
+            )
+            raise ConfigError(
+                source, f"line {number}, column {column}", f"expected a number, got {cell!r}"
+            ) from None
+    return TelemetryLog(columns, values, source)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -17,6 +17,7 @@ from snakebot.backends.dynamixel.blocks import Block, encode_checked, encode_row
 from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.backends.dynamixel.plans import SyncReadPlan, SyncWritePlan
 from snakebot.backends.dynamixel.transport import Transport
+from snakebot.config.ports import check_port
 from snakebot.errors import BusError
 from snakebot.servo_tables import ServoTable, table_for_model
 
@@ -32,7 +33,8 @@ class DynamixelBus:
     ``model`` picks the control table that register names resolve in (X-series servos share
     addresses). ``port_handler_factory`` builds the SDK port handler from the port name, e.g. the
     emulator's ``EmulatedPortHandler``; default ``dynamixel_sdk.PortHandler``. ``clock`` (s) stamps
-    ``last_instruction_s``.
+    ``last_instruction_s``. ``port`` must pass ``snakebot.config.ports.check_port`` (a device path
+    or a ``dxlemu://`` URL), else ConfigError before anything is opened.
     """
 
     def __init__(
@@ -50,6 +52,7 @@ class DynamixelBus:
         self.baud = baud
         self.protocol = protocol
         self.table: ServoTable = table_for_model(model)
+        check_port(port)  # device paths and dxlemu:// only: no socket://, spy://?file=, ...
         factory = port_handler_factory or sdk.default_port_handler
         self._link = sdk.SdkLink(factory(port), protocol)
         self.transport = Transport(port, self._link, retries, clock)

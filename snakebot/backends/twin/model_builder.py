@@ -8,6 +8,7 @@ friction (axial, lateral) gives friction along and across each module (locomotio
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -195,7 +196,26 @@ def build_model(
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
 ) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
-    """Compile the twin of ``robot``; returns the model and the spec it came from."""
+    """Compile the twin of ``robot``; returns the model and the spec it came from.
+
+    ConfigError naming the robot file if MuJoCo refuses the model (see :func:`compile_spec`).
+    """
     spec = build_spec(robot, friction=friction, timestep_s=timestep_s)
     add_actuators(spec, robot)
-    return spec.compile(), spec
+    return compile_spec(spec, robot), spec
+
+
+# Which robot-file table a MuJoCo element named in a compile error comes from.
+_ELEMENT_KEYS = {"link": "link", "joint": "joints", "servo": "gains", "floor": "twin"}
+
+
+def compile_spec(spec: mujoco.MjSpec, robot: RobotConfig) -> mujoco.MjModel:
+    """``spec.compile()``, with MuJoCo's refusal (a mass or size it cannot use, say) raised as a
+    ConfigError naming the robot file and the table the offending element comes from."""
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        text = " ".join(str(exc).replace("Error:", "").split())
+        element = re.search(r"Element name '([A-Za-z_]+?)\d*'", text)
+        key = _ELEMENT_KEYS.get(element.group(1), "") if element else ""
+        raise ConfigError(robot.source, key, f"MuJoCo cannot compile the twin: {text}") from None

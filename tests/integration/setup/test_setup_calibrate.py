@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import stat
 from dataclasses import replace
 from pathlib import Path
 
@@ -95,3 +96,26 @@ def test_dry_run_and_no_terminal_write_nothing(snake: Bus, cli: Cli, robot_file:
     code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", snake.url)
     assert code == 1 and "pass --yes" in err
     assert robot_file.read_text() == text
+
+
+@pytest.mark.parametrize("mode", [0o644, 0o664, 0o640], ids=oct)
+def test_the_robot_file_keeps_its_permissions(
+    snake: Bus, cli: Cli, robot_file: Path, mode: int
+) -> None:
+    lay_straight(snake)
+    robot_file.chmod(mode)
+    code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", snake.url, "--yes")
+    assert code == 0, err
+    assert stat.S_IMODE(robot_file.stat().st_mode) == mode
+    assert load_robot(robot_file).joints[3].zero_offset_rad == pytest.approx(0.2, abs=2e-3)
+    assert sorted(p.name for p in robot_file.parent.iterdir()) == ["snake12.toml", "snake8.toml"]
+
+
+def test_a_linked_robot_file_stays_a_link(snake: Bus, cli: Cli, robot_file: Path) -> None:
+    lay_straight(snake)
+    link = robot_file.parent / "mine.toml"
+    link.symlink_to(robot_file.name)
+    code, _, err = cli("calibrate", "--robot", str(link), "--port", snake.url, "--yes")
+    assert code == 0, err
+    assert link.is_symlink()
+    assert load_robot(robot_file).joints[3].zero_offset_rad == pytest.approx(0.2, abs=2e-3)

@@ -43,7 +43,8 @@ def test_fresh_servos_plugged_in_one_at_a_time_keep_their_eeprom(tmp_path: Path,
         assert code == 0, err
         emu.proc.send_signal(signal.SIGUSR1)
         assert emu.event()["serial"] == 2
-        code, out, _ = cli("config", "assign-id", "--port", emu.port, "--from", "1", "--to", "1")
+        code, out, _ = cli("config", "assign-id", "--port", emu.port, "--from", "1", "--to", "1",
+                           "--robot", "snake12")
         assert code == 0
         assert out.strip() == "servo ID 1 at 57600 baud is now ID 1 at 1000000 baud"
     with emulator("--robot", "snake12", "--fresh", "2", "--state-file", state) as emu:

@@ -1,11 +1,14 @@
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 from snakebot.telemetry import CsvTelemetryWriter, column_names, read_log
 
 
@@ -34,8 +37,84 @@ def test_torn_last_line_is_dropped(tmp_path: Path) -> None:
     assert read_log(path).values.shape[0] == 3
 
 
-def test_unwritable_log_is_a_config_error(tmp_path: Path) -> None:
+def test_unwritable_log_is_an_output_error(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("")
-    with pytest.raises(ConfigError, match="cannot write log file"):
+    with pytest.raises(OutputError, match="cannot write log file"):
         CsvTelemetryWriter(blocker / "sub" / "run.csv", 2)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_full_device_is_an_output_error_naming_it() -> None:
+    with pytest.raises(OutputError, match=r"^/dev/full: cannot write log file: No space left"):
+        CsvTelemetryWriter("/dev/full", 2)
+
+
+# Writes rows until the file-size limit stops it (CPython ignores SIGXFSZ: the write fails).
+WRITER = """
+import sys
+import numpy as np
+from snakebot.errors import OutputError
+from snakebot.telemetry import CsvTelemetryWriter
+q = np.full(4, 0.123456)
+with CsvTelemetryWriter(sys.argv[1], 4) as log:
+    try:
+        for cycle in range(100000):
+            log.write(cycle * 0.01, cycle, q, q, q, q, None)
+    except OutputError as exc:
+        print(log.rows)
+        print(exc)
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="RLIMIT_FSIZE is POSIX")
+def test_a_file_size_limit_is_an_output_error_and_the_rows_before_it_stay(tmp_path: Path) -> None:
+    import resource
+
+    path = tmp_path / "run.csv"
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
+
+    done = subprocess.run(
+        [sys.executable, "-c", WRITER, str(path)], preexec_fn=limit, capture_output=True,
+        text=True, timeout=60, env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+    )
+    assert done.returncode == 0, done.stderr
+    rows, message = done.stdout.splitlines()
+    assert message.startswith(f"{path}: cannot write telemetry row {rows}: File too large")
+    assert path.stat().st_size == 20_000  # up to the limit, the last row torn
+    data = read_log(path)
+    assert data.values.shape[0] == int(rows) > 50
+    np.testing.assert_array_equal(data.column("cycle"), np.arange(int(rows)))
+
+
+def test_reading_a_missing_log_names_it(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="cannot read telemetry log") as info:
+        read_log(tmp_path / "nope.csv")
+    assert info.value.source == str(tmp_path / "nope.csv")
+
+
+def test_a_binary_file_is_not_a_log(tmp_path: Path) -> None:
+    path = tmp_path / "run.csv"
+    path.write_bytes(b"time_s,cycle\n\xff\xfe\x00\x01")
+    with pytest.raises(ConfigError, match="not UTF-8") as info:
+        read_log(path)
+    assert info.value.source == str(path)
+
+
+def test_a_value_that_is_not_a_number_names_line_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "run.csv"
+    path.write_text("time_s,cycle,position_rad_0\n0.0,0,0.1\n0.01,1,abc\n")
+    with pytest.raises(ConfigError, match="expected a number, got 'abc'") as info:
+        read_log(path)
+    assert info.value.key == "line 3, column position_rad_0"
+    assert info.value.source == str(path)
+
+
+def test_a_missing_column_names_file_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "run.csv"
+    path.write_text("cycle,position_rad_0\n0,0.1\n")
+    with pytest.raises(ConfigError, match="missing column") as info:
+        read_log(path).column("time_s")
+    assert (info.value.source, info.value.key) == (str(path), "time_s")

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from snakebot.servo_tables import table_for_model
-from snakebot.setup.units import UnitError, display, from_raw, parse_key, to_raw
+from snakebot.servo_tables.units import UnitError, display, from_raw, parse_key, to_raw
 
 TABLE = table_for_model("XL430-W250")
 

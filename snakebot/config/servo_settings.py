@@ -1,0 +1,101 @@
+"""Servo settings tables (``[settings]`` of servo and robot files, ``joints[].settings``): each key
+a control-table register, optionally with a unit suffix, each value inside the register's range.
+
+The robot-file loader checks every settings table with :func:`parse_settings` so that ``run`` and
+``model`` refuse what ``config diff`` would; snakebot.setup.settings merges them per servo and
+checks the result against what ``run --backend dynamixel`` accepts at connect.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from snakebot.errors import ConfigError
+from snakebot.servo_tables import Register, ServoTable
+from snakebot.servo_tables.units import Unit, UnitError, display, parse_key, to_raw
+
+GAIN_KEYS = {"position_p_gain": "position_p", "position_i_gain": "position_i",
+             "position_d_gain": "position_d"}
+DERIVED = {
+    "id": "comes from the robot file ([[joints]] servo_id)",
+    "baud_rate": "comes from the robot file ([bus] baud)",
+    **{key: f"comes from the robot file ([gains] {name})" for key, name in GAIN_KEYS.items()},
+}
+REFUSED = {
+    "torque_enable": "is switched by the tools (off for EEPROM writes), not a setting",
+    "protocol_type": "must stay 2: snakebot speaks Protocol 2.0 only",
+    "led": "is a status light, not a setting",
+}
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One wanted register value; ``unit`` is how the user wrote it, ``source`` where."""
+
+    register: Register
+    raw: int
+    unit: Unit | None
+    source: str
+    table: ServoTable
+
+    @property
+    def key(self) -> str:
+        """The register key, e.g. ``return_delay_time``."""
+        return self.register.key
+
+    @property
+    def eeprom(self) -> bool:
+        """Whether the register is in EEPROM (kept at power-off, writable only with torque off)."""
+        return self.register.eeprom
+
+    def show(self, raw: int) -> tuple[str, str]:
+        """A register value as (value, unit) in the unit the setting was written in."""
+        return display(self.register, self.unit, raw, self.table)
+
+
+def parse_settings(
+    source: Path, where: str, data: object, table: ServoTable
+) -> dict[str, Setting]:
+    """The settings table ``data`` found at key path ``where`` of ``source``, by register key.
+
+    ConfigError naming ``source`` and ``where.<key>`` for a key that names no register (or a
+    unit that does not fit it), a register the tools own (ID, baud, gains, torque), a read-only
+    or command register, a value that is not a number or outside the register's range, or a
+    register set twice.
+    """
+    if not isinstance(data, Mapping):
+        raise ConfigError(source, where, f"expected a table, got {type(data).__name__}")
+    out: dict[str, Setting] = {}
+    for key, value in data.items():
+        path = f"{where}.{key}"
+        try:
+            register, unit = parse_key(table, key)
+        except UnitError as exc:
+            raise ConfigError(source, path, str(exc)) from None
+        reason = DERIVED.get(register.key) or REFUSED.get(register.key)
+        if register.key.startswith("goal_"):
+            reason = "is a command, not a setting"
+        if not register.writable:
+            reason = "is read-only"
+        if reason:
+            raise ConfigError(source, path, f"{register.key} {reason}")
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ConfigError(source, path, f"expected a number, got {value!r}")
+        if not math.isfinite(value):
+            raise ConfigError(source, path, f"expected a finite number, got {value!r}")
+        try:
+            raw = to_raw(register, unit, value, table)
+        except UnitError as exc:
+            raise ConfigError(source, path, str(exc)) from None
+        if not register.minimum <= raw <= register.maximum:
+            low, high = (display(register, unit, r, table)[0] for r in
+                         (register.minimum, register.maximum))
+            raise ConfigError(source, path, f"{value} is outside {low}..{high} "
+                              f"{unit.symbol if unit else '(raw)'} for {table.model}")
+        if register.key in out:
+            raise ConfigError(source, path, f"{register.key} is set twice in [{where}]")
+        out[register.key] = Setting(register, raw, unit, f"{source.name} {path}", table)
+    return out

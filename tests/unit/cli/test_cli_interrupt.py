@@ -1,0 +1,47 @@
+"""Ctrl-C while the CLI starts up (imports, building the parser) ends like Ctrl-C anywhere else."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child needs POSIX")
+
+
+def imported(line: str) -> str:
+    """The module an ``-X importtime`` line reports (``import time: 12 | 34 |   name``)."""
+    return line.rsplit("|", 1)[-1].strip()
+
+
+@pytest.mark.parametrize(
+    "marker",
+    [
+        "snakebot.cli",  # importing snakebot.cli.main (python -m snakebot's own import)
+        "snakebot.cli.main",  # main() about to build the parser: every command module imports
+        "snakebot.control.runner",  # half way through those imports (run_cmd's)
+    ],
+)
+def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) -> None:
+    # -X importtime reports each module as it finishes importing: the signal goes out right after
+    # `marker` and lands in the start-up that follows it (building the parser alone takes ~0.5 s).
+    proc = subprocess.Popen(
+        [sys.executable, "-X", "importtime", "-m", "snakebot", "gaits"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    assert proc.stderr is not None
+    seen = []
+    for line in proc.stderr:
+        seen.append(line)
+        if imported(line) == marker:
+            proc.send_signal(signal.SIGINT)
+            break
+    out, err = proc.communicate(timeout=60)
+    assert marker in map(imported, seen)
+    assert "Traceback" not in err, err[-2000:]
+    assert err.rstrip().endswith("snakebot: interrupted")
+    assert proc.returncode == 130
+    assert out == ""  # interrupted before the gait list

@@ -1,0 +1,74 @@
+"""`snakebot run`'s outputs: one that cannot be written is exit 1 naming it, before the run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from snakebot.cli.main import main
+
+
+@pytest.fixture
+def blocker(tmp_path: Path) -> Path:
+    """A regular file where a folder should be."""
+    path = tmp_path / "blocker"
+    path.write_text("")
+    return path
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(["run", "--duration", "0.3", *argv])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_log_on_a_full_device(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = run(capsys, "--log", "/dev/full")
+    assert code == 1 and out == ""
+    assert err == "snakebot: error: /dev/full: cannot write log file: No space left on device\n"
+
+
+def test_a_log_under_a_file(capsys: pytest.CaptureFixture[str], blocker: Path) -> None:
+    code, _, err = run(capsys, "--log", str(blocker / "run.csv"))
+    assert code == 1
+    assert err == f"snakebot: error: {blocker}/run.csv: cannot write log file: Not a directory\n"
+
+
+@pytest.mark.parametrize(
+    ("video", "message"),
+    [
+        ("{blocker}/run.mp4", "{blocker}/run.mp4: cannot write the video: Not a directory"),
+        ("{tmp}/folder.mp4", "{tmp}/folder.mp4: cannot write the video: Is a directory"),
+        ("{tmp}/run.txt", "--video: {tmp}/run.txt: expected a video file name ending in .mp4"),
+        ("/dev/full", "--video: /dev/full: expected a video file name ending in .mp4"),
+    ],
+)
+def test_an_unwritable_video_stops_the_run_before_it_starts(
+    video: str, message: str, capsys: pytest.CaptureFixture[str], blocker: Path, tmp_path: Path
+) -> None:
+    paths = {"blocker": blocker, "tmp": tmp_path}
+    (tmp_path / "folder.mp4").mkdir()
+    log = tmp_path / "run.csv"
+    code, out, err = run(capsys, "--video", video.format(**paths), "--log", str(log))
+    assert code == 1 and out == ""
+    assert err.startswith(f"snakebot: error: {message.format(**paths)}")
+    assert not log.exists()  # refused before the run: no log either
+
+
+def test_video_renders_offscreen_without_a_display_or_mujoco_gl(tmp_path: Path) -> None:
+    video = tmp_path / "run.mp4"
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY")}
+    done = subprocess.run(
+        [sys.executable, "-m", "snakebot", "run", "--duration", "0.3", "--video", str(video)],
+        capture_output=True, text=True, timeout=120, env=env,
+    )
+    if sys.platform.startswith("linux"):
+        assert done.returncode == 0, done.stderr
+        assert video.stat().st_size > 1000
+    else:  # elsewhere MuJoCo's default platform renders, or it is a clear error
+        assert done.returncode in (0, 1), done.stderr
