@@ -6,6 +6,8 @@
   actuator with kp = k and kv = D: the actuator's ``ctrl`` is the spring's rest length L, so the
   force along the spring is exactly k (L - l) - D dl/dt.
 - Points reach the floor and the terrain (bit 1) but not each other.
+- A skin (snakebot.backends.softbody.skin) draws the body as a smooth surface; points and springs
+  sit in geom/tendon group 3, hidden by default (MuJoCo's viewer shows them on key 3).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import mujoco
 import numpy as np
 
 from snakebot.backends.softbody.lattice import Lattice, build_lattice, rest_positions
+from snakebot.backends.softbody.skin import add_skin
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.model_builder import SCENE_PATH
 from snakebot.config.body import BodyConfig
@@ -93,16 +96,22 @@ def build_body_spec(
             rgba=[0.8, 0.35, 0.3, 1] if index < 4 else [0.35, 0.3, 0.3, 1],
             group=3,  # hidden under the skin by default
         )
-        point.add_site(name=f"{point_name(index)}_site")
+        point.add_site(name=f"{point_name(index)}_site", group=3)
     stiffness, damping = body.stiffness_n_per_m, body.damping_ns_per_m
     for index, (a, b) in enumerate(lattice.springs):
-        tendon = spec.add_tendon(name=spring_name(index), rgba=[0.9, 0.8, 0.2, 1])
+        tendon = spec.add_tendon(name=spring_name(index), rgba=[0.9, 0.8, 0.2, 1], group=3)
         tendon.wrap_site(f"{point_name(int(a))}_site")
         tendon.wrap_site(f"{point_name(int(b))}_site")
         actuator = spec.add_actuator(name=spring_name(index), target=spring_name(index))
         actuator.trntype = mujoco.mjtTrn.mjTRN_TENDON
         actuator.set_to_position(kp=stiffness, kv=damping)
         actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    add_skin(
+        spec,
+        [point_name(i) for i in range(lattice.points)],
+        positions,
+        inflate_m=lat.point_radius_m,
+    )
     if terrain is not None:
         terrain.add_to(spec)
     length = body.body_length_m
