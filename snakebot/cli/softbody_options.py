@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import math
 
-from snakebot.backends.softbody import SoftBodyBackend
+import mujoco
+
+from snakebot.backends.softbody import SoftBodyBackend, build_body_spec
 from snakebot.backends.twin.cliff import Cliff, parse_terrain
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError
@@ -61,4 +63,21 @@ def make_softbody_backend(body: BodyConfig, args: argparse.Namespace) -> SoftBod
         directional=directional,
         terrain=terrain,
         realtime=bool(getattr(args, "realtime", False) or getattr(args, "viewer", False)),
+    )
+
+
+def softbody_spec(body: BodyConfig, args: argparse.Namespace) -> mujoco.MjSpec:
+    """The MjSpec ``snakebot model`` writes: the body with --friction and --terrain applied."""
+    friction, _directional, terrain = softbody_options(args)
+    return build_body_spec(body, friction=friction, terrain=terrain)
+
+
+def describe_body(body: BodyConfig) -> str:
+    """One line: segments, points, springs and their SI constants."""
+    segments = body.lattice.segments
+    springs = 6 * (segments + 1) + 12 * segments
+    return (
+        f"{segments} segments, {body.point_count} points, {springs} springs of "
+        f"{body.stiffness_n_per_m:.4g} N/m and {body.damping_ns_per_m:.4g} N·s/m "
+        f"(damping ratio {body.springs.damping_ratio:.2f}), {body.joint_count} channels"
     )

@@ -19,7 +19,8 @@ from snakebot.backends.softbody.lattice import CORNERS, FloatArray, IntArray
 
 _AROUND = 16  # skin vertices around the body
 _ALONG = 4  # skin rows per segment
-_CAP_REACH = 0.35  # caps bulge this fraction of a segment beyond the end rings
+_CAP_REACH = 0.4  # caps bulge this fraction of a segment beyond the end rings
+_CAP_ANGLES = (0.45, 0.9, 1.25)  # rad: cap rings on a quarter-circle profile
 
 
 def _cubic_basis(t: float) -> FloatArray:
@@ -69,28 +70,41 @@ def skin_mesh(rings: int, rest: FloatArray) -> SkinMesh:
     """The skin of a lattice with ``rings`` rings whose rest positions are ``rest`` (P, 3)."""
     along = _along_weights(rings, _ALONG)
     around = _around_weights(_AROUND)
-    rows = along.shape[0]
+    points = rings * CORNERS
     # Tube vertex (row, k) = sum over ring r and corner c of along[row, r] * around[k, c].
-    tube = np.einsum("ar,kc->akrc", along, around).reshape(rows * _AROUND, rings * CORNERS)
-    ring_mean = np.zeros((rings, rings * CORNERS))
+    tube = np.einsum("ar,kc->akrc", along, around).reshape(-1, _AROUND, points)
+    centre = np.zeros((rings, points))
     for r in range(rings):
-        ring_mean[r, CORNERS * r : CORNERS * (r + 1)] = 1.0 / CORNERS
-    head = (1 + _CAP_REACH) * ring_mean[0] - _CAP_REACH * ring_mean[1]
-    tail = (1 + _CAP_REACH) * ring_mean[-1] - _CAP_REACH * ring_mean[-2]
-    weights = np.vstack((tube, head, tail))
+        centre[r, CORNERS * r : CORNERS * (r + 1)] = 1.0 / CORNERS
+    head_axis, tail_axis = centre[0] - centre[1], centre[-1] - centre[-2]
+    # Round caps: rings shrinking towards a tip _CAP_REACH segments beyond the end ring.
+    head_rings = [_cap_ring(tube[0], centre[0], head_axis, angle) for angle in _CAP_ANGLES]
+    tail_rings = [_cap_ring(tube[-1], centre[-1], tail_axis, angle) for angle in _CAP_ANGLES]
+    strips = [*reversed(head_rings), *tube, *tail_rings]
+    tips = (centre[0] + _CAP_REACH * head_axis, centre[-1] + _CAP_REACH * tail_axis)
+    weights = np.vstack([*strips, tips[0], tips[1]])
+    count = len(strips)
     faces = []
-    for row in range(rows - 1):
+    for strip in range(count - 1):
         for k in range(_AROUND):
-            a, b = row * _AROUND + k, row * _AROUND + (k + 1) % _AROUND
+            a, b = strip * _AROUND + k, strip * _AROUND + (k + 1) % _AROUND
             c, d = a + _AROUND, b + _AROUND
             faces += [(a, b, c), (b, d, c)]
-    head_id, tail_id = rows * _AROUND, rows * _AROUND + 1
-    last = (rows - 1) * _AROUND
+    head_tip, tail_tip = count * _AROUND, count * _AROUND + 1
+    last = (count - 1) * _AROUND
     for k in range(_AROUND):
-        faces.append((head_id, (k + 1) % _AROUND, k))
-        faces.append((tail_id, last + k, last + (k + 1) % _AROUND))
+        faces.append((head_tip, (k + 1) % _AROUND, k))
+        faces.append((last + k, last + (k + 1) % _AROUND, tail_tip))
     mesh = SkinMesh(weights, np.array(faces, dtype=np.intp))
     return _outward(mesh, weights @ rest)
+
+
+def _cap_ring(edge: FloatArray, centre: FloatArray, axis: FloatArray, angle: float) -> FloatArray:
+    """Weights (AROUND, P) of a cap ring at ``angle`` rad over the end: a quarter-circle profile
+    from the end ring ``edge`` (AROUND, P) towards the tip along ``axis`` (P,) weights."""
+    radial, reach = np.cos(angle), np.sin(angle) * _CAP_REACH
+    ring: FloatArray = radial * edge + (1.0 - radial) * centre + reach * axis
+    return ring
 
 
 def _outward(mesh: SkinMesh, vertices: FloatArray) -> SkinMesh:
