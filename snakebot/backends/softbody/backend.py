@@ -11,6 +11,7 @@ times velocity is the muscles' power.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -32,6 +33,17 @@ _BAD_WARNINGS = np.array(
     ],
     dtype=int,
 )
+
+
+@dataclass(frozen=True)
+class _Snapshot:
+    """What one state of the lattice measures: channels and their rates (3, S) each, ring
+    centres (R, 3) and the head ring's frame (3, 3), columns forward, left, up."""
+
+    channels: np.ndarray
+    rates: np.ndarray
+    centres: np.ndarray
+    head_frame: np.ndarray
 
 
 class SoftBodyBackend(Backend):
@@ -90,10 +102,11 @@ class SoftBodyBackend(Backend):
         self._velocity = self.data.qvel.reshape(-1, 3)
         self._previous = self.start_positions.copy()
         self._previous_time = 0.0
+        self._snapshot: _Snapshot | None = None
         self.torque_enabled = True
         self._apply_muscles()
         mujoco.mj_forward(self.model, self.data)
-        self._start_com = self.positions().mean(axis=0)
+        self._start_com = self._measure().centres.mean(axis=0)
         self._axis_sum = np.zeros(3)
         self._contact_sum = 0.0
         self._cycles = 0
@@ -101,6 +114,7 @@ class SoftBodyBackend(Backend):
         self._pacer = Pacer(self.stats) if self._realtime else None
 
     def _close(self) -> None:
+        self.stats.extra.update(self.travel())
         self.set_torque(self.stop_policy == "hold")
 
     # -- geometry ------------------------------------------------------------------------------
@@ -120,24 +134,34 @@ class SoftBodyBackend(Backend):
         return self.muscles.ring_scale(self.muscles.segment_lengths(self.positions()))
 
     def _apply_muscles(self) -> None:
-        """Write every spring's rest length for the command (or the rest shape, torque off)."""
+        """Write every spring's rest length for the command (or the rest shape, torque off), and
+        keep d(rest length)/d(channel) for the efforts."""
         yaw, pitch, axial = self._channels()
-        self.data.ctrl[:] = self.muscles.rest_lengths(yaw, pitch, axial, self._ring_scale())
+        rest, self._jacobian = self.muscles.rest_lengths_and_jacobian(
+            yaw, pitch, axial, self._ring_scale()
+        )
+        self.data.ctrl[:] = rest
 
     # -- the cycle ---------------------------------------------------------------------------
+    def _measure(self) -> _Snapshot:
+        """Measure the lattice now and one physics step earlier (for rates), once per state."""
+        if self._snapshot is None:
+            both = np.stack((self._previous, self.positions()))
+            centres, forward, left, up = self.muscles.ring_axes(both)
+            channels = np.stack(self.muscles.channels_of(centres, forward, left, up), axis=1)
+            elapsed = float(self.data.time) - self._previous_time
+            rates = (channels[1] - channels[0]) / elapsed if elapsed > 0 else 0.0 * channels[1]
+            head = np.stack((forward[1, 0], left[1, 0], up[1, 0]), axis=1)
+            self._snapshot = _Snapshot(channels[1], rates, centres[1], head)
+        return self._snapshot
+
     def _read_state(self) -> JointState:
-        now = self.positions()
-        measured = np.stack(self.muscles.measure(now))
-        before = np.stack(self.muscles.measure(self._previous))
-        elapsed = float(self.data.time) - self._previous_time
-        velocity = (measured - before) / elapsed if elapsed > 0 else np.zeros_like(measured)
-        yaw, pitch, axial = self._channels()
-        jacobian = self.muscles.jacobian(yaw, pitch, axial, self._ring_scale())
-        effort = self.muscles.segment_efforts(jacobian, self.data.actuator_force)
+        snapshot = self._measure()
+        effort = self.muscles.segment_efforts(self._jacobian, self.data.actuator_force)
         return JointState(
             time_s=float(self.data.time),
-            position_rad=self._layout.join(*measured),
-            velocity_rad_s=self._layout.join(*velocity),
+            position_rad=self._layout.join(*snapshot.channels),
+            velocity_rad_s=self._layout.join(*snapshot.rates),
             effort_nm=self._layout.join(*effort),
         )
 
@@ -174,6 +198,7 @@ class SoftBodyBackend(Backend):
         warnings = data.warning.number
         before = int(warnings[_BAD_WARNINGS].sum())
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
+        self._snapshot = None
         for step in range(steps):
             if step == steps - 1:
                 self._previous = self.positions()
@@ -193,28 +218,26 @@ class SoftBodyBackend(Backend):
     def body_state(self) -> BodyState:
         """Centre of mass of the points and the head ring's orientation (w, x, y, z)."""
         self._require_connected()
-        positions = self.positions()
-        _, frames = self.muscles.ring_frames(positions[:8])
+        snapshot = self._measure()
         quat = np.empty(4)
-        mujoco.mju_mat2Quat(quat, frames[0].reshape(-1))
-        return BodyState(com_m=positions.mean(axis=0), head_quat=quat)
+        mujoco.mju_mat2Quat(quat, snapshot.head_frame.reshape(-1))
+        return BodyState(com_m=snapshot.centres.mean(axis=0), head_quat=quat)
 
     def _track(self) -> None:
         """Accumulate the body axis and floor contact once per control cycle."""
-        centres = self.positions().reshape(-1, 4, 3).mean(axis=1)
+        centres = self._measure().centres
         axis = centres[0] - centres[-1]
-        self._axis_sum += axis / max(float(np.linalg.norm(axis)), 1e-12)
+        self._axis_sum += axis / max(math.sqrt(float(axis @ axis)), 1e-12)
         if self.data.ncon:
             touching = self.friction_rule.touching(self.data.contact.geom)
             self._contact_sum += float(np.count_nonzero(touching)) / self.lattice.points
         self._cycles += 1
-        self.stats.extra.update(self.travel())
 
     def travel(self) -> dict[str, float]:
         """Since connect: the mean body axis (tail to head) and the angle from it to the net
         COM displacement, both in degrees in the horizontal plane (0: head first, ±90: sideways,
         ±180: tail first), and the mean fraction of points touching the ground."""
-        dx, dy = (self.positions().mean(axis=0) - self._start_com)[:2]
+        dx, dy = (self._measure().centres.mean(axis=0) - self._start_com)[:2]
         axis = math.degrees(math.atan2(self._axis_sum[1], self._axis_sum[0]))
         heading = math.degrees(math.atan2(dy, dx))
         return {

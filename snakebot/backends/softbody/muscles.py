@@ -30,7 +30,6 @@ from snakebot.backends.softbody.lattice import (
 )
 
 AXES = ("yaw", "pitch", "axial")
-_EPS = 1e-6
 
 
 @dataclass(frozen=True)
@@ -70,20 +69,22 @@ class ChannelLayout:
         return joined
 
 
-def _rotations(yaw: FloatArray, pitch: FloatArray) -> FloatArray:
-    """Rz(yaw) @ Ry(pitch) for each segment, shape (S, 3, 3)."""
-    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-    out = np.empty((yaw.shape[0], 3, 3))
-    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = cy * cp, -sy, cy * sp
-    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = sy * cp, cy, sy * sp
-    out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = -sp, 0.0, cp
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Row-wise dot product over the last axis."""
+    out: FloatArray = np.einsum("...i,...i->...", a, b)
+    return out
+
+
+def _unit(a: FloatArray) -> FloatArray:
+    out: FloatArray = a / np.sqrt(_dot(a, a))[..., None]
     return out
 
 
 class MuscleMap:
     """Rest lengths from channel commands and channel values from point positions.
 
-    ``segment_length_m`` (L0), ``width_m`` and ``height_m`` are the relaxed cube's sides.
+    ``segment_length_m`` (L0), ``width_m`` and ``height_m`` are the relaxed cube's sides. Every
+    method also takes a leading batch shape (B, ...) on its arrays, computed in one pass.
     """
 
     def __init__(
@@ -91,59 +92,116 @@ class MuscleMap:
     ) -> None:
         self.lattice = lattice
         self.segment_length_m = segment_length_m
-        self.corners = np.zeros((CORNERS, 3))
-        self.corners[:, 1:] = CORNER_SIGNS * np.array([width_m / 2, height_m / 2])
+        corners = CORNER_SIGNS * np.array([width_m / 2, height_m / 2])  # (4, 2): y, z
         springs = lattice.springs
         self._ring_springs = np.flatnonzero(lattice.ring >= 0)
         self._ring_of = lattice.ring[self._ring_springs]
         a, b = springs[self._ring_springs, 0] % CORNERS, springs[self._ring_springs, 1] % CORNERS
-        self._ring_base = np.linalg.norm(self.corners[b] - self.corners[a], axis=1)
+        self._ring_base = np.linalg.norm(corners[b] - corners[a], axis=1)
         self._seg_springs = np.flatnonzero(lattice.segment >= 0)
         self._seg_of = lattice.segment[self._seg_springs]
-        self._front_corner = springs[self._seg_springs, 0] % CORNERS
-        self._back_corner = springs[self._seg_springs, 1] % CORNERS
+        # segment_efforts sums each segment's springs as one block of a reshape.
+        per_segment = np.bincount(self._seg_of, minlength=lattice.segments)
+        if np.any(np.diff(self._seg_of) < 0) or np.any(per_segment != per_segment[0]):
+            raise ValueError("segment springs must come in equal blocks, segment by segment")
+        front, back = (
+            springs[self._seg_springs, 0] % CORNERS,
+            springs[self._seg_springs, 1] % CORNERS,
+        )
+        self._front_yz = corners[front]  # (Mseg, 2)
+        self._back_yz = corners[back]
         self.longitudinal: IntArray = lattice.of_kind(SpringKind.LONGITUDINAL)
 
     # -- commands -> rest lengths ---------------------------------------------------------------
     def rest_lengths(
         self, yaw: FloatArray, pitch: FloatArray, axial: FloatArray, ring_scale: FloatArray
     ) -> FloatArray:
-        """Rest length (M,) in m of every spring, for channels (S,) each and ring scales (R,)."""
+        """Rest length (..., M) in m of every spring, for channels (..., S) and ring scales
+        (..., R)."""
+        yaw, pitch, axial = np.asarray(yaw), np.asarray(pitch), np.asarray(axial)
+        batch = np.broadcast_shapes(yaw.shape, pitch.shape, axial.shape)[:-1]
+        out = np.empty((*batch, self.lattice.spring_count))
+        scale = np.broadcast_to(ring_scale, (*batch, self.lattice.rings))
+        out[..., self._ring_springs] = self._ring_base * scale[..., self._ring_of]
+        seg = self._seg_of
+        cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+        chy, shy = np.cos(0.5 * yaw), np.sin(0.5 * yaw)
+        chp, shp = np.cos(0.5 * pitch), np.sin(0.5 * pitch)
+        length = self.segment_length_m * (1.0 - axial)
+        # Back ring centre: the half turn Rz(yaw/2) Ry(pitch/2) of (-length, 0, 0).
+        centre = -length[..., None] * np.stack((chy * chp, shy * chp, -shp), axis=-1)
+        # Columns 1 (left) and 2 (up) of Rz(yaw) Ry(pitch): where the back ring's y, z go.
+        zero = np.zeros_like(cy)
+        left = np.stack((-sy, cy, zero), axis=-1)
+        up = np.stack((cy * sp, sy * sp, cp), axis=-1)
+        front_scale = scale[..., :-1][..., seg, None]
+        back_scale = scale[..., 1:][..., seg, None]
+        back = centre[..., seg, :] + back_scale * (
+            self._back_yz[:, 0, None] * left[..., seg, :]
+            + self._back_yz[:, 1, None] * up[..., seg, :]
+        )
+        back[..., 1:] -= front_scale * self._front_yz
+        out[..., self._seg_springs] = np.sqrt(_dot(back, back))
+        return out
+
+    def rest_lengths_and_jacobian(
+        self, yaw: FloatArray, pitch: FloatArray, axial: FloatArray, ring_scale: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Rest lengths (M,) as ``rest_lengths`` for one command (S,) each, and their analytic
+        derivatives (3, M): rows yaw, pitch, axial, each spring against its own segment's
+        channel (a spring depends on one segment's channels only; ring springs on none)."""
         out = np.empty(self.lattice.spring_count)
         out[self._ring_springs] = self._ring_base * ring_scale[self._ring_of]
-        rotation = _rotations(yaw, pitch)
-        half = _rotations(0.5 * yaw, 0.5 * pitch)
-        length = self.segment_length_m * (1.0 - axial)
-        centre = -length[:, None] * half[:, :, 0]  # half-turn of (-L, 0, 0)
-        front = self.corners[None] * ring_scale[:-1, None, None]
-        back_local = self.corners[None] * ring_scale[1:, None, None]
-        back = centre[:, None, :] + np.einsum("sij,scj->sci", rotation, back_local)
         seg = self._seg_of
-        delta = back[seg, self._back_corner] - front[seg, self._front_corner]
-        out[self._seg_springs] = np.sqrt(np.einsum("ij,ij->i", delta, delta))
-        return out
+        cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+        chy, shy = np.cos(0.5 * yaw), np.sin(0.5 * yaw)
+        chp, shp = np.cos(0.5 * pitch), np.sin(0.5 * pitch)
+        length = self.segment_length_m * (1.0 - axial)
+        zero = np.zeros_like(cy)
+        half = np.stack((chy * chp, shy * chp, -shp), axis=-1)
+        centre = -length[:, None] * half
+        left = np.stack((-sy, cy, zero), axis=-1)
+        up = np.stack((cy * sp, sy * sp, cp), axis=-1)
+        # d/d(yaw, pitch, axial) of the centre, left and up columns: (3, S, 3) each.
+        d_centre = np.stack(
+            (
+                -0.5 * length[:, None] * np.stack((-shy * chp, chy * chp, zero), axis=-1),
+                -0.5 * length[:, None] * np.stack((-chy * shp, -shy * shp, -chp), axis=-1),
+                self.segment_length_m * half,
+            )
+        )
+        d_left = np.stack((np.stack((-cy, -sy, zero), axis=-1), 0.0 * left, 0.0 * left))
+        d_up = np.stack(
+            (
+                np.stack((-sy * sp, cy * sp, zero), axis=-1),
+                np.stack((cy * cp, sy * cp, -sp), axis=-1),
+                0.0 * up,
+            )
+        )
+        back_scale = ring_scale[1:][seg, None]
+        by, bz = self._back_yz[:, 0, None], self._back_yz[:, 1, None]
+        back = centre[seg] + back_scale * (by * left[seg] + bz * up[seg])
+        back[:, 1:] -= ring_scale[:-1][seg, None] * self._front_yz
+        d_back = d_centre[:, seg] + back_scale * (by * d_left[:, seg] + bz * d_up[:, seg])
+        lengths = np.sqrt(_dot(back, back))
+        out[self._seg_springs] = lengths
+        jacobian = np.zeros((3, self.lattice.spring_count))
+        jacobian[:, self._seg_springs] = np.einsum("qmi,mi->qm", d_back, back) / lengths
+        return out, jacobian
 
     def jacobian(
         self, yaw: FloatArray, pitch: FloatArray, axial: FloatArray, ring_scale: FloatArray
     ) -> FloatArray:
-        """d(rest length)/d(channel) (3, M): rows yaw, pitch, axial, each spring against its own
-        segment's channel (a spring depends on one segment's channels only)."""
-        base = self.rest_lengths(yaw, pitch, axial, ring_scale)
-        rows = [
-            self.rest_lengths(yaw + _EPS, pitch, axial, ring_scale),
-            self.rest_lengths(yaw, pitch + _EPS, axial, ring_scale),
-            self.rest_lengths(yaw, pitch, axial + _EPS, ring_scale),
-        ]
-        return (np.stack(rows) - base) / _EPS
+        """d(rest length)/d(channel) (3, M) for one command (S,) each; see
+        ``rest_lengths_and_jacobian``."""
+        return self.rest_lengths_and_jacobian(yaw, pitch, axial, ring_scale)[1]
 
     def segment_efforts(self, jacobian: FloatArray, spring_force_n: FloatArray) -> FloatArray:
         """Generalised muscle force per segment and channel (3, S) from spring forces (M,) (N,
         positive = extending): yaw and pitch in N·m, axial in N·m per unit strain, so that
         effort · channel rate is the muscles' power in W."""
-        out = np.zeros((3, self.lattice.segments))
         weighted = jacobian[:, self._seg_springs] * spring_force_n[self._seg_springs]
-        for row in range(3):
-            np.add.at(out[row], self._seg_of, weighted[row])
+        out: FloatArray = weighted.reshape(3, self.lattice.segments, -1).sum(axis=2)
         return out
 
     def ring_scale(self, segment_length_m: FloatArray) -> FloatArray:
@@ -160,35 +218,52 @@ class MuscleMap:
         return rings
 
     # -- positions -> channels ----------------------------------------------------------------
-    def ring_frames(self, positions: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Ring centres (R, 3) and frames (R, 3, 3) from point positions (P, 3).
+    def ring_axes(
+        self, positions: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Ring centres, forward (towards the head), left and up unit vectors, each (..., R, 3),
+        from point positions (..., P, 3); the three axes are orthonormal."""
+        rings = positions.reshape(*positions.shape[:-2], -1, CORNERS, 3)
+        c0, c1, c2, c3 = (rings[..., c, :] for c in range(CORNERS))
+        centres = 0.25 * (c0 + c1 + c2 + c3)
+        left = _unit(c0 + c3 - c1 - c2)
+        forward = _unit(np.cross(left, c0 + c1 - c2 - c3))
+        return centres, forward, left, np.cross(forward, left)
 
-        A frame's columns are forward (towards the head), left and up, orthonormal.
-        """
-        rings = positions.reshape(-1, CORNERS, 3)
-        centres = rings.mean(axis=1)
-        left = rings[:, (0, 3)].sum(axis=1) - rings[:, (1, 2)].sum(axis=1)
-        up = rings[:, (0, 1)].sum(axis=1) - rings[:, (2, 3)].sum(axis=1)
-        left /= np.linalg.norm(left, axis=1, keepdims=True)
-        forward = np.cross(left, up)
-        forward /= np.linalg.norm(forward, axis=1, keepdims=True)
-        up = np.cross(forward, left)
-        return centres, np.stack((forward, left, up), axis=2)
+    def ring_frames(self, positions: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Ring centres (..., R, 3) and frames (..., R, 3, 3), columns forward, left, up."""
+        centres, forward, left, up = self.ring_axes(positions)
+        return centres, np.stack((forward, left, up), axis=-1)
 
     def measure(self, positions: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Measured (yaw, pitch, axial), each (S,), of the lattice at positions (P, 3)."""
-        centres, frames = self.ring_frames(positions)
-        relative = np.einsum("sji,sjk->sik", frames[:-1], frames[1:])
-        yaw = np.arctan2(relative[:, 1, 0], relative[:, 0, 0])
-        pitch = np.arctan2(-relative[:, 2, 0], np.hypot(relative[:, 0, 0], relative[:, 1, 0]))
-        length = np.linalg.norm(np.diff(centres, axis=0), axis=1)
-        return yaw, pitch, 1.0 - length / self.segment_length_m
+        """Measured (yaw, pitch, axial), each (..., S), of the lattice at positions (..., P, 3).
+
+        The tail-side ring's forward axis seen in the head-side ring's frame gives yaw and pitch
+        (the inverse of Rz(yaw) Ry(pitch)); the centres' distance gives the strain.
+        """
+        return self.channels_of(*self.ring_axes(positions))
+
+    def channels_of(
+        self, centres: FloatArray, forward: FloatArray, left: FloatArray, up: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``measure`` from ring axes already computed by ``ring_axes``."""
+        ahead = forward[..., 1:, :]
+        x = _dot(forward[..., :-1, :], ahead)
+        y = _dot(left[..., :-1, :], ahead)
+        z = _dot(up[..., :-1, :], ahead)
+        gap = np.diff(centres, axis=-2)
+        length = np.sqrt(_dot(gap, gap))
+        return (
+            np.arctan2(y, x),
+            np.arctan2(-z, np.hypot(x, y)),
+            1.0 - length / self.segment_length_m,
+        )
 
     def segment_lengths(self, positions: FloatArray) -> FloatArray:
         """Distance (S,) in m between consecutive ring centres."""
         centres = positions.reshape(-1, CORNERS, 3).mean(axis=1)
-        lengths: FloatArray = np.linalg.norm(np.diff(centres, axis=0), axis=1)
-        return lengths
+        gap = np.diff(centres, axis=0)
+        return np.sqrt(_dot(gap, gap))
 
 
 def layout_for(channels: Sequence[str], segments: int) -> ChannelLayout:

@@ -25,9 +25,10 @@ _CAP_ANGLES = (0.45, 0.9, 1.25)  # rad: cap rings on a quarter-circle profile
 
 def _cubic_basis(t: float) -> FloatArray:
     """Uniform cubic B-spline weights (4,) of control points i-1, i, i+1, i+2 at t in [0, 1)."""
-    return np.array(
-        [(1 - t) ** 3, 3 * t**3 - 6 * t**2 + 4, -3 * t**3 + 3 * t**2 + 3 * t + 1, t**3]
-    ) / 6.0
+    return (
+        np.array([(1 - t) ** 3, 3 * t**3 - 6 * t**2 + 4, -3 * t**3 + 3 * t**2 + 3 * t + 1, t**3])
+        / 6.0
+    )
 
 
 def _along_weights(rings: int, rows_per_segment: int) -> FloatArray:
