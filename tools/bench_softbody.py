@@ -10,7 +10,8 @@ shuffled order:
                   (precomputed) written to ctrl every 10 ms, one mj_step() call per physics step
   bare_step+rule  bare_step plus DirectionalFriction.apply after every step
 Ratios are taken within each round, then the median over rounds is reported with its range.
-Real time x = simulated seconds per wall second.
+Real time x = simulated seconds per wall second (and per CPU second of the process: on
+a shared machine the CPU figure is what one free core would give).
 
     python tools/bench_softbody.py [--rounds 7] [--seconds 5] [--sizes 6,10,20] [--cpu 0]
 """
@@ -50,14 +51,14 @@ def body_with(segments: int) -> BodyConfig:
     return dataclasses.replace(body, lattice=dataclasses.replace(body.lattice, segments=segments))
 
 
-def run_snakebot(body: BodyConfig, seconds: float, directional: bool) -> float:
+def run_snakebot(body: BodyConfig, seconds: float, directional: bool) -> tuple[float, float]:
     gait = make_gait("undulation", body.joint_count)
     metrics = RunMetrics(body.joint_count, body.body_length_m, body.total_mass_kg)
     plan = RunPlan(duration_s=seconds, rate_hz=RATE_HZ, ramp_out=False)
     with SoftBodyBackend(body, directional=directional) as backend:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         run_gait(backend, gait, SafetyLayer.for_robot(body), plan, metrics)
-        return seconds / (time.perf_counter() - start)
+        return seconds / (time.perf_counter() - start), seconds / (time.process_time() - cpu)
 
 
 def ctrl_schedule(body: BodyConfig, seconds: float) -> np.ndarray:
@@ -76,7 +77,7 @@ def ctrl_schedule(body: BodyConfig, seconds: float) -> np.ndarray:
     return np.array(rows)
 
 
-def run_bare(xml: Path, schedule: np.ndarray, rule: bool) -> float:
+def run_bare(xml: Path, schedule: np.ndarray, rule: bool) -> tuple[float, float]:
     model = mujoco.MjModel.from_xml_path(str(xml))
     data = mujoco.MjData(model)
     points = model.nbody - 1
@@ -85,15 +86,15 @@ def run_bare(xml: Path, schedule: np.ndarray, rule: bool) -> float:
     friction = DirectionalFriction(geoms, model.ngeom, model.body_pos[bodies].copy())
     displacement, velocity = data.qpos.reshape(-1, 3), data.qvel.reshape(-1, 3)
     per_cycle = round(1.0 / RATE_HZ / model.opt.timestep)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     for ctrl in schedule:
         data.ctrl[:] = ctrl
         for _ in range(per_cycle):
             mujoco.mj_step(model, data)
             if rule and data.ncon:
                 friction.apply(displacement, velocity, data.contact.geom)
-    wall = time.perf_counter() - start
-    return len(schedule) * per_cycle * model.opt.timestep / wall
+    simulated = len(schedule) * per_cycle * model.opt.timestep
+    return simulated / (time.perf_counter() - start), simulated / (time.process_time() - cpu)
 
 
 def micro(xml: Path, repeats: int = 2000) -> tuple[float, float]:
@@ -140,36 +141,46 @@ def main() -> None:
             xml[n] = Path(tmp) / f"soft{n}.xml"
             xml[n].write_text(build_body_spec(bodies[n]).to_xml())
             schedules[n] = ctrl_schedule(bodies[n], args.seconds)
-        results = {(n, v): [] for n in sizes for v in VARIANTS}
-        ratios = {(n, k): [] for n in sizes for k in ("snakebot", "rule")}
+        # (wall, cpu) real-time factors per block; ratios within a round, on CPU time.
+        results: dict[tuple[int, str], list[tuple[float, float]]] = {
+            (n, v): [] for n in sizes for v in VARIANTS
+        }
+        ratios: dict[tuple[int, str], list[float]] = {
+            (n, k): [] for n in sizes for k in ("snakebot", "rule")
+        }
         for _ in range(args.rounds):
             for n in sizes:
                 order = list(VARIANTS)
                 random.shuffle(order)
-                got: dict[str, float] = {}
+                got: dict[str, tuple[float, float]] = {}
                 for variant in order:
                     if variant.startswith("snakebot"):
                         got[variant] = run_snakebot(bodies[n], args.seconds, variant == "snakebot")
                     else:
                         got[variant] = run_bare(xml[n], schedules[n], variant.endswith("rule"))
                     results[(n, variant)].append(got[variant])
-                ratios[(n, "snakebot")].append(got["snakebot"] / got["bare_step"])
-                ratios[(n, "rule")].append(got["bare_step+rule"] / got["bare_step"])
+                ratios[(n, "snakebot")].append(got["snakebot"][1] / got["bare_step"][1])
+                ratios[(n, "rule")].append(got["bare_step+rule"][1] / got["bare_step"][1])
         costs = {n: micro(xml[n]) for n in sizes}
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(
         f"{args.rounds} rounds, {args.seconds:g} s simulated per block, 1 ms steps, control "
-        f"{RATE_HZ:g} Hz, pinned to core {args.cpu}, load average {load:.1f}\n"
+        f"{RATE_HZ:g} Hz, pinned to core {args.cpu}, load average {load:.1f}; cells: times real "
+        "time by the wall clock (by the process's CPU time)\n"
     )
     print(
         "| segments | points / springs | "
-        + " | ".join(f"{v} (x real time)" for v in VARIANTS)
-        + " | snakebot / bare_step | bare+rule / bare_step | mj_step µs | rule µs |"
+        + " | ".join(VARIANTS)
+        + " | snakebot / bare_step (CPU) | bare+rule / bare_step (CPU) | mj_step µs | rule µs |"
     )
     print("|---" * (len(VARIANTS) + 6) + "|")
     for n in sizes:
         springs = 6 * (n + 1) + 12 * n
-        cells = [f"{statistics.median(results[(n, v)]):.1f}" for v in VARIANTS]
+        cells = []
+        for v in VARIANTS:
+            wall = statistics.median(w for w, _ in results[(n, v)])
+            cpu = statistics.median(c for _, c in results[(n, v)])
+            cells.append(f"{wall:.1f} ({cpu:.1f})")
         cells += [
             f"{statistics.median(ratios[(n, k)]):.2f} "
             f"({min(ratios[(n, k)]):.2f}-{max(ratios[(n, k)]):.2f})"
