@@ -164,23 +164,42 @@ def cliff_rows(folder: Path) -> None:
     row("worm over the cliff", shown, summary, f"{z[0]:.3f} -> {z[-1]:.3f}")
 
 
-def reference_rows() -> None:
+def reference_rows(folder: Path) -> None:
     sys.path.insert(0, str(ROOT))
     from snakebot.gaits import make_gait
     from tests.integration.softbody.reference_integrator import run_reference
 
     worm = load_body("worm")
-    print("\n| worm, 10 s | numpy reference: scales on / off, m | ratio |")
-    print("|---|---|---|")
+    print(
+        "\n| worm rectilinear, 10 s | MuJoCo: scales on / off, m | ratio "
+        "| numpy reference: on / off, m | ratio |"
+    )
+    print("|---|---|---|---|---|")
     for volume in (False, True):
         body = replace(worm, muscles=replace(worm.muscles, volume_preservation=volume))
+        path = folder / f"worm_volume_{volume}.toml"
+        text = resolve_body_path("worm").read_text()
+        path.write_text(
+            text.replace(
+                "volume_preservation = true", f"volume_preservation = {str(volume).lower()}"
+            )
+        )
+        runs = [
+            run("--robot", str(path), "--gait", "rectilinear", "--directional", d)
+            for d in ("on", "off")
+        ]
+        mujoco = [float(summary["displacement_m"][0]) for summary in runs]
         gait = make_gait("rectilinear", body.joint_count)
-        on, off = (
+        reference = [
             float(run_reference(body, gait, duration_s=10.0, directional=d).displacement[0])
             for d in (True, False)
-        )
+        ]
+        cells = [
+            f"{pair[0]:.3f} / {pair[1]:.3f} | {pair[0] / max(abs(pair[1]), 1e-9):.0f}"
+            for pair in (mujoco, reference)
+        ]
         label = "volume preservation " + ("on" if volume else "off")
-        print(f"| {label} | {on:.3f} / {off:.3f} | {on / max(abs(off), 1e-9):.1f} |", flush=True)
+        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
 
 def main() -> None:
@@ -204,7 +223,7 @@ def main() -> None:
         if args.rows in ("all", "cliff"):
             cliff_rows(folder)
         if args.rows in ("all", "reference"):
-            reference_rows()
+            reference_rows(folder)
 
 
 if __name__ == "__main__":
