@@ -129,7 +129,7 @@ def snake_rows() -> None:
 
 
 def damping_rows(folder: Path) -> None:
-    header("tail off-drive rad", "tail amplitude / command", "reflection |B|/|F|")
+    header("tail off-drive rad", "tail amplitude / command", "reflected / forward wave")
     for time_unit in (0.005, 0.01):
         for damping in (3.5, 0.52, 0.2):
             ratio = damping / (2 * math.sqrt(0.5))
