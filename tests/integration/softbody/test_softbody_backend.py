@@ -133,3 +133,26 @@ def test_spec_exports_and_reloads_with_its_skin() -> None:
     xml = build_body_spec(load_body("worm")).to_xml()
     model = mujoco.MjModel.from_xml_string(xml)
     assert model.nskin == 1 and model.nu == 114 and model.ntendon == 114
+
+
+def test_mujoco_draws_the_skin_on_the_b_spline_surface_of_the_moving_lattice() -> None:
+    from snakebot.backends.softbody.skin import skin_mesh
+
+    body = load_body("snake")
+    with SoftBodyBackend(body) as backend:
+        backend.send_command(JointCommand(np.tile([0.4, 0.2, 0.2], body.lattice.segments)))
+        for _ in range(20):
+            backend.advance(0.01)
+        model, data = backend.model, backend.data
+        mujoco.mj_forward(model, data)  # body poses of the current state
+        scene = mujoco.MjvScene(model, maxgeom=100)
+        mujoco.mjv_updateScene(
+            model, data, mujoco.MjvOption(), None, mujoco.MjvCamera(),
+            mujoco.mjtCatBit.mjCAT_ALL, scene,
+        )
+        drawn = np.array(scene.skinvert).reshape(-1, 3)
+        positions = backend.positions()
+    mesh = skin_mesh(backend.lattice.rings, backend.start_positions)
+    normals = np.array(scene.skinnormal).reshape(-1, 3)
+    inflate = body.lattice.point_radius_m
+    np.testing.assert_allclose(drawn - inflate * normals, mesh.weights @ positions, atol=1e-6)
