@@ -68,7 +68,7 @@ class SoftBodyBackend(Backend):
         realtime: bool = False,
     ) -> None:
         super().__init__()
-        self.robot = body
+        self.robot = body  # the config under the name the other backends use
         self.body = body
         self.joint_count = body.joint_count
         self.stop_policy = body.safety.stop_policy
