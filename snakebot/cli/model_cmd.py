@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from snakebot.backends.twin.cliff import parse_terrain
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
     add_actuators,
@@ -13,7 +14,8 @@ from snakebot.backends.twin.model_builder import (
     compile_spec,
 )
 from snakebot.cli.common import add_robot_option, check_writable, os_reason, robot_name
-from snakebot.config import load_robot
+from snakebot.config.body import BodyConfig
+from snakebot.config.body_loader import load_robot_or_body
 from snakebot.errors import OutputError
 
 
@@ -22,21 +24,36 @@ def add_parser(subparsers: Any) -> None:
     parser = subparsers.add_parser("model", help="export the twin's MuJoCo model (MJCF)")
     add_robot_option(parser)
     parser.add_argument("--out", required=True, type=Path, help="MJCF file to write")
-    parser.add_argument("--friction", help="AXIAL,LATERAL ground friction (overrides the robot's)")
+    parser.add_argument(
+        "--friction",
+        help="AXIAL,LATERAL ground friction (overrides the robot's); MU for a mass-spring body",
+    )
+    parser.add_argument(
+        "--terrain", metavar="NAME[:KEY=VALUE,...]", help="flat (default) or cliff[:key=value,...]"
+    )
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
-    robot = load_robot(robot_name(args, hardware=False, what="model"))
+    robot = load_robot_or_body(robot_name(args, hardware=False, what="model"))
     check_writable(args.out, "model")
-    friction = GroundFriction.parse(args.friction) if args.friction else None
-    spec = build_spec(robot, friction=friction)
-    add_actuators(spec, robot)
-    compile_spec(spec, robot)
+    terrain = parse_terrain(args.terrain) if args.terrain else None
+    if isinstance(robot, BodyConfig):
+        from snakebot.cli.softbody_options import describe_body, softbody_spec
+
+        spec = softbody_spec(robot, args)
+        what = describe_body(robot)
+        spec.compile()
+    else:
+        friction = GroundFriction.parse(args.friction) if args.friction else None
+        spec = build_spec(robot, friction=friction, terrain=terrain)
+        add_actuators(spec, robot)
+        compile_spec(spec, robot)
+        what = f"{robot.joint_count} joints"
     try:
         args.out.write_text(spec.to_xml())
     except OSError as exc:
         raise OutputError(args.out, f"cannot write the model: {os_reason(exc)}") from exc
-    print(f"wrote {args.out} ({robot.name}: {robot.joint_count} joints)")
+    print(f"wrote {args.out} ({robot.name}: {what})")
     return 0

@@ -22,7 +22,9 @@ from snakebot.cli.common import (
     print_json,
     robot_name,
 )
-from snakebot.config import RobotConfig, load_robot
+from snakebot.config import RobotConfig
+from snakebot.config.body import BodyConfig
+from snakebot.config.body_loader import load_robot_or_body
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
@@ -63,7 +65,18 @@ def add_parser(subparsers: Any) -> None:
         "--friction",
         metavar="AXIAL,LATERAL",
         help="twin ground friction along and across each module; "
-        "equal values = isotropic (overrides the robot's ground model)",
+        "equal values = isotropic (overrides the robot's ground model); "
+        "one number MU for a mass-spring body's floor",
+    )
+    parser.add_argument(
+        "--directional",
+        choices=("on", "off"),
+        help="mass-spring bodies: Miller's directional friction on or off (default: the body file)",
+    )
+    parser.add_argument(
+        "--terrain",
+        metavar="NAME[:KEY=VALUE,...]",
+        help="twin terrain: flat (default) or cliff, e.g. cliff:edge_m=0.1,height_m=0.04",
     )
     parser.add_argument("--realtime", action="store_true", help="pace the twin to the wall clock")
     parser.add_argument(
@@ -79,7 +92,7 @@ def add_parser(subparsers: Any) -> None:
     parser.set_defaults(handler=run)
 
 
-def build_gait(robot: RobotConfig, args: argparse.Namespace) -> tuple[str, Gait]:
+def build_gait(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> tuple[str, Gait]:
     """The gait from --gait-file and/or --gait, with --set overrides on top."""
     params: dict[str, object] = {}
     name = args.gait or "serpenoid"
@@ -100,15 +113,27 @@ def build_gait(robot: RobotConfig, args: argparse.Namespace) -> tuple[str, Gait]
     return name, gait
 
 
-def make_backend(robot: RobotConfig, args: argparse.Namespace) -> Backend:
+def make_backend(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> Backend:
     """The backend --backend names, configured from the options."""
+    if isinstance(robot, BodyConfig):
+        from snakebot.cli.softbody_options import make_softbody_backend
+
+        return make_softbody_backend(robot, args)
+    if args.directional is not None:
+        raise ConfigError("--directional", "", "applies to mass-spring bodies only")
     if args.backend == "sim":
         from snakebot.backends.twin import GroundFriction, TwinBackend
+        from snakebot.backends.twin.cliff import parse_terrain
 
         friction = GroundFriction.parse(args.friction) if args.friction else None
-        return TwinBackend(robot, friction=friction, realtime=args.realtime or args.viewer)
-    if args.viewer or args.video or args.friction:
-        raise ConfigError("--backend", "", "--viewer, --video and --friction need --backend sim")
+        terrain = parse_terrain(args.terrain) if args.terrain else None
+        return TwinBackend(
+            robot, friction=friction, realtime=args.realtime or args.viewer, terrain=terrain
+        )
+    if args.viewer or args.video or args.friction or args.terrain:
+        raise ConfigError(
+            "--backend", "", "--viewer, --video, --friction and --terrain need --backend sim"
+        )
     from snakebot.backends.dynamixel import DynamixelBackend
 
     return DynamixelBackend(robot, port=args.port, baud=args.baud)
@@ -135,7 +160,7 @@ def sigterm_as_interrupt() -> Iterator[None]:
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
     hardware = args.backend == "dynamixel"
-    robot = load_robot(robot_name(args, hardware=hardware, what="run --backend dynamixel"))
+    robot = load_robot_or_body(robot_name(args, hardware=hardware, what="run --backend dynamixel"))
     gait_name, gait = build_gait(robot, args)
     plan = RunPlan(duration_s=args.duration, rate_hz=args.rate)
     backend = make_backend(robot, args)
@@ -161,6 +186,8 @@ def run(args: argparse.Namespace) -> int:
             backend, gait, safety, plan, metrics, log=log, on_cycle=_chain(hooks) if hooks else None
         )
     summary = {"robot": robot.name, "gait": gait_name, "backend": args.backend, **result.summary}
+    if isinstance(robot, BodyConfig):
+        summary.update(backend.stats.extra)
     if args.log:
         summary["log"] = str(args.log)
     if args.video:
@@ -176,11 +203,12 @@ def _cycle_hooks(
     stack: contextlib.ExitStack, backend: Backend, args: argparse.Namespace, plan: RunPlan
 ) -> list[Any]:
     hooks: list[Any] = []
+    from snakebot.backends.softbody import SoftBodyBackend
     from snakebot.backends.twin import TwinBackend
 
-    if isinstance(backend, TwinBackend) and args.video:
+    if isinstance(backend, TwinBackend | SoftBodyBackend) and args.video:
         hooks.append(stack.enter_context(VideoOutput(backend, args.video, plan.rate_hz)))
-    if isinstance(backend, TwinBackend) and args.viewer:
+    if isinstance(backend, TwinBackend | SoftBodyBackend) and args.viewer:
         from snakebot.backends.twin.viewer import PassiveViewer
 
         hooks.append(stack.enter_context(PassiveViewer(backend)))

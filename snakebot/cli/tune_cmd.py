@@ -7,7 +7,7 @@ import contextlib
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from snakebot.cli.common import (
     RATE_HZ,
@@ -23,9 +23,14 @@ from snakebot.cli.common import (
     robot_name,
     write_report,
 )
-from snakebot.config import load_robot
+from snakebot.config import RobotConfig, load_robot
+from snakebot.config.body import BodyConfig
+from snakebot.config.body_loader import load_robot_or_body
 from snakebot.errors import ConfigError, SafetyLimitError
 from snakebot.gaits import get_spec, parse_set_options
+
+if TYPE_CHECKING:
+    from snakebot.backends.twin import GroundFriction
 
 
 def add_parser(subparsers: Any) -> None:
@@ -123,14 +128,13 @@ def run(args: argparse.Namespace) -> int:
 
 def run_gait(args: argparse.Namespace) -> int:
     """Tune, then write the gait file, the report and the summary."""
-    from snakebot.backends.twin import GroundFriction
     from snakebot.tuning.objectives import objective_for
     from snakebot.tuning.problem import EvalPlan
     from snakebot.tuning.progress import ProgressBar, gait_summary_text
     from snakebot.tuning.space import build_space, parse_bounds, tuning_base
     from snakebot.tuning.tuner import DEFAULT_BUDGET, save_best_gait, tune_gait
 
-    robot = load_robot(robot_name(args, hardware=False, what="tune gait"))
+    robot = load_robot_or_body(robot_name(args, hardware=False, what="tune gait"))
     _check_outputs(args)
     fixed = parse_set_options(args.gait, args.set)
     base = tuning_base(args.gait, robot.joint_count, fixed)
@@ -152,7 +156,7 @@ def run_gait(args: argparse.Namespace) -> int:
         workers=max(1, args.workers),
         engine=args.engine,
         allow_roll=args.allow_roll or get_spec(args.gait).rolls_over,
-        friction=GroundFriction.parse(args.friction) if args.friction else None,
+        friction=_friction(robot, args.friction),
     )
     objective = objective_for(args.objective, args.heading, robot.body_length_m)
     bar = None if args.quiet else ProgressBar(budget)
@@ -186,6 +190,20 @@ def run_gait(args: argparse.Namespace) -> int:
             "contact); narrow --bounds or raise --budget. Nothing was written to --out"
         )
     return 0
+
+
+def _friction(robot: RobotConfig | BodyConfig, text: str | None) -> GroundFriction | None:
+    """--friction as the twin's GroundFriction; a body's one floor coefficient fills both."""
+    from snakebot.backends.twin import GroundFriction
+
+    if not text:
+        return None
+    if isinstance(robot, BodyConfig):
+        from snakebot.cli.softbody_options import parse_floor_friction
+
+        mu = parse_floor_friction(text)
+        return GroundFriction(mu, mu)
+    return GroundFriction.parse(text)
 
 
 def _add_gains_parser(commands: Any) -> None:

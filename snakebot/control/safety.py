@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from snakebot.config.body import BodyConfig
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import SafetyLimitError
 
@@ -45,8 +46,8 @@ class SafetyLayer:
         self._last: np.ndarray | None = None
 
     @classmethod
-    def for_robot(cls, robot: RobotConfig) -> SafetyLayer:
-        """The envelope a robot config asks for."""
+    def for_robot(cls, robot: RobotConfig | BodyConfig) -> SafetyLayer:
+        """The envelope a robot (or mass-spring body) config asks for."""
         return cls(robot.lower_rad, robot.upper_rad, robot.max_speed_rad_s, robot.safety.ramp_s)
 
     def reset(self, measured_rad: np.ndarray) -> None:

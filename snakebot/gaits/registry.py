@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.errors import GaitError
-from snakebot.gaits import compound, dft, keyframes, serpenoid, simple
+from snakebot.gaits import compound, dft, keyframes, miller, serpenoid, simple
 from snakebot.gaits.base import FloatArray, Gait, check_joint_count
 from snakebot.gaits.spec import (
     GaitSpec,
@@ -59,7 +59,9 @@ GAITS: Registry[GaitSpec] = Registry(
     check=_check_spec,
     builtins={
         spec.name: spec
-        for spec in (serpenoid.SPEC, *compound.SPECS, *dft.SPECS, simple.SPEC, keyframes.SPEC)
+        for spec in (
+            serpenoid.SPEC, *compound.SPECS, *dft.SPECS, simple.SPEC, keyframes.SPEC, *miller.SPECS
+        )
     },
 )
 

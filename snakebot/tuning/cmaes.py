@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from snakebot.errors import ConfigError, MissingDependencyError
-from snakebot.tuning.problem import GaitProblem
+from snakebot.tuning.problem import SearchProblem
 
 INSTALL = "pip install 'snakebot[tune]'"
 
@@ -32,7 +32,7 @@ def default_popsize(dims: int, workers: int) -> int:
 
 
 def cmaes_search(
-    problem: GaitProblem,
+    problem: SearchProblem,
     budget: int,
     seed: int,
     *,

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from snakebot.errors import ConfigError
-from snakebot.tuning.problem import GaitProblem
+from snakebot.tuning.problem import SearchProblem
 from snakebot.tuning.trace import FloatArray
 
 
@@ -45,7 +45,7 @@ class GaSettings:
 
 
 def genetic_search(
-    problem: GaitProblem, budget: int, seed: int, settings: GaSettings | None = None
+    problem: SearchProblem, budget: int, seed: int, settings: GaSettings | None = None
 ) -> list[Generation]:
     """Evolve joint poses (keyframes') for at most ``budget`` evaluations; the base poses are in
     the first generation. ConfigError unless every coordinate of the space is a pose angle."""

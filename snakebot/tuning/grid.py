@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from snakebot.errors import ConfigError
-from snakebot.tuning.problem import GaitProblem
+from snakebot.tuning.problem import SearchProblem
 from snakebot.tuning.trace import FloatArray
 
 
@@ -33,7 +33,7 @@ def points_per_dim(budget: int, dims: int) -> int:
     return count
 
 
-def grid_search(problem: GaitProblem, budget: int, chunk: int = 20) -> GridResult:
+def grid_search(problem: SearchProblem, budget: int, chunk: int = 20) -> GridResult:
     """Evaluate a full grid with ``points_per_dim(budget, D)`` evenly spaced points per bound box
     edge (bounds included), ``chunk`` candidates per parallel batch."""
     space = problem.space

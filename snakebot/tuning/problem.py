@@ -9,8 +9,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 from snakebot.backends.twin import GroundFriction
+from snakebot.config.body import BodyConfig
 from snakebot.config.schema import RobotConfig
 from snakebot.gaits import Gait, make_gait
 from snakebot.gaits.spec import ParamValue
@@ -55,7 +57,49 @@ class EvalPlan:
     friction: GroundFriction | None = None
 
 
-Listener = Callable[["GaitProblem"], None]
+class SearchProblem(Protocol):
+    """What the search methods and the progress bar use of a problem: GaitProblem on the rigid
+    twin, snakebot.tuning.softbody.SoftGaitProblem on a mass-spring body."""
+
+    @property
+    def robot(self) -> RobotConfig | BodyConfig:
+        """The robot or body the candidates run on."""
+
+    @property
+    def space(self) -> SearchSpace:
+        """The search space."""
+
+    @property
+    def objective(self) -> Objective:
+        """What is optimised."""
+
+    @property
+    def plan(self) -> EvalPlan:
+        """How each candidate runs."""
+
+    @property
+    def history(self) -> list[Evaluation]:
+        """Every evaluation so far, in order."""
+
+    @property
+    def evaluations(self) -> int:
+        """Candidates run so far."""
+
+    @property
+    def best(self) -> Evaluation | None:
+        """The lowest-loss evaluation so far."""
+
+    def evaluate(self, points: Sequence[FloatArray] | FloatArray) -> list[Evaluation]:
+        """Run and score every point (D,), in order."""
+
+    def baseline(self) -> Evaluation:
+        """The base parameters, scored but not counted."""
+
+    def close(self) -> None:
+        """Release workers."""
+
+
+Listener = Callable[[SearchProblem], None]
 
 
 class GaitProblem:

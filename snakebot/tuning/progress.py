@@ -7,7 +7,7 @@ import sys
 import time
 from typing import Any, TextIO
 
-from snakebot.tuning.problem import GaitProblem
+from snakebot.tuning.problem import SearchProblem
 
 
 class ProgressBar:
@@ -25,7 +25,7 @@ class ProgressBar:
         self._last_line = -math.inf
         self._tty = bool(getattr(self.stream, "isatty", lambda: False)())
 
-    def __call__(self, problem: GaitProblem) -> None:
+    def __call__(self, problem: SearchProblem) -> None:
         """Show the state of ``problem``."""
         now = time.monotonic()
         done = problem.evaluations
@@ -49,7 +49,7 @@ class ProgressBar:
             self.stream.flush()
 
 
-def best_text(problem: GaitProblem) -> str:
+def best_text(problem: SearchProblem) -> str:
     """The best objective so far with its unit, or why there is none."""
     best = problem.best
     if best is None:

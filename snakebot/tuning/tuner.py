@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from snakebot.config.body import BodyConfig
 from snakebot.config.loader import resolve_robot_path
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
@@ -14,7 +15,7 @@ from snakebot.gaits import save_gait_file
 from snakebot.tuning.genetic import Generation, genetic_search
 from snakebot.tuning.grid import GridResult, grid_search
 from snakebot.tuning.objectives import Objective
-from snakebot.tuning.problem import EvalPlan, Evaluation, GaitProblem, Listener
+from snakebot.tuning.problem import EvalPlan, Evaluation, GaitProblem, Listener, SearchProblem
 from snakebot.tuning.space import SearchSpace
 
 METHODS = ("grid", "cmaes", "ga")
@@ -25,7 +26,7 @@ DEFAULT_BUDGET = {"grid": 100, "cmaes": 100, "ga": 160}
 class TuneResult:
     """Everything a tuning run produced: every evaluation in order, the best, the baseline."""
 
-    robot: RobotConfig
+    robot: RobotConfig | BodyConfig
     method: str
     objective: Objective
     space: SearchSpace
@@ -90,7 +91,7 @@ def evaluation_dict(evaluation: Evaluation) -> dict[str, object]:
 
 
 def tune_gait(
-    robot: RobotConfig,
+    robot: RobotConfig | BodyConfig,
     space: SearchSpace,
     objective: Objective,
     method: str,
@@ -100,10 +101,18 @@ def tune_gait(
     plan: EvalPlan | None = None,
     listener: Listener | None = None,
 ) -> TuneResult:
-    """Search ``space`` with ``method`` for at most ``budget`` evaluations on the twin."""
+    """Search ``space`` with ``method`` for at most ``budget`` evaluations on the twin (or, for a
+    mass-spring body, through the normal runner in a process pool)."""
     plan = plan or EvalPlan()
     start = time.perf_counter()
-    problem = GaitProblem(robot, space, objective, plan, listener=listener)
+    problem: SearchProblem
+    if isinstance(robot, BodyConfig):
+        from snakebot.tuning.softbody import SoftGaitProblem
+
+        plan = replace(plan, engine="processes")
+        problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
+    else:
+        problem = GaitProblem(robot, space, objective, plan, listener=listener)
     try:
         grid: GridResult | None = None
         generations: tuple[Generation, ...] = ()

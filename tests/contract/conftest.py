@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 
 import pytest
 
@@ -33,6 +34,28 @@ def _twin_factory() -> Iterator[BackendFactory]:
 
 
 FACTORIES["twin"] = _twin_factory
+
+
+def _softbody(robot: str) -> Backend:
+    """Miller's snake lattice with one yaw muscle channel per joint of ``robot``, no friction."""
+    from snakebot.backends.softbody import SoftBodyBackend
+    from snakebot.config.body_loader import load_body
+
+    body = load_body("snake")
+    segments = load_robot(robot).joint_count
+    body = replace(
+        body,
+        lattice=replace(body.lattice, segments=segments),
+        muscles=replace(body.muscles, channels=("yaw",)),
+    )
+    return SoftBodyBackend(body, friction=0.0)
+
+
+def _softbody_factory() -> Iterator[BackendFactory]:
+    yield _softbody
+
+
+FACTORIES["softbody"] = _softbody_factory
 
 
 def _dynamixel_factory() -> Iterator[BackendFactory]:

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Protocol
 
 import mujoco
 import numpy as np
 
 from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
 from snakebot.backends.pacing import Pacer
+from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
     build_model,
@@ -23,6 +25,14 @@ from snakebot.errors import ConfigError, SimulationDivergedError
 
 JointSelection = int | slice | Sequence[int] | np.ndarray
 """Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""
+
+
+class Simulated(Protocol):
+    """A backend with a MuJoCo model and data to render or view (the twin, a soft body)."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+
 
 # MuJoCo answers instability by resetting the state and counting a warning, not with NaN.
 _BAD_WARNINGS = np.array(
@@ -39,7 +49,8 @@ class TwinBackend(Backend):
     """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
 
     ``friction`` overrides the robot's ground model (``--friction``); ``timestep_s`` overrides
-    ``twin.timestep_s``. Control periods passed to ``advance`` must be whole numbers of steps.
+    ``twin.timestep_s``; ``terrain`` adds Miller's cliff (the snake starts on its plateau).
+    Control periods passed to ``advance`` must be whole numbers of steps.
     """
 
     def __init__(
@@ -49,9 +60,11 @@ class TwinBackend(Backend):
         friction: GroundFriction | None = None,
         timestep_s: float | None = None,
         realtime: bool = False,
+        terrain: Cliff | None = None,
     ) -> None:
         super().__init__()
         self.robot = robot
+        self.terrain = terrain
         self.joint_count = robot.joint_count
         self.stop_policy = robot.safety.stop_policy
         self._friction = friction
@@ -65,7 +78,10 @@ class TwinBackend(Backend):
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
         self.model, _ = build_model(
-            self.robot, friction=self._friction, timestep_s=self._timestep_override
+            self.robot,
+            friction=self._friction,
+            timestep_s=self._timestep_override,
+            terrain=self.terrain,
         )
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]

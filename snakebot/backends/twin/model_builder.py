@@ -15,6 +15,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.servo_model import ServoDynamics, history_samples, servo_dynamics
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
@@ -94,8 +95,10 @@ def build_spec(
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
     scene_path: Path = SCENE_PATH,
+    terrain: Cliff | None = None,
 ) -> mujoco.MjSpec:
-    """An ``MjSpec`` of ``robot`` in the scene; compile it, or ``to_xml()`` it for a viewer."""
+    """An ``MjSpec`` of ``robot`` in the scene (on ``terrain``'s plateau if one is given);
+    compile it, or ``to_xml()`` it for a viewer."""
     spec = mujoco.MjSpec.from_file(str(scene_path))
     spec.modelname = robot.name
     spec.compiler.degree = False
@@ -110,7 +113,8 @@ def build_spec(
     for index in range(robot.link_count):
         body = parent.add_body(name=link_name(index))
         if index == 0:
-            body.pos = [0.0, 0.0, radius + 1e-3]
+            base = terrain.start_height_m if terrain is not None else 0.0
+            body.pos = [0.0, 0.0, base + radius + 1e-3]
             body.add_freejoint(name="root")
         else:
             body.pos = [-length, 0.0, 0.0]
@@ -133,6 +137,8 @@ def build_spec(
             friction=ground.pair_friction(radius),
         )
         parent = body
+    if terrain is not None:
+        terrain.add_to(spec)
     head = spec.body(link_name(0))
     head.add_camera(
         name="track",
@@ -195,12 +201,13 @@ def build_model(
     *,
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
+    terrain: Cliff | None = None,
 ) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
     """Compile the twin of ``robot``; returns the model and the spec it came from.
 
     ConfigError naming the robot file if MuJoCo refuses the model (see :func:`compile_spec`).
     """
-    spec = build_spec(robot, friction=friction, timestep_s=timestep_s)
+    spec = build_spec(robot, friction=friction, timestep_s=timestep_s, terrain=terrain)
     add_actuators(spec, robot)
     return compile_spec(spec, robot), spec
 

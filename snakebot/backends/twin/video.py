@@ -9,7 +9,7 @@ from typing import Any
 
 import mujoco
 
-from snakebot.backends.twin.backend import TwinBackend
+from snakebot.backends.twin.backend import Simulated
 from snakebot.errors import MissingDependencyError
 
 
@@ -24,7 +24,7 @@ class VideoRecorder:
 
     def __init__(
         self,
-        backend: TwinBackend,
+        backend: Simulated,
         path: Path,
         rate_hz: float,
         *,

@@ -6,14 +6,14 @@ import os
 from types import TracebackType
 from typing import Any
 
-from snakebot.backends.twin.backend import TwinBackend
+from snakebot.backends.twin.backend import Simulated
 from snakebot.errors import BackendError
 
 
 class PassiveViewer:
     """Opens ``mujoco.viewer.launch_passive``; closing the window stops nothing but the view."""
 
-    def __init__(self, backend: TwinBackend) -> None:
+    def __init__(self, backend: Simulated) -> None:
         if (
             os.name == "posix"
             and not os.environ.get("DISPLAY")

@@ -1,0 +1,247 @@
+"""A mass-spring body as a Backend: the controller's joints are its muscle channels.
+
+Joint ``j`` is channel ``muscles.channels[j % k]`` of segment ``j // k``: yaw and pitch in rad,
+axial in strain. ``send_command`` sets the muscles' rest lengths (snakebot.backends.softbody.
+muscles); ``advance`` steps MuJoCo and applies Miller's directional friction after every step;
+``read_state`` measures the channels from the lattice's shape, so tracking errors compare like
+with like. Efforts are generalised muscle forces (N·m for bends, N·m per unit strain), so effort
+times velocity is the muscles' power.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.pacing import Pacer
+from snakebot.backends.softbody.friction import DirectionalFriction
+from snakebot.backends.softbody.model import build_body_model
+from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
+from snakebot.backends.twin.cliff import Cliff
+from snakebot.config.body import BodyConfig
+from snakebot.errors import ConfigError, SimulationDivergedError
+
+_BAD_WARNINGS = np.array(
+    [
+        mujoco.mjtWarning.mjWARN_BADQACC,
+        mujoco.mjtWarning.mjWARN_BADQPOS,
+        mujoco.mjtWarning.mjWARN_BADQVEL,
+    ],
+    dtype=int,
+)
+
+
+@dataclass(frozen=True)
+class _Snapshot:
+    """What one state of the lattice measures: channels and their rates (3, S) each, ring
+    centres (R, 3) and the head ring's frame (3, 3), columns forward, left, up."""
+
+    channels: np.ndarray
+    rates: np.ndarray
+    centres: np.ndarray
+    head_frame: np.ndarray
+
+
+class SoftBodyBackend(Backend):
+    """Steps Miller's lattice of ``body``; as fast as possible, or paced to the wall clock.
+
+    Options: ``friction`` (floor coefficient, overrides ``ground.friction``), ``directional``
+    (Miller's rule on or off, overrides ``ground.directional``), ``terrain`` (a Cliff, or None
+    for the flat floor) and ``realtime``. Control periods must be whole numbers of timesteps.
+
+    A mass-spring muscle has no position loop: its stiffness and damping are the body file's
+    springs, so ``set_gains`` records the gains and changes nothing. Torque off relaxes every
+    muscle to the rest shape (``stop_policy = "limp"``).
+    """
+
+    def __init__(
+        self,
+        body: BodyConfig,
+        *,
+        friction: float | None = None,
+        directional: bool | None = None,
+        terrain: Cliff | None = None,
+        realtime: bool = False,
+    ) -> None:
+        super().__init__()
+        self.robot = body  # the config under the name the other backends use
+        self.body = body
+        self.joint_count = body.joint_count
+        self.stop_policy = body.safety.stop_policy
+        self.directional = body.ground.directional if directional is None else directional
+        self.friction = body.ground.friction if friction is None else friction
+        self.terrain = terrain
+        self.gains: ServoGains | None = None
+        self._realtime = realtime
+        self._pacer: Pacer | None = None
+        self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
+        self._command = np.zeros(self.joint_count)
+        self.model: mujoco.MjModel
+        self.data: mujoco.MjData
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def _connect(self) -> None:
+        if not (math.isfinite(self.friction) and self.friction >= 0):
+            raise ConfigError("--friction", "", f"expected a number >= 0, got {self.friction}")
+        built = build_body_model(self.body, friction=self.friction, terrain=self.terrain)
+        self.model, self.lattice = built.model, built.lattice
+        self.data = mujoco.MjData(self.model)
+        self.start_positions = built.start_positions
+        lat = self.body.lattice
+        self.muscles = MuscleMap(self.lattice, lat.segment_length_m, lat.width_m, lat.height_m)
+        self.friction_rule = DirectionalFriction(
+            built.point_geoms, self.model.ngeom, built.start_positions
+        )
+        self.friction_rule.enabled = self.directional
+        # Views into MjData: point displacements and world velocities, (P, 3) each.
+        self._displacement = self.data.qpos.reshape(-1, 3)
+        self._velocity = self.data.qvel.reshape(-1, 3)
+        self._previous = self.start_positions.copy()
+        self._previous_time = 0.0
+        self._snapshot: _Snapshot | None = None
+        self.torque_enabled = True
+        self._apply_muscles()
+        mujoco.mj_forward(self.model, self.data)
+        self._start_com = self._measure().centres.mean(axis=0)
+        self._axis_sum = np.zeros(3)
+        self._contact_sum = 0.0
+        self._cycles = 0
+        self._steps: dict[float, int] = {}
+        self._pacer = Pacer(self.stats) if self._realtime else None
+
+    def _close(self) -> None:
+        self.stats.extra.update(self.travel())
+        self.set_torque(self.stop_policy == "hold")
+
+    # -- geometry ------------------------------------------------------------------------------
+    def positions(self) -> np.ndarray:
+        """World positions (P, 3) of the point masses in lattice order, now."""
+        return self.start_positions + self._displacement  # type: ignore[no-any-return]
+
+    def _channels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if not self.torque_enabled:
+            zero = np.zeros(self.body.lattice.segments)
+            return zero, zero, zero
+        return self._layout.split(self._command)
+
+    def _ring_scale(self) -> np.ndarray:
+        if not self.body.muscles.volume_preservation:
+            return np.ones(self.lattice.rings)
+        return self.muscles.ring_scale(self.muscles.segment_lengths(self.positions()))
+
+    def _apply_muscles(self) -> None:
+        """Write every spring's rest length for the command (or the rest shape, torque off), and
+        keep d(rest length)/d(channel) for the efforts."""
+        yaw, pitch, axial = self._channels()
+        rest, self._jacobian = self.muscles.rest_lengths_and_jacobian(
+            yaw, pitch, axial, self._ring_scale()
+        )
+        self.data.ctrl[:] = rest
+
+    # -- the cycle ---------------------------------------------------------------------------
+    def _measure(self) -> _Snapshot:
+        """Measure the lattice now and one physics step earlier (for rates), once per state."""
+        if self._snapshot is None:
+            both = np.stack((self._previous, self.positions()))
+            centres, forward, left, up = self.muscles.ring_axes(both)
+            channels = np.stack(self.muscles.channels_of(centres, forward, left, up), axis=1)
+            elapsed = float(self.data.time) - self._previous_time
+            rates = (channels[1] - channels[0]) / elapsed if elapsed > 0 else 0.0 * channels[1]
+            head = np.stack((forward[1, 0], left[1, 0], up[1, 0]), axis=1)
+            self._snapshot = _Snapshot(channels[1], rates, centres[1], head)
+        return self._snapshot
+
+    def _read_state(self) -> JointState:
+        snapshot = self._measure()
+        effort = self.muscles.segment_efforts(self._jacobian, self.data.actuator_force)
+        return JointState(
+            time_s=float(self.data.time),
+            position_rad=self._layout.join(*snapshot.channels),
+            velocity_rad_s=self._layout.join(*snapshot.rates),
+            effort_nm=self._layout.join(*effort),
+        )
+
+    def _send_command(self, position_rad: np.ndarray) -> None:
+        self._command = position_rad.copy()
+        self._apply_muscles()
+
+    def _set_gains(self, gains: ServoGains) -> None:
+        self.gains = gains
+
+    def _set_torque(self, enabled: bool) -> None:
+        self.torque_enabled = enabled
+        self._apply_muscles()
+
+    def steps_for(self, dt_s: float) -> int:
+        """Physics steps in a control period; it must be a whole number of timesteps."""
+        timestep = float(self.model.opt.timestep)
+        steps = round(dt_s / timestep)
+        if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
+            raise ConfigError(
+                "--rate",
+                "",
+                f"control period {dt_s:g} s is not a whole number of {timestep:g} s physics "
+                f"steps; pick a rate that divides {1 / timestep:g} Hz (e.g. 50, 100, 250)",
+            )
+        self._steps[dt_s] = steps
+        return steps
+
+    def _advance(self, dt_s: float) -> None:
+        steps = self._steps.get(dt_s) or self.steps_for(dt_s)
+        model, data = self.model, self.data
+        if self.body.muscles.volume_preservation:
+            self._apply_muscles()
+        warnings = data.warning.number
+        before = int(warnings[_BAD_WARNINGS].sum())
+        rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
+        self._snapshot = None
+        for step in range(steps):
+            if step == steps - 1:
+                self._previous = self.positions()
+                self._previous_time = float(data.time)
+            mujoco.mj_step(model, data)
+            if rule.enabled and data.ncon:
+                rule.apply(displacement, velocity, data.contact.geom)
+        if int(warnings[_BAD_WARNINGS].sum()) != before or not np.isfinite(data.qpos).all():
+            raise SimulationDivergedError(
+                float(data.time), "MuJoCo reported bad accelerations (state was reset)"
+            )
+        self._track()
+        if self._pacer is not None:
+            self._pacer.wait(dt_s)
+
+    # -- whole-body measures ------------------------------------------------------------------
+    def body_state(self) -> BodyState:
+        """Centre of mass of the points and the head ring's orientation (w, x, y, z)."""
+        self._require_connected()
+        snapshot = self._measure()
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, snapshot.head_frame.reshape(-1))
+        return BodyState(com_m=snapshot.centres.mean(axis=0), head_quat=quat)
+
+    def _track(self) -> None:
+        """Accumulate the body axis and floor contact once per control cycle."""
+        centres = self._measure().centres
+        axis = centres[0] - centres[-1]
+        self._axis_sum += axis / max(math.sqrt(float(axis @ axis)), 1e-12)
+        if self.data.ncon:
+            touching = self.friction_rule.touching(self.data.contact.geom)
+            self._contact_sum += float(np.count_nonzero(touching)) / self.lattice.points
+        self._cycles += 1
+
+    def travel(self) -> dict[str, float]:
+        """Since connect: the mean body axis (tail to head) and the angle from it to the net
+        COM displacement, both in degrees in the horizontal plane (0: head first, ±90: sideways,
+        ±180: tail first), and the mean fraction of points touching the ground."""
+        dx, dy = (self._measure().centres.mean(axis=0) - self._start_com)[:2]
+        axis = math.degrees(math.atan2(self._axis_sum[1], self._axis_sum[0]))
+        heading = math.degrees(math.atan2(dy, dx))
+        return {
+            "body_axis_deg": axis,
+            "travel_angle_deg": math.remainder(heading - axis, 360.0),
+            "contact_fraction": self._contact_sum / max(self._cycles, 1),
+        }
