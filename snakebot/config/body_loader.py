@@ -8,9 +8,7 @@ robots first, then bodies.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
-from typing import Any
 
 from snakebot.config.body import (
     CHANNEL_AXES,
@@ -23,7 +21,7 @@ from snakebot.config.body import (
     MuscleConfig,
     SpringConfig,
 )
-from snakebot.config.fields import Table
+from snakebot.config.fields import Table, read_toml
 from snakebot.config.loader import config_search_path, load_robot, resolve_robot_path, robot_names
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
@@ -59,16 +57,6 @@ def resolve_body_path(name_or_path: str | Path) -> Path:
     )
 
 
-def _read(path: Path) -> dict[str, Any]:
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except OSError as exc:
-        raise ConfigError(path, "", f"cannot read: {exc.strerror}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(path, "", f"not valid TOML: {exc}") from exc
-
-
 def load_robot_or_body(name_or_path: str | Path) -> RobotConfig | BodyConfig:
     """What ``--robot`` names: a robot (servo chain) or a mass-spring body.
 
@@ -78,7 +66,7 @@ def load_robot_or_body(name_or_path: str | Path) -> RobotConfig | BodyConfig:
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
         path = resolve_robot_path(candidate)
-        return load_body(path) if "kind" in _read(path) else load_robot(path)
+        return load_body(path) if "kind" in read_toml(path) else load_robot(path)
     name = str(name_or_path)
     if name in robot_names():
         return load_robot(name)
@@ -97,7 +85,7 @@ def load_robot_or_body(name_or_path: str | Path) -> RobotConfig | BodyConfig:
 def load_body(name_or_path: str | Path) -> BodyConfig:
     """Load and validate a body by name (``worm``) or path; errors name file and key path."""
     path = resolve_body_path(name_or_path)
-    root = Table(path, _read(path))
+    root = Table(path, read_toml(path))
     kind = root.text("kind", choices=(BODY_KIND,))
     assert kind == BODY_KIND
     name = root.text("name", path.stem)
