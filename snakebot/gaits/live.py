@@ -34,7 +34,8 @@ class LiveStatus:
     """A snapshot of a live gait for displays and telemetry.
 
     ``gait`` is the gait driven (or resumed after a pause); ``blend`` the fraction 0..1 of a
-    transition under way (None when there is none); ``speed_limit`` the fastest speed the
+    transition under way (None when there is none) and ``blend_left_s`` the time it still takes
+    (0 when none); ``speed_limit`` the fastest speed the
     bounds and the servos allow at the set amplitude; ``phase_rad`` the driven gait's phases
     (empty while holding a pose); ``governed_cycles`` counts cycles whose time the governor
     slowed to keep a step within the budget.
@@ -47,6 +48,7 @@ class LiveStatus:
     bounds: ControlBounds | None
     speed_limit: float
     blend: float | None
+    blend_left_s: float
     phase_rad: tuple[float, ...]
     governed_cycles: int
     finished: bool
@@ -115,22 +117,17 @@ class LiveGait(Gait):
         self._last = None
         self._time_s = None
 
+    def check(self, name: str, params: Mapping[str, object] | None = None) -> None:
+        """Raise GaitError unless gait ``name`` with ``params`` can be driven live here."""
+        self._track_model(name, params)
+
     def select(self, name: str, params: Mapping[str, object] | None = None) -> None:
         """Blend into gait ``name`` (with ``params`` over its defaults) at the current set
         point; also resumes a pause. Raises GaitError for an unknown gait, bad parameters or a
         gait that cannot be driven live; the current motion then goes on unchanged."""
         if self._mode == "stopping":
             return
-        spec = get_spec(name)
-        model = TrackModel(
-            spec,
-            resolve_params(name, params),
-            self.joint_count,
-            self.lower,
-            self.upper,
-            self.steer,
-            self.smoothing_s,
-        )
+        model = self._track_model(name, params)
         self._gait, self._params, self._model = name, dict(params or {}), model
         self._setpoint = self._clip(self._setpoint)
         self._mode = "driving"
@@ -187,6 +184,7 @@ class LiveGait(Gait):
             bounds=None if self._model is None else self._model.bounds,
             speed_limit=self._speed_limit,
             blend=None if blend is None else blend.fraction,
+            blend_left_s=0.0 if blend is None else max(blend.duration_s - blend.elapsed_s, 0.0),
             phase_rad=() if track is None else tuple(float(v) for v in track.phases),
             governed_cycles=self.governed_cycles,
             finished=self.finished,
@@ -223,6 +221,17 @@ class LiveGait(Gait):
         self._mode = "driving"
 
     # -- inside ----------------------------------------------------------------------------
+    def _track_model(self, name: str, params: Mapping[str, object] | None) -> TrackModel:
+        return TrackModel(
+            get_spec(name),
+            resolve_params(name, params),
+            self.joint_count,
+            self.lower,
+            self.upper,
+            self.steer,
+            self.smoothing_s,
+        )
+
     def _advance(self, source: Source, dt_s: float) -> tuple[Source, FloatArray]:
         budget = self.speed_budget_rad_s * self.control_period_s
         fraction = 1.0
