@@ -21,6 +21,8 @@ from snakebot.drive.keymap import HELP
 from snakebot.drive.loop import DriveCycle
 from snakebot.gaits.live import LiveStatus
 
+WIDTH = 78
+"""Longest line drawn: wider lines wrap and would break redrawing in place."""
 FRAME_PERIOD_S = 0.25
 """Four frames a second: readable numbers, negligible cost."""
 _HIDE_CURSOR, _SHOW_CURSOR, _CLEAR_LINE = "\x1b[?25l", "\x1b[?25h", "\x1b[2K"
@@ -68,7 +70,8 @@ def render(frame: Frame) -> list[str]:
             f"phase {_phase(status.phase_rad)}"
         )
     else:
-        lines += ["  speed     -", "  amplitude -"]
+        held = "the rest pose" if status.mode != "driving" else "the start pose"
+        lines += [f"  speed     -    (holding {held})", "  amplitude -"]
     lines.append(
         f"  rate      {frame.achieved_rate_hz:5.1f} Hz of {frame.rate_hz:g}   overruns "
         f"{frame.overruns}   time {frame.drive_time_s:7.1f} s"
@@ -85,14 +88,24 @@ def render(frame: Frame) -> list[str]:
     lines.append(f"  servos    hottest {heat}   errors {', '.join(frame.alerts) or 'none'}")
     if frame.notice:
         lines.append(f"  note      {frame.notice}")
-    gaits = "  ".join(
+    gaits = [
         f"[{n + 1} {name}]" if n == frame.gait_index else f"{n + 1} {name}"
         for n, name in enumerate(frame.gaits)
-    )
-    lines.append(f"  gaits     {gaits}")
-    keys = "  ".join(f"{key}: {what}" for key, what in HELP[:5])
-    lines += [f"  keys      {keys}", "            " + "  ".join(f"{k}: {w}" for k, w in HELP[5:])]
+    ]
+    lines += _wrapped("  gaits     ", gaits)
+    lines += _wrapped("  keys      ", [short for _, _, short in HELP if short])
     return lines
+
+
+def _wrapped(label: str, items: Sequence[str]) -> list[str]:
+    """``items`` after ``label``, two spaces apart, in lines of at most WIDTH characters."""
+    rows: list[list[str]] = [[]]
+    for item in items:
+        if rows[-1] and len(label) + len("  ".join([*rows[-1], item])) > WIDTH:
+            rows.append([])
+        rows[-1].append(item)
+    indent = " " * len(label)
+    return [(label if n == 0 else indent) + "  ".join(row) for n, row in enumerate(rows)]
 
 
 def _phase(phase_rad: Sequence[float]) -> str:

@@ -90,18 +90,18 @@ DEFAULT_KEYS: dict[str, Action] = {
 """Keys to actions; letters match either case."""
 
 HELP = (
-    ("w / up", "faster (below 0: backwards)"),
-    ("s / down", "slower"),
-    ("a / left", "turn left"),
-    ("d / right", "turn right"),
-    ("x", "halt: speed and turn to 0"),
-    ("+ / -", "amplitude up / down"),
-    ("] / [", "longer / shorter wave"),
-    ("1-9, tab", "gait number n, next gait"),
-    ("space", "pause to the rest pose / resume"),
-    ("q, esc, ctrl-c", "stop (rest pose, then the stop policy)"),
+    ("w / up", "faster (below 0: backwards)", "w/s speed"),
+    ("s / down", "slower", ""),
+    ("a / left", "turn left", "a/d turn"),
+    ("d / right", "turn right", ""),
+    ("x", "halt: speed and turn to 0", "x halt"),
+    ("+ / -", "amplitude up / down", "+/- amplitude"),
+    ("] / [", "longer / shorter wave", "]/[ wave"),
+    ("1-9, tab", "gait number n, next gait", "1-9 tab gait"),
+    ("space", "pause to the rest pose / resume", "space pause"),
+    ("q, esc, ctrl-c", "stop (rest pose, then the stop policy)", "q stop"),
 )
-"""The key map as (keys, what they do) rows, for the display and the docs."""
+"""The key map as (keys, what they do, short form for the display) rows."""
 
 
 def action_for(key: str, keys: dict[str, Action] | None = None) -> Action | None:
