@@ -55,7 +55,8 @@ class PadMapper:
                 self.unplugged = True
             elif kind == "axis" and attrs["axis"] in (SPEED_AXIS, TURN_AXIS):
                 control = "speed" if attrs["axis"] == SPEED_AXIS else "turn"
-                value = -stick_value(float(attrs["value"]))  # up and left are negative on a pad
+                # up and left are negative on a pad; + 0.0 turns -0.0 into 0.0
+                value = -stick_value(float(attrs["value"])) + 0.0
                 if value != self.sent[control]:
                     self.sent[control] = value
                     out.append(f"{control}={value:g}")
