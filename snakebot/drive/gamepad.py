@@ -4,7 +4,9 @@ The left stick sets speed (up = forward) and turn (left = left) directly as ``sp
 ``turn=V`` keys, so a gamepad drive records and replays like a keyboard one. Buttons use SDL's
 numbering, the same for Xbox-style pads on Linux, Windows and macOS: A (0) pause/resume, B (1)
 halt, X (2) next gait, Y (3) stop. The d-pad moves amplitude (up/down) and wavelength
-(right/left). Unplugging the pad sets ``lost``: the drive stops safely.
+(right/left). A stick held off centre when the drive starts is ignored until it has been
+centred once, so a pad lying on its stick cannot start the snake. Unplugging the pad sets
+``lost``: the drive stops safely.
 """
 
 from __future__ import annotations
@@ -43,7 +45,13 @@ class PadMapper:
 
     instance_id: int
     sent: dict[str, float] = field(default_factory=lambda: {"speed": 0.0, "turn": 0.0})
+    armed: dict[str, bool] = field(default_factory=lambda: {"speed": True, "turn": True})
     unplugged: bool = False
+
+    def prime(self, axis: int, raw: float) -> None:
+        """The stick's position when the drive starts: off centre, it waits to be centred."""
+        control = "speed" if axis == SPEED_AXIS else "turn"
+        self.armed[control] = stick_value(raw) == 0.0
 
     def keys(self, events: Iterable[tuple[str, dict[str, Any]]]) -> list[str]:
         """Keys for (kind, attributes) events: kind is axis, button, hat or removed."""
@@ -57,7 +65,9 @@ class PadMapper:
                 control = "speed" if attrs["axis"] == SPEED_AXIS else "turn"
                 # up and left are negative on a pad; + 0.0 turns -0.0 into 0.0
                 value = -stick_value(float(attrs["value"])) + 0.0
-                if value != self.sent[control]:
+                if not self.armed[control]:
+                    self.armed[control] = value == 0.0
+                elif value != self.sent[control]:
                     self.sent[control] = value
                     out.append(f"{control}={value:g}")
             elif kind == "button" and attrs["button"] in BUTTONS:
@@ -102,6 +112,9 @@ class GamepadSource(InputSource):
         self._pad = pad
         self._mapper = PadMapper(pad.get_instance_id())
         pygame.event.clear()
+        for axis in (SPEED_AXIS, TURN_AXIS):
+            if axis < pad.get_numaxes():
+                self._mapper.prime(axis, pad.get_axis(axis))
 
     def poll(self, now_s: float) -> list[str]:
         """Keys from the events queued since the last poll; sets ``lost`` on unplug."""

@@ -30,6 +30,17 @@ def test_stick_up_is_forward_and_left_is_left_and_only_changes_are_sent() -> Non
     assert mapper.keys(events) == ["speed=1", "turn=0.5"]
 
 
+def test_a_stick_held_at_start_is_ignored_until_centred() -> None:
+    mapper = PadMapper(instance_id=0)
+    mapper.prime(1, -1.0)  # lying on its stick
+    mapper.prime(0, 0.05)
+    forward = ("axis", {"instance_id": 0, "axis": 1, "value": -1.0})
+    centre = ("axis", {"instance_id": 0, "axis": 1, "value": 0.0})
+    left = ("axis", {"instance_id": 0, "axis": 0, "value": -1.0})
+    assert mapper.keys([forward, left]) == ["turn=1"]
+    assert mapper.keys([centre, forward]) == ["speed=1"]
+
+
 def test_buttons_and_the_d_pad_map_to_keys_and_removal_is_noticed() -> None:
     mapper = PadMapper(instance_id=0)
     events = [
@@ -55,7 +66,8 @@ def test_without_pygame_the_error_gives_the_install_command(
 
 
 @pytest.fixture
-def pygame() -> Iterator[object]:
+def pygame(monkeypatch: pytest.MonkeyPatch) -> Iterator[object]:
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # no window, as GamepadSource runs SDL
     module = pytest.importorskip("pygame")
     if not sys.platform.startswith("linux"):
         pytest.skip("the virtual pad uses the Linux wheel's bundled SDL2")
