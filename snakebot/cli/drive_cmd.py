@@ -252,13 +252,20 @@ def _display(
     def health() -> Mapping[str, np.ndarray]:
         return getattr(backend, "health", {})
 
+    bus = getattr(backend, "bus", None)  # the Dynamixel backend's: retries and alert bits
+
     def alerts() -> tuple[str, ...]:
         extra = backend.stats.extra
-        return tuple(
+        found = [
             f"{key.replace('_', ' ')} {int(extra[key])}"
             for key in ("clipped_commands", "watchdog_rearms")
             if extra.get(key)
-        )
+        ]
+        if bus is not None:
+            retries = sum(bus.retry_counts.values()) + bus.group_retries
+            found += [f"retries {retries}"] if retries else []
+            found += [f"alert bit: servo {i}" for i in sorted(bus.alerts)]
+        return tuple(found)
 
     display = DriveDisplay(
         sys.stderr,
