@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from snakebot.errors import GaitError
-from snakebot.gaits.base import FloatArray, PhasedGait
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait
 from snakebot.gaits.spec import GaitSpec, ParamValue, ParamValues
 
 DEFAULT_TURN_RAD = 0.3
@@ -25,6 +25,37 @@ DEFAULT_SPEED_CAP = 4.0
 DEFAULT_AMPLITUDE_CAP = 2.0
 """Largest amplitude multiple when the gait's amplitude parameters have no bounds."""
 _PHASE_SAMPLES = 96
+
+
+@dataclass(frozen=True)
+class TimeWarpedGait(PhasedGait):
+    """Any gait of time alone seen as one phase, 2*pi*t/period (t in s for an aperiodic gait),
+    so gaits written before phases (plugins) drive live too: speed warps their time."""
+
+    inner: Gait
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "joint_count", self.inner.joint_count)
+
+    @property
+    def gait_label(self) -> str:
+        """The wrapped gait's class name."""
+        return type(self.inner).__name__
+
+    @property
+    def period_s(self) -> float | None:
+        """The wrapped gait's period."""
+        return self.inner.period_s
+
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """[2*pi/period] in rad/s, or [1] (one rad of phase per s) without a period."""
+        period = self.inner.period_s
+        return np.array([2.0 * math.pi / period if period else 1.0])
+
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
+        times = phases[:, 0] / self.phase_rates_rad_s[0]
+        return np.asarray(self.inner.targets(times), dtype=np.float64).reshape(len(times), -1)
 
 
 @dataclass(frozen=True)
@@ -122,12 +153,12 @@ class TrackModel:
         gait = self.spec.factory(
             self.joint_count, ParamValues(self.name, params), self.lower, self.upper
         )
-        if not isinstance(gait, PhasedGait) or gait.uses_measured_pose:
+        if gait.uses_measured_pose:
             raise GaitError(
-                f"{self.name}: cannot be driven live: it is not a function of explicit phases "
-                "or it reads the measured pose (keyframes: use advance=time)"
+                f"{self.name}: cannot be driven live: it reads the measured pose, so its "
+                "targets are no function of a phase (keyframes: use advance=time)"
             )
-        return gait
+        return gait if isinstance(gait, PhasedGait) else TimeWarpedGait(gait)
 
     def param_key(self, controls: LiveControls) -> tuple[float, ...]:
         """The controls that change the gait's parameters (equal keys give the same gait)."""

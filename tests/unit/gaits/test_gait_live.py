@@ -7,13 +7,14 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from snakebot.config import load_robot
 from snakebot.control.safety import SafetyLayer
 from snakebot.errors import GaitError
-from snakebot.gaits import make_gait
-from snakebot.gaits.base import PhasedGait
+from snakebot.gaits import GaitSpec, make_gait, register_gait
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait, as_times, shaped
 from snakebot.gaits.live import LiveGait
 from snakebot.gaits.live_track import LiveControls
 from snakebot.gaits.registry import GAITS
@@ -224,3 +225,36 @@ def test_the_first_command_starts_from_the_measured_pose() -> None:
     gait.select("serpenoid")
     first = gait.command(12.0, np.array([0.5, 2.0, -0.2]))
     np.testing.assert_array_equal(first, [0.5, 1.0, -0.2])  # clipped into the limits
+
+
+class _Rocking(Gait):
+    """A gait of time alone, as plugins wrote them before phases: every joint sin(2 t)."""
+
+    def __init__(self, joint_count: int) -> None:
+        self.joint_count = joint_count
+
+    @property
+    def period_s(self) -> float:
+        return math.pi
+
+    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
+        t, scalar = as_times("rocking", time_s)
+        return shaped(np.repeat(0.3 * np.sin(2 * t)[:, None], self.joint_count, axis=1), scalar)
+
+
+def test_a_gait_of_time_alone_drives_live_with_speed_warping_its_time() -> None:
+    spec = GaitSpec("rocking", "test", (), lambda n, p, lo, hi: _Rocking(n))
+    register_gait(spec)
+    try:
+        gait = live(smoothing_s=0.0)
+        gait.select("rocking")
+        gait.set_controls(LiveControls(speed=2.0))
+        targets = play(gait, 300)
+        assert steps(targets).max() <= SLEW
+        phase = gait.status().phase_rad[0]  # 2 rad/s of phase per s at speed 1: t = phase / 2
+        np.testing.assert_allclose(targets[-1], _Rocking(12).targets(phase / 2.0), atol=1e-9)
+        later = play(gait, 10, t0=300)
+        assert gait.status().phase_rad[0] == pytest.approx(phase + 10 * DT * 2.0 * 2.0)
+        assert later.shape == (10, 12)
+    finally:
+        GAITS.unregister("rocking")
