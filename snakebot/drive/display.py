@@ -8,7 +8,9 @@ due it takes a small immutable ``Frame`` and a writer thread renders it and writ
 
 from __future__ import annotations
 
+import io
 import math
+import os
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -106,6 +108,14 @@ def _wrapped(label: str, items: Sequence[str]) -> list[str]:
         rows[-1].append(item)
     indent = " " * len(label)
     return [(label if n == 0 else indent) + "  ".join(row) for n, row in enumerate(rows)]
+
+
+def _columns(stream: TextIO) -> int:
+    """The terminal's width (lines longer than it would wrap and break redrawing in place)."""
+    try:
+        return os.get_terminal_size(stream.fileno()).columns or WIDTH + 2
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return WIDTH + 2
 
 
 def _phase(phase_rad: Sequence[float]) -> str:
@@ -236,7 +246,8 @@ class DriveDisplay:
             self.failed = True
 
     def _draw(self, frame: Frame) -> None:
-        lines = render(frame)
+        width = _columns(self.stream)
+        lines = [line[: width - 1] for line in render(frame)]
         up = f"\x1b[{self._lines}F" if self._lines else "\r"
         body = "".join(f"{_CLEAR_LINE}{line}\n" for line in lines)
         extra = max(self._lines - len(lines), 0)  # a shorter frame: clear what is left below

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import os
 import re
 
 import numpy as np
@@ -99,3 +100,30 @@ def test_frames_are_drawn_only_when_due_and_the_cursor_comes_back() -> None:
     assert "hottest 52 degC (servo 6)" in text
     assert "0.020 rad RMS" in text and "stopped by quit" in text
     assert "\x1b[" in text.split("\n", 1)[1]  # later frames move up and redraw in place
+
+
+def test_a_narrow_terminal_gets_lines_cut_to_its_width_not_wrapped() -> None:
+    import pty
+
+    master, slave = pty.openpty()
+    try:
+        import fcntl
+        import struct
+        import termios
+
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 40, 0, 0))
+        with open(slave, "w", closefd=False) as stream:
+            display = DriveDisplay(
+                stream, title="t" * 60, gaits=GAITS, gait_index=lambda: 0, notice=lambda: "",
+                rate_hz=100.0, servo_ids=range(1, 13), health=dict, alerts=tuple,
+                overruns=lambda: 0,
+            )
+            display(cycle(0, 0.0))
+            display.close()
+        text = os.read(master, 65536).decode()
+    finally:
+        os.close(master)
+        os.close(slave)
+    for line in text.replace("\r", "").split("\n"):
+        visible = re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", line)
+        assert len(visible) <= 39
