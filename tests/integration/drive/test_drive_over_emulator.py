@@ -67,29 +67,34 @@ def test_the_scripted_tour_drives_the_twin_through_the_bus_and_ends_holding(
     assert np.abs(commands[-1]).max() < 1e-6
 
 
-def test_closing_the_terminal_stops_the_robot_and_leaves_it_limp(config_dir: Path) -> None:
+def test_closing_the_terminal_stops_the_robot_and_leaves_it_limp(
+    config_dir: Path, tmp_path: Path
+) -> None:
     robot = edit_robot(config_dir, "snake12", 'stop_policy = "hold"', 'stop_policy = "limp"')
+    log = tmp_path / "drive.csv"
     with emulator("--robot", str(robot), "--physics") as emu:
         master, slave = pty.openpty()
         drive = subprocess.Popen(
             [sys.executable, "-m", "snakebot", "drive", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", str(robot), "--gaits", "sidewinding", "--json"],
-            stdin=slave, stdout=subprocess.PIPE, stderr=slave, start_new_session=True,
+             emu.port, "--robot", str(robot), "--gaits", "sidewinding", "--log", str(log),
+             "--json"],
+            stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
         )
         os.close(slave)
-        screen = b""
         deadline = time.monotonic() + 30
-        while b"rate " not in screen and time.monotonic() < deadline:  # the display is up
-            screen += os.read(master, 4096)
+        while not (log.exists() and log.read_text().count("\n") > 50):  # driving
+            assert time.monotonic() < deadline and drive.poll() is None, drive.stderr
+            time.sleep(0.05)
         os.write(master, b"wwww")
         time.sleep(2.0)
         os.close(master)  # the terminal window closes
-        out, _ = drive.communicate(timeout=60)
+        out, err = drive.communicate(timeout=60)
         torque = registers(emu.port, "torque_enable")
         goals = registers(emu.port, "goal_position")
-    assert b"gait      sidewinding" in screen
-    assert drive.returncode == 1
+    assert drive.returncode == 1, err.decode()
+    assert b"input lost: the terminal closed" in err
     summary = json.loads(out)
     assert summary["stopped_by"].startswith("input lost: the terminal closed")
+    assert summary["keys"] == 4
     assert torque == [0] * 12  # limp, as the robot file says
     assert max(abs(g - 2048) for g in goals) <= 2  # after ramping to the straight pose
