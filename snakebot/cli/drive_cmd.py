@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +18,8 @@ from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController, GaitChoice
-from snakebot.drive.loop import DriveCycle, DriveObserver, DriveResult, run_drive
+from snakebot.drive.loop import DriveObserver, DriveResult, run_drive
+from snakebot.drive.observers import backend_readings, csv_log_observer
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
@@ -177,7 +178,8 @@ def run(args: argparse.Namespace) -> int:
         controller = DriveController(live, choices, on_event=recorder)
         observers: list[DriveObserver] = []
         if args.log:
-            observers.append(_csv_observer(stack, args.log, robot.joint_count))
+            log = stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
+            observers.append(csv_log_observer(log))
         signals = stack.enter_context(StopSignals())
         stack.enter_context(source)
         stack.enter_context(backend)
@@ -224,18 +226,6 @@ def _recorder(
     return ScriptRecorder(stream, header)
 
 
-def _csv_observer(stack: contextlib.ExitStack, path: Path, joints: int) -> DriveObserver:
-    log = stack.enter_context(CsvTelemetryWriter(path, joints))
-
-    def write(cycle: DriveCycle) -> None:
-        state = cycle.state
-        com = None if cycle.body is None else cycle.body.com_m
-        log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
-                  state.velocity_rad_s, state.effort_nm, com)
-
-    return write
-
-
 def _display(
     stack: contextlib.ExitStack,
     args: argparse.Namespace,
@@ -249,24 +239,7 @@ def _display(
 
     where = f" ({args.port or robot.bus.port})" if args.backend == "dynamixel" else ""
 
-    def health() -> Mapping[str, np.ndarray]:
-        return getattr(backend, "health", {})
-
-    bus = getattr(backend, "bus", None)  # the Dynamixel backend's: retries and alert bits
-
-    def alerts() -> tuple[str, ...]:
-        extra = backend.stats.extra
-        found = [
-            f"{key.replace('_', ' ')} {int(extra[key])}"
-            for key in ("clipped_commands", "watchdog_rearms")
-            if extra.get(key)
-        ]
-        if bus is not None:
-            retries = sum(bus.retry_counts.values()) + bus.group_retries
-            found += [f"retries {retries}"] if retries else []
-            found += [f"alert bit: servo {i}" for i in sorted(bus.alerts)]
-        return tuple(found)
-
+    health, alerts = backend_readings(backend)
     display = DriveDisplay(
         sys.stderr,
         title=f"snakebot drive: {robot.name} on {args.backend}{where}, {robot.joint_count} "
@@ -317,11 +290,12 @@ def _print_summary(summary: dict[str, object]) -> None:
             return "n/a"
         return f"{value:.{digits}f}{unit}" if isinstance(value, float) else f"{value}{unit}"
 
+    gaits = summary["gaits"] if isinstance(summary["gaits"], list) else []
     lines = [
         f"{summary['robot']} driven on {summary['backend']}: stopped by {summary['stopped_by']}",
         f"  time         {fmt('duration_s', ' s', 2)}, {fmt('control_cycles')} cycles at "
         f"{fmt('achieved_rate_hz', ' Hz', 1)} ({fmt('overruns')} overruns)",
-        f"  input        {fmt('keys')} keys; gaits {', '.join(summary['gaits'])}",  # type: ignore[arg-type]
+        f"  input        {fmt('keys')} keys; gaits {', '.join(map(str, gaits))}",
         f"  distance     {fmt('distance_m', ' m')} at heading {fmt('heading_deg', ' deg', 1)}, "
         f"turned {fmt('turn_deg', ' deg', 1)}",
         f"  tracking     {fmt('tracking_rms_rad', ' rad RMS', 4)}; max command "
