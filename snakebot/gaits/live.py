@@ -107,6 +107,7 @@ class LiveGait(Gait):
         self._last: FloatArray | None = None
         self._time_s: float | None = None
         self._speed_limit = 0.0
+        self._models: dict[tuple[str, tuple[tuple[str, object], ...]], TrackModel] = {}
         self.governed_cycles = 0
 
     # -- what the driver does --------------------------------------------------------------
@@ -222,15 +223,22 @@ class LiveGait(Gait):
 
     # -- inside ----------------------------------------------------------------------------
     def _track_model(self, name: str, params: Mapping[str, object] | None) -> TrackModel:
-        return TrackModel(
-            get_spec(name),
-            resolve_params(name, params),
-            self.joint_count,
-            self.lower,
-            self.upper,
-            self.steer,
-            self.smoothing_s,
-        )
+        """The gait's model, built once per (name, params): a key press reuses it."""
+        resolved = resolve_params(name, params)
+        key = (name, tuple(sorted(resolved.items())))
+        model = self._models.get(key)
+        if model is None:
+            model = TrackModel(
+                get_spec(name),
+                resolved,
+                self.joint_count,
+                self.lower,
+                self.upper,
+                self.steer,
+                self.smoothing_s,
+            )
+            self._models[key] = model
+        return model
 
     def _advance(self, source: Source, dt_s: float) -> tuple[Source, FloatArray]:
         budget = self.speed_budget_rad_s * self.control_period_s

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -128,6 +128,9 @@ class TrackModel:
     steer: FloatArray
     smoothing_s: float
     bounds: ControlBounds = field(init=False)
+    _peaks: dict[tuple[float, ...], float] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "bounds", self._bounds())
@@ -179,8 +182,19 @@ class TrackModel:
         return targets
 
     def peak_speed_rad_s(self, controls: LiveControls) -> float:
-        """Fastest joint speed in rad/s over one cycle at speed 1 with these controls."""
-        gait = self.build(replace(controls, speed=1.0))
+        """Fastest joint speed in rad/s over one cycle at speed 1 with these controls (the
+        speed control is ignored); remembered per shape, as key presses ask it again."""
+        key = (*self.param_key(controls), controls.amplitude, controls.turn)
+        peak = self._peaks.get(key)
+        if peak is None:
+            peak = self._peak_speed(controls)
+            if len(self._peaks) > 256:
+                self._peaks.clear()
+            self._peaks[key] = peak
+        return peak
+
+    def _peak_speed(self, controls: LiveControls) -> float:
+        gait = self.build(controls)
         rates = gait.phase_rates_rad_s
         if rates.size == 0 or not np.any(rates):
             return 0.0

@@ -151,7 +151,7 @@ def blend_duration_s(
     duration_s: float,
     speed_budget_rad_s: float,
     setpoint: LiveControls | None,
-    samples: int = 24,
+    samples: int = 12,
 ) -> float:
     """The shortest blend in s that keeps every joint under ``speed_budget_rad_s``.
 
