@@ -45,7 +45,13 @@ class TerminalSource(InputSource):
 
     def open(self) -> None:
         """Find the terminal and put it in raw mode (output processing kept)."""
-        import termios
+        try:
+            import termios
+        except ImportError:  # Windows: no termios
+            raise ConfigError(
+                "--script", "", "keyboard driving needs a POSIX terminal (Linux, macOS); "
+                "here, drive with --gamepad or --script FILE"
+            ) from None
 
         if self._fd is None:
             if sys.stdin is not None and sys.stdin.isatty():
@@ -102,11 +108,11 @@ class TerminalSource(InputSource):
 
     def close(self) -> None:
         """Restore the terminal's settings; close it if we opened it. Idempotent."""
-        import termios
-
         fd, saved = self._fd, self._saved
         self._saved = None
         if fd is not None and saved is not None:
+            import termios
+
             with contextlib.suppress(OSError, termios.error):  # gone: nothing to restore
                 termios.tcsetattr(fd, termios.TCSANOW, saved)
         if fd is not None and self._owned:

@@ -6,17 +6,19 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import pty
 import signal
 import subprocess
 import sys
-import termios
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
+
+if os.name == "posix":
+    import pty
+    import termios
 
 pytestmark = [
     pytest.mark.pty,

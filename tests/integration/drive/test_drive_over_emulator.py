@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import os
-import pty
 import subprocess
 import sys
 import time
@@ -22,6 +21,9 @@ from snakebot.config import load_robot
 from snakebot.telemetry import read_log
 from tests.conftest import edit_robot
 from tests.pty_emulator import emulator
+
+if os.name == "posix":
+    import pty
 
 pytestmark = [
     pytest.mark.pty,
