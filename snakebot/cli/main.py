@@ -20,7 +20,8 @@ from snakebot.errors import SnakebotError, UsageError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
 COMMANDS = (
-    "run", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune", "sysid"
+    "run", "drive", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune",
+    "sysid",
 )
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130

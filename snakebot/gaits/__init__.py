@@ -1,11 +1,13 @@
 """Gaits: joint-angle targets (rad) over time (s) for head-to-tail indexed snake joints."""
 
-from snakebot.gaits.base import Gait
+from snakebot.gaits.base import Gait, PhasedGait
 from snakebot.gaits.compound import CompoundGait
 from snakebot.gaits.dft import DftGait, DftShiftGait, dft_coefficients_from_pose, scale_into_limits
 from snakebot.gaits.expr import parse_number
 from snakebot.gaits.gait_file import load_gait_file, save_gait_file
 from snakebot.gaits.keyframes import KeyframeGait
+from snakebot.gaits.live import LiveGait, LiveStatus
+from snakebot.gaits.live_track import LiveControls
 from snakebot.gaits.registry import (
     GAITS,
     GaitSpec,
@@ -20,7 +22,7 @@ from snakebot.gaits.registry import (
 )
 from snakebot.gaits.serpenoid import SerpenoidGait
 from snakebot.gaits.simple import SimpleGait
-from snakebot.gaits.spec import ParamValues
+from snakebot.gaits.spec import LiveRoles, ParamValues
 
 __all__ = [
     "GAITS",
@@ -30,8 +32,13 @@ __all__ = [
     "Gait",
     "GaitSpec",
     "KeyframeGait",
+    "LiveControls",
+    "LiveGait",
+    "LiveRoles",
+    "LiveStatus",
     "ParamSpec",
     "ParamValues",
+    "PhasedGait",
     "SerpenoidGait",
     "SimpleGait",
     "dft_coefficients_from_pose",

@@ -1,4 +1,9 @@
-"""The gait interface: joint targets (rad) as a pure function of time (s), plus a feedback hook."""
+"""The gait interface: joint targets (rad) as a pure function of time (s), plus a feedback hook.
+
+Periodic gaits are also functions of explicit temporal phases (``PhasedGait``): ``targets(t)`` is
+``targets_at_phase(phase0 + rates * t)``, one formula, so a live driver can integrate the phases
+cycle by cycle and change the frequency without the targets jumping.
+"""
 
 from __future__ import annotations
 
@@ -77,3 +82,55 @@ def check_finite(gait: str, **values: float) -> None:
     for name, value in values.items():
         if not math.isfinite(value):
             raise GaitError(f"{gait}.{name}: expected a finite number, got {value!r}")
+
+
+class PhasedGait(Gait):
+    """A gait whose targets are a function of P temporal phases in rad (P may be 0: static).
+
+    ``targets(t) = targets_at_phase(phase0_rad + phase_rates_rad_s * t)``. Subclasses provide
+    ``phase_rates_rad_s`` (P,), optionally ``phase0_rad`` (P,), and ``_at_phases`` on (T, P).
+    """
+
+    @property
+    @abc.abstractmethod
+    def phase_rates_rad_s(self) -> FloatArray:
+        """How fast each phase turns, shape (P,) in rad/s (P = 0 for a static pose)."""
+
+    @property
+    def phase0_rad(self) -> FloatArray:
+        """The phases (P,) in rad at t = 0."""
+        return np.zeros(self.phase_rates_rad_s.size)
+
+    @property
+    def gait_label(self) -> str:
+        """The name errors start with."""
+        return type(self).__name__
+
+    @abc.abstractmethod
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
+        """Targets (T, N) in rad for phases (T, P) in rad; the one formula of the gait."""
+
+    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
+        """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
+        t, scalar = as_times(self.gait_label, time_s)
+        phases = self.phase0_rad + t[:, None] * self.phase_rates_rad_s
+        return shaped(self._at_phases(phases), scalar)
+
+    def targets_at_phase(self, phase_rad: npt.ArrayLike) -> FloatArray:
+        """Joint angles in rad at explicit phases: (P,) -> (N,), (T, P) -> (T, N).
+
+        Raises GaitError when the phases are not finite or not P per row.
+        """
+        count = self.phase_rates_rad_s.size
+        try:
+            phases = np.asarray(phase_rad, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise GaitError(f"{self.gait_label}: phases must be numbers in rad ({exc})") from exc
+        if phases.ndim not in (1, 2) or phases.shape[-1] != count:
+            raise GaitError(
+                f"{self.gait_label}: expected phases of shape ({count},) or (T, {count}) in rad, "
+                f"got shape {phases.shape}"
+            )
+        if not np.all(np.isfinite(phases)):
+            raise GaitError(f"{self.gait_label}: phases must be finite")
+        return shaped(self._at_phases(np.atleast_2d(phases)), phases.ndim == 1)

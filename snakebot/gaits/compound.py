@@ -3,23 +3,23 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
-import numpy.typing as npt
 
-from snakebot.gaits.base import FloatArray, Gait, as_times, check_finite, check_joint_count, shaped
-from snakebot.gaits.spec import FLAG_UNIT, GaitSpec, ParamSpec, ParamValues
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_finite, check_joint_count
+from snakebot.gaits.spec import FLAG_UNIT, GaitSpec, LiveRoles, ParamSpec, ParamValues
 
 
 @dataclass(frozen=True)
-class CompoundGait(Gait):
+class CompoundGait(PhasedGait):
     """Tesch et al. (2009) gait equation with angles in rad, rad/joint, rad/s.
 
     Even joints n: offset_even + amplitude_even*sin(spatial_freq_even*n - temporal_freq_even*t);
     odd joints: offset_odd + amplitude_odd*sin(spatial_freq_odd*n - temporal_freq_odd*t + shift).
     The rear half is n >= N//2: half_flip negates phase_shift there, offset_split the offsets.
     No (-1)^floor(n/2) hardware flip: joint directions belong to the robot config.
+    Two phases, (temporal_freq_even*t, temporal_freq_odd*t): ``targets_at_phase([pe, po])``.
     """
 
     joint_count: int
@@ -35,6 +35,9 @@ class CompoundGait(Gait):
     half_flip: bool = False
     offset_split: bool = False
     name: str = "compound"
+    _rates: FloatArray = field(init=False, repr=False, compare=False)
+    _even: FloatArray = field(init=False, repr=False, compare=False)
+    _odd: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         check_joint_count(self.name, self.joint_count)
@@ -50,6 +53,23 @@ class CompoundGait(Gait):
             temporal_freq_odd=self.temporal_freq_odd,
             phase_shift=self.phase_shift,
         )
+        n = np.arange(self.joint_count, dtype=np.float64)
+        rear = n >= self.joint_count // 2
+        shift = np.where(self.half_flip & rear, -self.phase_shift, self.phase_shift)
+        rates = np.array([self.temporal_freq_even, self.temporal_freq_odd])
+        object.__setattr__(self, "_rates", rates)
+        object.__setattr__(self, "_even", self.spatial_freq_even * n)
+        object.__setattr__(self, "_odd", self.spatial_freq_odd * n + shift)
+
+    @property
+    def gait_label(self) -> str:
+        """The preset's name."""
+        return self.name
+
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """[temporal_freq_even, temporal_freq_odd] in rad/s."""
+        return self._rates
 
     @property
     def period_s(self) -> float | None:
@@ -59,21 +79,15 @@ class CompoundGait(Gait):
                 return 2.0 * math.pi / abs(omega)
         return None
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
-        t, scalar = as_times(self.name, time_s)
-        n = np.arange(self.joint_count, dtype=np.float64)
-        rear = n >= self.joint_count // 2
-        shift = np.where(self.half_flip & rear, -self.phase_shift, self.phase_shift)
-        side = np.where(self.offset_split & rear, -1.0, 1.0)
-        tt = t[:, None]
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
+        n = np.arange(self.joint_count)
+        side = np.where(self.offset_split & (n >= self.joint_count // 2), -1.0, 1.0)
         even = side * self.offset_even + self.amplitude_even * np.sin(
-            self.spatial_freq_even * n - self.temporal_freq_even * tt
+            self._even - phases[:, :1]
         )
-        odd = side * self.offset_odd + self.amplitude_odd * np.sin(
-            self.spatial_freq_odd * n - self.temporal_freq_odd * tt + shift
-        )
-        return shaped(np.where(n % 2 == 0, even, odd), scalar)
+        odd = side * self.offset_odd + self.amplitude_odd * np.sin(self._odd - phases[:, 1:2])
+        out: FloatArray = np.where(n % 2 == 0, even, odd)
+        return out
 
 
 _PI = math.pi
@@ -101,6 +115,13 @@ _FIELDS: tuple[tuple[str, str, str, tuple[float, float] | None], ...] = (
 _TIES = (
     ("spatial_freq_even", "spatial_freq_odd"),
     ("temporal_freq_even", "temporal_freq_odd"),
+)
+# Driving: both waves scale together; turning biases the even (yaw) joints.
+_LIVE = LiveRoles(
+    amplitude=("amplitude_even", "amplitude_odd"),
+    frequency=_TIES[1],
+    spatial_frequency=_TIES[0],
+    offset=("offset_even",),
 )
 _SIDEWINDING_SEARCH = frozenset(
     (
@@ -226,6 +247,7 @@ def _factory(name: str) -> GaitSpec:
         factory=build,
         ties=_TIES,
         rolls_over=name == "rolling",
+        live=_LIVE,
     )
 
 

@@ -15,8 +15,8 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.errors import GaitError
-from snakebot.gaits.base import FloatArray, Gait, as_times, check_finite, check_joint_count, shaped
-from snakebot.gaits.spec import GaitSpec, ParamSpec, ParamValues
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_finite, check_joint_count
+from snakebot.gaits.spec import GaitSpec, LiveRoles, ParamSpec, ParamValues
 
 ComplexArray = npt.NDArray[np.complex128]
 
@@ -49,7 +49,7 @@ def scale_into_limits(
 
 
 @dataclass(frozen=True)
-class _FourierPose(Gait):
+class _FourierPose(PhasedGait):
     """Shared validation and synthesis of the two DFT gaits; limits () mean +-pi/2 rad."""
 
     gait_name: ClassVar[str] = "dft"
@@ -91,6 +91,11 @@ class _FourierPose(Gait):
         object.__setattr__(self, "_lower", lower)
         object.__setattr__(self, "_upper", upper)
 
+    @property
+    def gait_label(self) -> str:
+        """"dft" or "dft_shift"."""
+        return self.gait_name
+
     def _limit(self, key: str, values: tuple[float, ...], default: float) -> FloatArray:
         if not values:
             return np.full(self.joint_count, default)
@@ -109,22 +114,29 @@ class _FourierPose(Gait):
 
 @dataclass(frozen=True)
 class DftGait(_FourierPose):
-    """A static pose (N,) in rad: the inverse real DFT of the coefficients, fitted into limits."""
+    """A static pose (N,) in rad: the inverse real DFT of the coefficients, fitted into limits.
+
+    No phase (P = 0): the same pose at every time.
+    """
 
     gait_name: ClassVar[str] = "dft"
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """The same pose (N,) in rad for a scalar time, repeated (T, N) for times (T,)."""
-        t, scalar = as_times(self.gait_name, time_s)
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """Empty: a static pose."""
+        return np.zeros(0)
+
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
         pose = self._synthesise(self._spectrum[None, :])
-        return shaped(np.repeat(pose, t.size, axis=0), scalar)
+        return np.repeat(pose, phases.shape[0], axis=0)
 
 
 @dataclass(frozen=True)
 class DftShiftGait(_FourierPose):
     """The DFT pose shifted toward the tail by D = shift0 + shift_rate*t joints (fractional ok).
 
-    Bin k is multiplied by exp(-2j*pi*k*D/N), so an integer D is np.roll(pose, D).
+    Bin k is multiplied by exp(-2j*pi*k*D/N), so an integer D is np.roll(pose, D). One phase,
+    2*pi*D/N rad (a full turn is one lap of the shape along the body).
     """
 
     gait_name: ClassVar[str] = "dft_shift"
@@ -141,13 +153,20 @@ class DftShiftGait(_FourierPose):
         """N/|shift_rate| in s (one full lap of the shape); None when shift_rate is 0."""
         return None if self.shift_rate == 0.0 else self.joint_count / abs(self.shift_rate)
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
-        t, scalar = as_times(self.gait_name, time_s)
-        shift = self.shift0 + self.shift_rate * t
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """[2*pi*shift_rate/N] in rad/s."""
+        return np.array([2.0 * math.pi * self.shift_rate / self.joint_count])
+
+    @property
+    def phase0_rad(self) -> FloatArray:
+        """[2*pi*shift0/N] in rad."""
+        return np.array([2.0 * math.pi * self.shift0 / self.joint_count])
+
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
         k = np.arange(self._spectrum.size, dtype=np.float64)
-        rotation = np.exp(-2j * np.pi * np.outer(shift, k) / self.joint_count)
-        return shaped(self._synthesise(rotation * self._spectrum[None, :]), scalar)
+        rotation = np.exp(-1j * np.outer(phases[:, 0], k))
+        return self._synthesise(rotation * self._spectrum[None, :])
 
 
 _COMMON = (
@@ -191,6 +210,7 @@ SPECS = (
         ),
         params=_COMMON,
         factory=_build_dft,
+        live=LiveRoles(amplitude=("scale",)),
     ),
     GaitSpec(
         name="dft_shift",
@@ -206,5 +226,6 @@ SPECS = (
             ParamSpec("shift0", "joints", 0.0, "shift at t = 0"),
         ),
         factory=_build_shift,
+        live=LiveRoles(amplitude=("scale",), frequency=("shift_rate",)),
     ),
 )

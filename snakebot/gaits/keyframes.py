@@ -8,11 +8,18 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 from scipy.interpolate import CubicSpline
 
 from snakebot.errors import GaitError
-from snakebot.gaits.base import FloatArray, Gait, as_times, check_finite, check_joint_count, shaped
+from snakebot.gaits.base import (
+    FloatArray,
+    Gait,
+    PhasedGait,
+    as_times,
+    check_finite,
+    check_joint_count,
+    shaped,
+)
 from snakebot.gaits.spec import FLAG_UNIT, GaitSpec, ParamSpec, ParamValues
 
 INTERPOLATIONS = ("linear", "cubic")
@@ -33,12 +40,13 @@ class _AdvanceState:
 
 
 @dataclass(frozen=True)
-class KeyframeGait(Gait):
+class KeyframeGait(PhasedGait):
     """A cycle through P poses (flat P*N tuple, rad); segment k lasts durations[k] s.
 
     mirror appends the negated poses (a left/right mirror), doubling the cycle. targets() is
     the time schedule; with advance="error", command() holds each keyframe until the measured
     pose is within error_threshold_rad of it (or timeout_s has passed), then moves on.
+    One phase for the time schedule, 2*pi*t/period_s: a full turn is one cycle.
     """
 
     joint_count: int
@@ -107,6 +115,16 @@ class KeyframeGait(Gait):
         return float(self._knots[-1])
 
     @property
+    def gait_label(self) -> str:
+        """"keyframes"."""
+        return "keyframes"
+
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """[2*pi/period_s] in rad/s."""
+        return np.array([2.0 * math.pi / self.period_s])
+
+    @property
     def uses_measured_pose(self) -> bool:
         """True with advance="error": command() waits for the measured pose to reach a keyframe."""
         return self.advance == "error"
@@ -121,10 +139,9 @@ class KeyframeGait(Gait):
         """When the schedule passes through each keyframe (Q,), in s from the cycle start."""
         return self._knots[:-1].copy()
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """Time-scheduled angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
-        t, scalar = as_times("keyframes", time_s)
-        return shaped(self._schedule(np.mod(t, self.period_s)), scalar)
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
+        turns = phases[:, 0] / (2.0 * math.pi)
+        return self._schedule(np.mod(turns, 1.0) * self.period_s)
 
     def command(self, time_s: float, measured_rad: FloatArray | None = None) -> FloatArray:
         """Targets (N,) in rad; with advance="error" each keyframe is held until reached."""

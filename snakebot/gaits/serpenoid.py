@@ -3,20 +3,20 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
-import numpy.typing as npt
 
-from snakebot.gaits.base import FloatArray, Gait, as_times, check_finite, check_joint_count, shaped
-from snakebot.gaits.spec import GaitSpec, ParamSpec, ParamValues
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_finite, check_joint_count
+from snakebot.gaits.spec import GaitSpec, LiveRoles, ParamSpec, ParamValues
 
 
 @dataclass(frozen=True)
-class SerpenoidGait(Gait):
+class SerpenoidGait(PhasedGait):
     """theta_i(t) = amplitude*sin(omega*t - i*phase_lag) + offset, in rad, for joints i = 0..N-1.
 
-    A positive phase_lag makes joint i lag joint i-1, so the wave travels head -> tail.
+    A positive phase_lag makes joint i lag joint i-1, so the wave travels head -> tail. One
+    phase, phi = omega*t: ``targets_at_phase([phi])``.
     """
 
     joint_count: int
@@ -24,6 +24,8 @@ class SerpenoidGait(Gait):
     omega: float = math.pi
     phase_lag: float = 0.7
     offset: float = 0.0
+    _rates: FloatArray = field(init=False, repr=False, compare=False)
+    _lags: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         check_joint_count("serpenoid", self.joint_count)
@@ -34,18 +36,27 @@ class SerpenoidGait(Gait):
             phase_lag=self.phase_lag,
             offset=self.offset,
         )
+        object.__setattr__(self, "_rates", np.array([self.omega]))
+        object.__setattr__(self, "_lags", self.phase_lag * np.arange(self.joint_count, dtype=float))
+
+    @property
+    def gait_label(self) -> str:
+        """"serpenoid"."""
+        return "serpenoid"
+
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """[omega] in rad/s."""
+        return self._rates
 
     @property
     def period_s(self) -> float | None:
         """2*pi/|omega| in s; None when omega is 0 (a frozen curve)."""
         return None if self.omega == 0.0 else 2.0 * math.pi / abs(self.omega)
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
-        t, scalar = as_times("serpenoid", time_s)
-        joints = np.arange(self.joint_count, dtype=np.float64)
-        phase = self.omega * t[:, None] - self.phase_lag * joints[None, :]
-        return shaped(self.amplitude * np.sin(phase) + self.offset, scalar)
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
+        wave: FloatArray = self.amplitude * np.sin(phases[:, :1] - self._lags[None, :])
+        return wave + self.offset
 
 
 def _build(joint_count: int, p: ParamValues, _lower: FloatArray, _upper: FloatArray) -> Gait:
@@ -99,4 +110,8 @@ SPEC = GaitSpec(
         ),
     ),
     factory=_build,
+    live=LiveRoles(
+        amplitude=("amplitude",), frequency=("omega",), spatial_frequency=("phase_lag",),
+        offset=("offset",),
+    ),
 )

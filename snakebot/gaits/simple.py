@@ -5,16 +5,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import numpy.typing as npt
 
 from snakebot.errors import GaitError
-from snakebot.gaits.base import FloatArray, Gait, as_times, check_joint_count, shaped
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_joint_count
 from snakebot.gaits.spec import GaitSpec, ParamSpec, ParamValues
 
 
 @dataclass(frozen=True)
-class SimpleGait(Gait):
-    """Hold pose (N,) in rad at every time; an empty pose means all zeros (straight)."""
+class SimpleGait(PhasedGait):
+    """Hold pose (N,) in rad at every time; an empty pose means all zeros (straight). No phase."""
 
     joint_count: int
     pose: tuple[float, ...] = ()
@@ -28,11 +27,19 @@ class SimpleGait(Gait):
         if not np.all(np.isfinite(self.pose)):
             raise GaitError("simple.pose: expected finite numbers in rad")
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """The pose (N,) in rad for a scalar time, repeated (T, N) for times (T,)."""
-        t, scalar = as_times("simple", time_s)
+    @property
+    def gait_label(self) -> str:
+        """"simple"."""
+        return "simple"
+
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """Empty: a static pose."""
+        return np.zeros(0)
+
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
         pose = np.asarray(self.pose or (0.0,) * self.joint_count, dtype=np.float64)
-        return shaped(np.tile(pose, (t.size, 1)), scalar)
+        return np.tile(pose, (phases.shape[0], 1))
 
 
 def _build(joint_count: int, p: ParamValues, _lower: FloatArray, _upper: FloatArray) -> Gait:

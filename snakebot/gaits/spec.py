@@ -102,6 +102,32 @@ class ParamValues:
         return value == 1.0
 
 
+@dataclass(frozen=True)
+class LiveRoles:
+    """Which parameters a live driver (``snakebot drive``) moves for each of its controls.
+
+    ``amplitude``: multiplied by the amplitude control; ``frequency``: the temporal frequencies
+    (their bounds cap the speed control, which scales the phase rates); ``spatial_frequency``:
+    divided by the wavelength control; ``offset``: the steering bias set by the turn control.
+    Each names number parameters of the gait; an empty role falls back to a generic control
+    (amplitude scales the targets, turning biases the steering joints) or none (wavelength).
+    """
+
+    amplitude: tuple[str, ...] = ()
+    frequency: tuple[str, ...] = ()
+    spatial_frequency: tuple[str, ...] = ()
+    offset: tuple[str, ...] = ()
+
+    def items(self) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        """(role, parameter names) for every role."""
+        return (
+            ("amplitude", self.amplitude),
+            ("frequency", self.frequency),
+            ("spatial_frequency", self.spatial_frequency),
+            ("offset", self.offset),
+        )
+
+
 GaitFactory = Callable[[int, ParamValues, FloatArray, FloatArray], Gait]
 TuningStart = Callable[[int, Mapping[str, object]], Mapping[str, object]]
 
@@ -118,6 +144,8 @@ class GaitSpec:
     ``fixed`` itself, the rest at their defaults). ``rolls_over``: the body turns over as it
     moves, so tuning does not stop runs whose head is upside down. Raises GaitError when the
     parameters or ties do not fit together.
+
+    ``live`` says which parameters the drive controls move (see LiveRoles).
     """
 
     name: str
@@ -128,6 +156,7 @@ class GaitSpec:
     ties: tuple[tuple[str, ...], ...] = ()
     tuning_start: TuningStart | None = field(default=None, repr=False, compare=False)
     rolls_over: bool = False
+    live: LiveRoles = LiveRoles()
 
     def __post_init__(self) -> None:
         names = self.param_names
@@ -150,6 +179,12 @@ class GaitSpec:
                     f"number parameters, all tunable or none, each in at most one tie"
                 )
             tied |= set(group)
+        for role, keys in self.live.items():
+            if any(k not in names or self.param(k).kind != "number" for k in keys):
+                raise GaitError(
+                    f"gait {self.name!r}: live role {role} must name number parameters of the "
+                    f"gait, got {', '.join(keys)}"
+                )
 
     @property
     def param_names(self) -> tuple[str, ...]:

@@ -1,0 +1,51 @@
+"""Drive observers that adapt existing sinks, and the backend readings the display shows."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from snakebot.backends.base import Backend
+from snakebot.drive.loop import DriveCycle, DriveObserver
+from snakebot.telemetry import CsvTelemetryWriter
+
+
+def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
+    """Write each drive cycle as a row of ``snakebot run``'s telemetry CSV."""
+
+    def write(cycle: DriveCycle) -> None:
+        state = cycle.state
+        com = None if cycle.body is None else cycle.body.com_m
+        log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
+                  state.velocity_rad_s, state.effort_nm, com)
+
+    return write
+
+
+def backend_readings(
+    backend: Backend,
+) -> tuple[Callable[[], Mapping[str, np.ndarray]], Callable[[], tuple[str, ...]]]:
+    """(health, alerts) callables for the display: the backend's slow readings (the Dynamixel
+    backend's ``health``: ``temperature_c`` (N,), ...) and what went wrong so far (clipped
+    commands, Bus Watchdog re-arms, bus retries, servos raising the alert bit)."""
+    bus = getattr(backend, "bus", None)
+
+    def health() -> Mapping[str, np.ndarray]:
+        readings: Mapping[str, np.ndarray] = getattr(backend, "health", {})
+        return readings
+
+    def alerts() -> tuple[str, ...]:
+        extra = backend.stats.extra
+        found = [
+            f"{key.replace('_', ' ')} {int(extra[key])}"
+            for key in ("clipped_commands", "watchdog_rearms")
+            if extra.get(key)
+        ]
+        if bus is not None:
+            retries = sum(bus.retry_counts.values()) + bus.group_retries
+            found += [f"retries {retries}"] if retries else []
+            found += [f"alert bit: servo {i}" for i in sorted(bus.alerts)]
+        return tuple(found)
+
+    return health, alerts

@@ -1,0 +1,121 @@
+"""Keys from the terminal: raw mode on the controlling terminal, read without blocking.
+
+Raw mode (no echo, no line buffering, no signal keys) so every key arrives at once and Ctrl-C,
+Ctrl-Z and Ctrl-\\ are keys the drive handles (stop), not signals that would suspend or kill the
+control loop. Output processing stays on, so the display's newlines still work. The previous
+settings come back on close, whatever happened. A terminal that goes away (EOF, EIO) sets
+``lost``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import select
+import sys
+from typing import Any
+
+from snakebot.drive.keys import KeyDecoder
+from snakebot.drive.sources import InputSource
+from snakebot.errors import ConfigError
+
+TermAttrs = list[Any]
+
+_READ_SIZE = 256
+
+
+class TerminalSource(InputSource):
+    """Keys typed on ``fd`` (default: standard input if it is a terminal, else /dev/tty).
+
+    Raises ConfigError on open when there is no terminal to read.
+    """
+
+    def __init__(self, fd: int | None = None) -> None:
+        self.name = "terminal"
+        self._fd = fd
+        self._owned = False
+        self._saved: TermAttrs | None = None
+        self._decoder = KeyDecoder()
+
+    @property
+    def fd(self) -> int | None:
+        """The terminal's file descriptor while open."""
+        return self._fd
+
+    def open(self) -> None:
+        """Find the terminal and put it in raw mode (output processing kept)."""
+        try:
+            import termios
+        except ImportError:  # Windows: no termios
+            raise ConfigError(
+                "--script", "", "keyboard driving needs a POSIX terminal (Linux, macOS); "
+                "here, drive with --gamepad or --script FILE"
+            ) from None
+
+        if self._fd is None:
+            if sys.stdin is not None and sys.stdin.isatty():
+                self._fd = sys.stdin.fileno()
+            else:
+                try:
+                    self._fd = os.open("/dev/tty", os.O_RDWR | os.O_NOCTTY)
+                except OSError:
+                    raise ConfigError(
+                        "--script", "", "no terminal to read keys from: run `snakebot drive` in "
+                        "a terminal, or give --script FILE or --gamepad"
+                    ) from None
+                self._owned = True
+        if not os.isatty(self._fd):
+            raise ConfigError("--script", "", "standard input is not a terminal: give --script")
+        self.name = f"terminal {os.ttyname(self._fd)}"
+        self._saved = termios.tcgetattr(self._fd)
+        mode = termios.tcgetattr(self._fd)
+        mode[0] &= ~(  # iflag: no break signal, no CR->NL, no parity strip, no XON/XOFF
+            termios.BRKINT | termios.ICRNL | termios.INPCK | termios.ISTRIP | termios.IXON
+        )
+        mode[3] &= ~(termios.ECHO | termios.ICANON | termios.IEXTEN | termios.ISIG)  # lflag
+        mode[6][termios.VMIN] = 1
+        mode[6][termios.VTIME] = 0
+        termios.tcsetattr(self._fd, termios.TCSANOW, mode)
+
+    def poll(self, now_s: float) -> list[str]:
+        """Keys typed since the last poll; sets ``lost`` if the terminal is gone."""
+        if self._fd is None or self.lost is not None:
+            return []
+        keys: list[str] = []
+        got = False
+        while True:
+            try:
+                ready, _, _ = select.select([self._fd], [], [], 0.0)
+                if not ready:
+                    break
+                data = os.read(self._fd, _READ_SIZE)
+            except OSError as exc:
+                if exc.errno in (errno.EAGAIN, errno.EINTR):
+                    break
+                self.lost = f"the terminal closed ({os.strerror(exc.errno or 0)})"
+                break
+            if not data:
+                self.lost = "the terminal closed (end of input)"
+                break
+            got = True
+            keys += self._decoder.feed(data)
+            if len(data) < _READ_SIZE:
+                break
+        if not got:
+            keys += self._decoder.flush()  # a lone ESC with nothing after it this cycle
+        return keys
+
+    def close(self) -> None:
+        """Restore the terminal's settings; close it if we opened it. Idempotent."""
+        fd, saved = self._fd, self._saved
+        self._saved = None
+        if fd is not None and saved is not None:
+            import termios
+
+            with contextlib.suppress(OSError, termios.error):  # gone: nothing to restore
+                termios.tcsetattr(fd, termios.TCSANOW, saved)
+        if fd is not None and self._owned:
+            self._owned = False
+            os.close(fd)
+            self._fd = None
