@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from snakebot.backends.base import Backend
-from snakebot.cli.common import add_robot_option, positive_float, print_json
+from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
 from snakebot.cli.run_cmd import make_backend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
@@ -42,7 +42,7 @@ def add_parser(subparsers: Any) -> None:
         "rest pose, q or ctrl-c stop (rest pose, then the robot's stop policy). "
         "docs/driving.md has the details and the script format.",
     )
-    add_robot_option(parser)
+    add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument(
         "--backend",
         choices=("sim", "dynamixel"),
@@ -99,7 +99,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run, viewer=False, video=None)
+    parser.set_defaults(handler=run, viewer=False, video=None, directional=None, terrain=None)
 
 
 def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoice]:
@@ -162,7 +162,8 @@ def make_source(args: argparse.Namespace) -> InputSource:
 
 def run(args: argparse.Namespace) -> int:
     """Load, connect, drive until a stop, summarise; servos end as the stop policy says."""
-    robot = load_robot(args.robot)
+    hardware = args.backend == "dynamixel"
+    robot = load_robot(robot_name(args, hardware=hardware, what="drive --backend dynamixel"))
     choices = gait_choices(robot, args)
     live = make_live(robot, args)
     for choice in choices:

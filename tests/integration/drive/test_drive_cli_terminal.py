@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -44,7 +45,15 @@ class Terminal:
     def read_until(self, text: bytes, timeout_s: float = 30.0) -> None:
         deadline = time.monotonic() + timeout_s
         while text not in self.screen:
-            assert time.monotonic() < deadline, self.screen[-2000:].decode(errors="replace")
+            remaining = deadline - time.monotonic()
+            assert remaining > 0, self.screen[-2000:].decode(errors="replace")
+            ready, _, _ = select.select([self.master], [], [], min(remaining, 0.5))
+            if not ready:
+                exited = self.proc.poll()
+                assert exited is None, (
+                    f"drive exited {exited}: " + self.screen[-2000:].decode(errors="replace")
+                )
+                continue
             try:
                 self.screen += os.read(self.master, 65536)
             except OSError:
