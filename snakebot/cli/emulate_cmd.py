@@ -15,6 +15,7 @@ import queue
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -26,6 +27,7 @@ from snakebot.errors import ConfigError
 if TYPE_CHECKING:
     from snakebot.emulation.bench import ServoBench
     from snakebot.emulation.physics import TwinMotion
+    from snakebot.emulation.pty_server import PtyServer
 
 
 def add_parser(subparsers: Any) -> None:
@@ -131,15 +133,17 @@ def run(args: argparse.Namespace) -> int:
     previous = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
     server = PtyServer(bench.chain)
     threading.Thread(target=_read_commands, args=(commands,), daemon=True).start()
+    def tick() -> None:
+        while plugs:
+            _command(args, bench, plugs.pop())
+        while not commands.empty():
+            _command(args, bench, commands.get())
+        bench.save()
+
     try:
         server.start()
         _announce(args, robot, server.device_path, baud, bench, motion)
-        while not stop.wait(0.1):
-            while plugs:
-                _command(args, bench, plugs.pop())
-            while not commands.empty():
-                _command(args, bench, commands.get())
-            bench.save()
+        serve_until(stop, server, tick)
     finally:
         server.stop()
         bench.save()
@@ -150,6 +154,15 @@ def run(args: argparse.Namespace) -> int:
     if motion is not None:
         _summary(args, robot, motion)
     return 0
+
+
+def serve_until(stop: threading.Event, server: PtyServer, tick: Callable[[], None]) -> None:
+    """Run ``tick`` every 0.1 s until ``stop`` is set; PtyServerCrashedError (a bug, exit 3) as
+    soon as the server thread has died, so a dead emulator never looks like a silent bus."""
+    while not stop.wait(0.1):
+        server.check()
+        tick()
+    server.check()
 
 
 def _announce(args: argparse.Namespace, robot: RobotConfig, port: str, baud: int,

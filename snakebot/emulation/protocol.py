@@ -7,7 +7,7 @@ parser that finds packets in arbitrary chunks and resyncs after garbage. Referen
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -120,6 +120,12 @@ def fast_status_header(entries: Sequence[tuple[int, int, bytes]]) -> bytes:
     packet (for `entries` of (servo ID, error byte, data)) and the 0x55 instruction."""
     length = 1 + sum(len(data) + 4 for _, _, data in entries)
     return HEADER + bytes([BROADCAST_ID, length & 0xFF, length >> 8, Instruction.STATUS])
+
+
+def fast_reply_bytes(lengths: Iterable[int]) -> int:
+    """Wire bytes of a Fast Sync/Bulk Read reply with these data lengths, one per servo:
+    header(7), 0x55, then error, ID, data and CRC per servo, unstuffed (8 + N·4 + ΣL)."""
+    return 8 + sum(length + 4 for length in lengths)
 
 
 def fast_status_segment(crc_so_far: int, servo_id: int, error: int, data: bytes) -> bytes:

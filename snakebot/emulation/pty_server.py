@@ -22,6 +22,13 @@ from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.wire import LINE_RATES
 
 Trace = Callable[[str, bytes], None]
+
+
+class PtyServerCrashedError(RuntimeError):
+    """The serving thread died on an exception (a bug): the port no longer answers.
+
+    Not a `SnakebotError`: nothing the user did causes it, so the CLI reports it as a bug.
+    """
 _RATES = {getattr(termios, f"B{rate}"): rate for rate in LINE_RATES if hasattr(termios, f"B{rate}")}
 
 
@@ -30,6 +37,8 @@ class PtyServer:
 
     `serve_forever()` blocks; `start()` serves on a daemon thread; `stop()` ends either and closes
     the terminal. `trace(direction, data)` sees "rx" (from the host) and "tx" (to the host) bytes.
+    If the serving thread dies, `failure` holds the exception and `check()` (also run when a
+    `with` block ends) raises `PtyServerCrashedError` from it.
     """
 
     def __init__(
@@ -58,6 +67,7 @@ class PtyServer:
         self._outbox: list[tuple[float, int, bytes]] = []
         self._sequence = 0
         self._closed = False
+        self.failure: BaseException | None = None
 
     def __enter__(self) -> PtyServer:
         return self.start()
@@ -69,6 +79,8 @@ class PtyServer:
         traceback: TracebackType | None,
     ) -> None:
         self.stop()
+        if value is None:
+            self.check()
 
     def start(self) -> PtyServer:
         """Serve on a background thread and return self."""
@@ -76,11 +88,25 @@ class PtyServer:
             raise EmulationError("this PtyServer was stopped; make a new one")
         if self._thread is None:
             self._thread = threading.Thread(
-                target=self.serve_forever, name=f"pty-server {self.device_path}", daemon=True
+                target=self._serve_in_thread, name=f"pty-server {self.device_path}", daemon=True
             )
             self._serving_thread = self._thread
             self._thread.start()
         return self
+
+    def check(self) -> None:
+        """Raise `PtyServerCrashedError` if the serving thread died; otherwise do nothing."""
+        if self.failure is not None:
+            raise PtyServerCrashedError(
+                f"the pty server thread died: {self.failure!r}; {self.device_path} no longer "
+                "answers"
+            ) from self.failure
+
+    def _serve_in_thread(self) -> None:
+        try:
+            self.serve_forever()
+        except BaseException as exc:  # kept for check(): the thread must not die unnoticed
+            self.failure = exc
 
     def stop(self) -> None:
         """Stop serving and close the terminal (idempotent; safe from a signal handler)."""
