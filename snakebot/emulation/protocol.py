@@ -217,10 +217,18 @@ class StreamParser:
         """Bytes held while waiting for the rest of a packet."""
         return len(self._buffer)
 
-    def feed(self, data: bytes | bytearray, now_s: float = 0.0) -> list[Packet]:
-        """Add received bytes (at time `now_s`) and return every packet they complete."""
+    def feed(
+        self, data: bytes | bytearray, now_s: float = 0.0, *, idle_s: float | None = None
+    ) -> list[Packet]:
+        """Add received bytes (at time `now_s`) and return every packet they complete.
+
+        `idle_s`: how long the line was idle before `data` (default: `now_s` minus the time of
+        the last bytes); a partial packet is discarded when it exceeds `stale_after_s`.
+        """
         stale = self._stale_after_s
-        if self._buffer and stale is not None and now_s - self._last_byte_s > stale:
+        if idle_s is None:
+            idle_s = now_s - self._last_byte_s
+        if self._buffer and stale is not None and idle_s > stale:
             self.stats.stale_resets += 1
             self.reset()
         if data:

@@ -3,6 +3,11 @@
 The chain follows wall-clock time and replies are written after their Return Delay Time and wire
 time, in real time. The line rate follows the baud the client sets on the port (when the kernel
 reports a standard rate), so a client at the wrong baud gets silence, as on a real bus.
+
+On a loaded machine this process can be starved of CPU for longer than the Bus Watchdog period
+while the host keeps writing. Each loop therefore reads every byte already waiting before it
+lets the Bus Watchdog judge the elapsed time, and drops a partial packet only after an idle line
+it actually saw: the emulator's own lost time never trips a servo.
 """
 
 from __future__ import annotations
@@ -68,6 +73,7 @@ class PtyServer:
         self._sequence = 0
         self._closed = False
         self.failure: BaseException | None = None
+        self._heard_s = self._quiet_s = 0.0
 
     def __enter__(self) -> PtyServer:
         return self.start()
@@ -127,19 +133,26 @@ class PtyServer:
             raise EmulationError("this PtyServer was stopped; make a new one")
         if self._serving_thread is None:
             self._serving_thread = threading.current_thread()
-        last = time.monotonic()
+        last = self._heard_s = self._quiet_s = time.monotonic()
         try:
             while not self._stopping.is_set():
+                polled = time.monotonic()
+                data = self._read_pending()
                 now = time.monotonic()
-                self.chain.advance(now - last)
+                # Bytes found waiting arrived at some unknown moment since `last` (longer ago
+                # when this process was starved of CPU): time passes first, then they are fed,
+                # and only then may the Bus Watchdog judge the host (chain.advance).
+                self.chain.advance(now - last, bytes_waiting=bool(data))
                 last = now
+                if data:
+                    self._on_bytes(data, now)
+                else:
+                    self._quiet_s = polled
                 self._flush_due(now)
                 wait = self.tick_s
                 if self._outbox:
                     wait = max(0.0, min(wait, self._outbox[0][0] - now))
-                readable, _, _ = select.select([self._master, self._wake_read], [], [], wait)
-                if self._master in readable:
-                    self._on_bytes()
+                select.select([self._master, self._wake_read], [], [], wait)
         finally:
             self._done.set()
             if self._close_when_done:
@@ -158,19 +171,32 @@ class PtyServer:
             return None
         return _RATES.get(speed)
 
-    def _on_bytes(self) -> None:
-        try:
-            data = os.read(self._master, 4096)
-        except OSError:
-            return
-        arrived = time.monotonic()
+    def _read_pending(self) -> bytes:
+        """Every byte the host has written so far (b"" if none); never blocks."""
+        chunks = []
+        while select.select([self._master], [], [], 0)[0]:
+            try:
+                chunk = os.read(self._master, 4096)
+            except OSError:
+                break
+            if not chunk:
+                break
+            chunks.append(chunk)
+        return b"".join(chunks)
+
+    def _on_bytes(self, data: bytes, arrived: float) -> None:
+        """Feed host bytes read at `arrived` and schedule the replies in real time."""
         if self.trace is not None:
             self.trace("rx", data)
         baud = self._line_baud() if self.follow_port_baud else None
+        # The line was surely idle from the last bytes read to the last poll that found none;
+        # a starved poll loop cannot claim more (a partial packet is dropped only after that).
+        idle_s = max(0.0, self._quiet_s - self._heard_s)
+        self._heard_s = arrived
         with self.chain.lock:
             if baud is not None:
                 self.chain.baud = baud
-            for reply in self.chain.receive(data):
+            for reply in self.chain.receive(data, idle_s=idle_s):
                 self._sequence += 1
                 due = arrived + reply.end_s(self.chain.baud)
                 heapq.heappush(self._outbox, (due, self._sequence, reply.data))

@@ -201,8 +201,13 @@ class VirtualServo:
             self.memory.set("torque_enable", 0)
 
     # ----------------------------------------------------------------- time
-    def step(self, dt_s: float) -> None:
-        """Let `dt_s` seconds pass: motion, Bus Watchdog and fault detection."""
+    def step(self, dt_s: float, *, judge_watchdog: bool = True) -> None:
+        """Let `dt_s` seconds pass: motion, Bus Watchdog and fault detection.
+
+        With `judge_watchdog` False the time still counts towards the Bus Watchdog, but it fires
+        no earlier than the next step: instruction bytes that arrived within `dt_s` are still
+        to be fed (see `EmulatedChain.advance`).
+        """
         if dt_s <= 0.0:
             return
         self.uptime_s += dt_s
@@ -212,7 +217,8 @@ class VirtualServo:
         self.motion.step(self, dt_s)
         rules = self._step_rules()  # the motion model may have changed the table
         if (
-            rules.torque_enabled
+            judge_watchdog
+            and rules.torque_enabled
             and not self._watchdog_tripped
             and rules.watchdog_s > 0
             and self._since_packet_s > rules.watchdog_s

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
+import signal
 import threading
+import time
 from collections.abc import Iterator
 
 import dynamixel_sdk as dxl
@@ -76,3 +78,34 @@ def test_emulate_stops_with_the_crash_when_its_server_thread_dies() -> None:
         assert isinstance(crash.value.__cause__, ZeroDivisionError)
     finally:
         server.stop()
+
+
+WATCHDOG, TORQUE, GOAL = 98, 64, 116
+
+
+def test_a_starved_emulator_reads_what_queued_before_it_judges_the_bus_watchdog() -> None:
+    # The emulator process is stopped for 1.5 s (as a loaded machine can starve it) while the
+    # host keeps writing goals every 50 ms, well inside the 1 s watchdog: nothing may trip.
+    with emulator("--robot", "snake12") as emu:
+        port = dxl.PortHandler(emu.port)
+        ph = dxl.PacketHandler(2.0)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        assert ph.write1ByteTxRx(port, 1, TORQUE, 1) == (dxl.COMM_SUCCESS, 0)
+        assert ph.write1ByteTxRx(port, 1, WATCHDOG, 50) == (dxl.COMM_SUCCESS, 0)  # 50 x 20 ms
+        writer = dxl.GroupSyncWrite(port, ph, GOAL, 4)
+        goal = 2048
+        emu.proc.send_signal(signal.SIGSTOP)
+        try:
+            for _ in range(30):
+                goal += 5
+                writer.clearParam()
+                writer.addParam(1, list(goal.to_bytes(4, "little")))
+                assert writer.txPacket() == dxl.COMM_SUCCESS
+                time.sleep(0.05)
+        finally:
+            emu.proc.send_signal(signal.SIGCONT)
+        time.sleep(0.2)  # the emulator catches up; still well inside the watchdog period
+        assert ph.read1ByteTxRx(port, 1, WATCHDOG) == (50, dxl.COMM_SUCCESS, 0)  # not tripped
+        assert ph.read4ByteTxRx(port, 1, GOAL) == (goal, dxl.COMM_SUCCESS, 0)
+        port.closePort()
+        emu.stop()
