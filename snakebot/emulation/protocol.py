@@ -184,8 +184,9 @@ class Packet:
 
 @dataclass
 class ParserStats:
-    """Counts of what the stream parser threw away, for diagnostics and tests."""
+    """Counts of what the stream parser took in and threw away, for diagnostics and tests."""
 
+    received_bytes: int = 0
     packets: int = 0
     dropped_bytes: int = 0
     crc_errors: int = 0
@@ -234,6 +235,7 @@ class StreamParser:
         if data:
             self._last_byte_s = now_s
         self._buffer += data
+        self.stats.received_bytes += len(data)
         packets: list[Packet] = []
         while True:
             packet, consumed = self._next()

@@ -74,6 +74,7 @@ class PtyServer:
         self._closed = False
         self.failure: BaseException | None = None
         self._heard_s = self._quiet_s = 0.0
+        self._in_flight = 0
 
     def __enter__(self) -> PtyServer:
         return self.start()
@@ -99,6 +100,13 @@ class PtyServer:
             self._serving_thread = self._thread
             self._thread.start()
         return self
+
+    @property
+    def replies_in_flight(self) -> int:
+        """Replies scheduled and not yet written to the terminal (0: the host has every reply to
+        what the chain has received; hold `chain.lock` to read it together with the chain's
+        parser stats, as new replies are scheduled under that lock)."""
+        return self._in_flight
 
     def check(self) -> None:
         """Raise `PtyServerCrashedError` if the serving thread died; otherwise do nothing."""
@@ -200,6 +208,7 @@ class PtyServer:
                 self._sequence += 1
                 due = arrived + reply.end_s(self.chain.baud)
                 heapq.heappush(self._outbox, (due, self._sequence, reply.data))
+                self._in_flight += 1
 
     def _flush_due(self, now: float) -> None:
         while self._outbox and self._outbox[0][0] <= now:
@@ -210,3 +219,5 @@ class PtyServer:
                 os.write(self._master, data)
             except OSError:
                 return
+            finally:
+                self._in_flight -= 1
