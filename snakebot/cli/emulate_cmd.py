@@ -152,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
         if motion is not None:
             motion.twin.close()
     if motion is not None:
-        _summary(args, robot, motion)
+        _summary(args, robot, motion, bench)
     return 0
 
 
@@ -205,12 +205,25 @@ def _command(args: argparse.Namespace, bench: ServoBench, command: str) -> None:
         print(text, flush=True)
 
 
-def _summary(args: argparse.Namespace, robot: RobotConfig, motion: TwinMotion) -> None:
-    summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary()}
+def _summary(
+    args: argparse.Namespace, robot: RobotConfig, motion: TwinMotion, bench: ServoBench
+) -> None:
+    stats, servos = bench.chain.parser_stats, bench.chain.servos
+    bus = {
+        "received_bytes": stats.received_bytes,
+        "packets": stats.packets,
+        "dropped_bytes": stats.dropped_bytes,
+        "crc_errors": stats.crc_errors,
+        "stale_resets": stats.stale_resets,
+        "watchdog_trips": sum(s.watchdog_trips for s in servos),
+    }
+    summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary(), "bus": bus}
     if args.json:
         print_json(summary)
     else:
         print(
             f"twin: moved {summary['distance_m']:.3f} m at heading "
-            f"{summary['heading_deg']:.1f} deg in {summary['duration_s']:.1f} s"
+            f"{summary['heading_deg']:.1f} deg in {summary['duration_s']:.1f} s; bus: "
+            f"{bus['packets']} packets, {bus['dropped_bytes']} bytes dropped, "
+            f"{bus['watchdog_trips']} watchdog trips"
         )

@@ -55,6 +55,7 @@ class VirtualServo:
             input_voltage_v=self.table.specs.nominal_voltage_v, temperature_c=temperature_c
         )
         self.uptime_s = 0.0
+        self.watchdog_trips = 0
         self._since_packet_s = 0.0
         self._overload_s = 0.0
         self._watchdog_tripped = False
@@ -111,7 +112,8 @@ class VirtualServo:
 
     @property
     def watchdog_tripped(self) -> bool:
-        """Whether the Bus Watchdog has fired and not been cleared by writing 0."""
+        """Whether the Bus Watchdog has fired and not been cleared by writing 0 (how often it
+        fired since the servo was made: `watchdog_trips`)."""
         return self._watchdog_tripped
 
     def peek(self, key: str) -> int:
@@ -265,6 +267,7 @@ class VirtualServo:
     def _trip_watchdog(self) -> None:
         """Bus Watchdog fired: stop where it is; reads -1 until 0 is written (e-Manual §2.4)."""
         self._watchdog_tripped = True
+        self.watchdog_trips += 1
         self.memory.set("bus_watchdog", -1)
         self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
         self.memory.set("goal_velocity", 0)
