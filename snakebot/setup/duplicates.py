@@ -128,17 +128,20 @@ def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Ev
 def _ask(
     link: Link, servo_id: int, address: int, length: int, tries: int = TRIES
 ) -> tuple[Tally, list[int] | None]:
-    """Read until one clean reply: the tally and the clean data (None if none came)."""
-    clean = corrupt = silent = 0
+    """Read until one clean reply: the tally and the clean data (None if none came).
+
+    A read that gets no reply at all ends the questions (Status Return Level 0 answers pings
+    only, and silence says nothing about collisions).
+    """
+    corrupt = 0
     for _ in range(tries):
         data, result = link.raw_read(servo_id, address, length)
         if result == sdk.COMM_SUCCESS and len(data) == length:
-            return Tally(clean + 1, corrupt, silent), list(data)
-        if result in CORRUPT:
-            corrupt += 1
-        else:
-            silent += 1
-    return Tally(clean, corrupt, silent), None
+            return Tally(1, corrupt, 0), list(data)
+        if result != sdk.COMM_SUCCESS and result not in CORRUPT:
+            return Tally(0, corrupt, 1), None
+        corrupt += 1  # damaged, or a status packet of the wrong length
+    return Tally(0, corrupt, 0), None
 
 
 def judge(evidence: Evidence) -> Verdict:
