@@ -74,3 +74,11 @@ def test_ten_percent_line_noise_is_noise_not_a_shared_id(seed: int, cli: Cli) ->
     corrupt = sum(int(s["corrupt_replies"]) for s in servos)  # type: ignore[call-overload]
     if corrupt:
         assert "the line is noisy" in err and "not shared IDs" in err
+
+
+def test_a_servo_that_answers_pings_only_is_listed_cleanly(snake: Bus, cli: Cli) -> None:
+    snake.servo(4).poke("status_return_level", 0)  # reads get no reply at all
+    code, servos, err = scan_json(cli, snake)
+    assert code == 0, err
+    assert [s["id"] for s in servos] == list(range(1, 13))
+    assert servos[3]["duplicate"] is None and servos[3]["model"] == MODEL
