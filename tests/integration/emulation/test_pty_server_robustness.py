@@ -12,7 +12,7 @@ import dynamixel_sdk as dxl
 import pytest
 
 from snakebot.emulation import make_chain_for_ids
-from tests.pty_emulator import emulator
+from tests.pty_emulator import emulator, patient
 
 pytestmark = [
     pytest.mark.pty,
@@ -40,7 +40,7 @@ def test_an_84_byte_fast_sync_read_for_70_ids_does_not_kill_the_emulator(
     for servo_id in range(1, 71):
         reader.addParam(servo_id)
     assert reader.fastSyncRead() == dxl.COMM_RX_TIMEOUT
-    assert ph.ping(port, 7) == (1060, dxl.COMM_SUCCESS, 0)
+    assert patient(lambda: ph.ping(port, 7)) == (1060, dxl.COMM_SUCCESS, 0)
 
 
 def test_a_dying_server_thread_is_reported_not_silent() -> None:
@@ -90,8 +90,9 @@ def test_a_starved_emulator_reads_what_queued_before_it_judges_the_bus_watchdog(
         port = dxl.PortHandler(emu.port)
         ph = dxl.PacketHandler(2.0)
         assert port.openPort() and port.setBaudRate(BAUD)
-        assert ph.write1ByteTxRx(port, 1, TORQUE, 1) == (dxl.COMM_SUCCESS, 0)
-        assert ph.write1ByteTxRx(port, 1, WATCHDOG, 50) == (dxl.COMM_SUCCESS, 0)  # 50 x 20 ms
+        assert patient(lambda: ph.write1ByteTxRx(port, 1, TORQUE, 1)) == (dxl.COMM_SUCCESS, 0)
+        armed = patient(lambda: ph.write1ByteTxRx(port, 1, WATCHDOG, 50))  # 50 x 20 ms
+        assert armed == (dxl.COMM_SUCCESS, 0)
         writer = dxl.GroupSyncWrite(port, ph, GOAL, 4)
         goal = 2048
         emu.proc.send_signal(signal.SIGSTOP)
@@ -105,7 +106,8 @@ def test_a_starved_emulator_reads_what_queued_before_it_judges_the_bus_watchdog(
         finally:
             emu.proc.send_signal(signal.SIGCONT)
         time.sleep(0.2)  # the emulator catches up; still well inside the watchdog period
-        assert ph.read1ByteTxRx(port, 1, WATCHDOG) == (50, dxl.COMM_SUCCESS, 0)  # not tripped
-        assert ph.read4ByteTxRx(port, 1, GOAL) == (goal, dxl.COMM_SUCCESS, 0)
+        watchdog = patient(lambda: ph.read1ByteTxRx(port, 1, WATCHDOG), seconds=0.5)
+        assert watchdog == (50, dxl.COMM_SUCCESS, 0)  # not tripped
+        assert patient(lambda: ph.read4ByteTxRx(port, 1, GOAL)) == (goal, dxl.COMM_SUCCESS, 0)
         port.closePort()
         emu.stop()
