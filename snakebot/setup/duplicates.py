@@ -98,8 +98,8 @@ def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Ev
     """Ping ``servo_id`` at ``baud``, then read Present Position and the model and firmware.
 
     Each question is asked up to :data:`TRIES` times, until one clean reply. Unless ``patient``,
-    an ID whose first ping gets no reply at all is taken as absent (one timeout, about 35 ms on a
-    real port).
+    an ID whose first two pings get no reply at all is taken as absent (two timeouts, about 70 ms
+    on a real port; one alone can be a hiccup of a busy host).
     """
     position = link.bus.table["present_position"]
     models: list[int] = []
@@ -112,7 +112,7 @@ def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Ev
             models.extend(probe.models)
             clean += 1
             break
-        if silent == attempt + 1 and not patient:
+        if silent == attempt + 1 >= 2 and not patient:
             break
     pings = Tally(clean, corrupt, silent)
     if not models:
