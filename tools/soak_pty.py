@@ -10,6 +10,10 @@ while `--load` CPU-bound processes compete for the cores. The soak passes when:
 - the emulator's resident memory grew by at most `--max-growth-mib` between the end of the first
   fifth of the run and the end (sampled once a second from /proc).
 
+The report also gives `longest_cpu_wait_s`: the longest the emulator or the run waited, runnable,
+for a CPU within a tenth of a second (/proc/<pid>/task/<tid>/schedstat). A machine that starves
+them for 0.1 s or more breaks any 100 ms watchdog or 35 ms timeout whatever the code does.
+
 Usage: python tools/soak_pty.py [--duration 60] [--rate 50] [--load 2] [--json]
 Prints a JSON report with --json; exits 1 if any check fails.
 """
@@ -43,21 +47,48 @@ def rss_mib(pid: int) -> float | None:
     return None
 
 
+def run_queue_s(pid: int) -> dict[int, float]:
+    """Seconds each thread of `pid` has waited, runnable, for a CPU (/proc/.../schedstat)."""
+    waits = {}
+    try:
+        for task in Path(f"/proc/{pid}/task").iterdir():
+            waits[int(task.name)] = int((task / "schedstat").read_text().split()[1]) / 1e9
+    except (OSError, ValueError, IndexError):
+        pass
+    return waits
+
+
 class Sampler(threading.Thread):
-    """Samples a process's resident memory once a second: (seconds since start, MiB)."""
+    """Samples the emulator's resident memory once a second ((seconds since start, MiB)) and,
+    ten times a second, the longest any thread of `pids` waited runnable for a CPU."""
 
     def __init__(self, pid: int) -> None:
         super().__init__(daemon=True)
         self.pid = pid
+        self.pids = [pid]
         self.samples: list[tuple[float, float]] = []
+        self.starved_s = 0.0
         self.done = threading.Event()
 
     def run(self) -> None:
-        start = time.monotonic()
-        while not self.done.wait(1.0):
-            value = rss_mib(self.pid)
-            if value is not None:
-                self.samples.append((time.monotonic() - start, value))
+        start = next_rss = sampled = time.monotonic()
+        last: dict[tuple[int, int], float] = {}
+        while not self.done.wait(0.1):
+            now = time.monotonic()
+            interval, sampled = now - sampled, now
+            for pid in list(self.pids):
+                for tid, waited in run_queue_s(pid).items():
+                    before = last.get((pid, tid))
+                    # Count a wait only if it filled half the interval (this sampler can be
+                    # late too): then it was one stretch of about that length.
+                    if before is not None and waited - before >= 0.5 * interval:
+                        self.starved_s = max(self.starved_s, waited - before)
+                    last[(pid, tid)] = waited
+            if time.monotonic() >= next_rss:
+                next_rss += 1.0
+                value = rss_mib(self.pid)
+                if value is not None:
+                    self.samples.append((time.monotonic() - start, value))
 
 
 def read_json_line(stream: Any, timeout_s: float) -> dict[str, Any]:
@@ -92,12 +123,14 @@ def soak(args: argparse.Namespace) -> dict[str, Any]:
         sampler = Sampler(emulator.pid)
         sampler.start()
         began = time.monotonic()
-        run = subprocess.run(
-            [PYTHON, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
-             "--robot", args.robot, "--gait", args.gait, "--rate", str(args.rate),
-             "--duration", str(args.duration), "--log", str(log), "--json"],
-            capture_output=True, text=True, timeout=args.duration * 4 + 120,
-        )
+        command = [PYTHON, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
+                   "--robot", args.robot, "--gait", args.gait, "--rate", str(args.rate),
+                   "--duration", str(args.duration), "--log", str(log), "--json"]
+        with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True) as process:
+            sampler.pids.append(process.pid)
+            stdout, stderr = process.communicate(timeout=args.duration * 4 + 120)
+        run = subprocess.CompletedProcess(command, process.returncode, stdout, stderr)
         wall_s = time.monotonic() - began
         sampler.done.set()
     finally:
@@ -108,7 +141,9 @@ def soak(args: argparse.Namespace) -> dict[str, Any]:
             emulator.send_signal(signal.SIGINT)
         out, err = emulator.communicate(timeout=60)
     emulated = [json.loads(line) for line in out.splitlines() if line.strip()]
-    return judge(args, run, wall_s, log, emulator.returncode, err, emulated, sampler.samples)
+    report = judge(args, run, wall_s, log, emulator.returncode, err, emulated, sampler.samples)
+    report["longest_cpu_wait_s"] = round(sampler.starved_s, 3)
+    return report
 
 
 def judge(
