@@ -1,4 +1,5 @@
-"""`snakebot emulate --pty --json` in a subprocess, as a user runs it, for pty tests."""
+"""`snakebot emulate --pty --json` in a subprocess, as a user runs it, for pty tests; and
+`patient`, for asking the bus again when a loaded machine delays its answer."""
 
 from __future__ import annotations
 
@@ -7,9 +8,10 @@ import select
 import signal
 import subprocess
 import sys
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, TypeVar
 
 
 class Emulator:
@@ -55,3 +57,28 @@ def emulator(*args: str) -> Iterator[Emulator]:
             proc.send_signal(signal.SIGINT)
             proc.wait(timeout=10)
         assert proc.returncode == 0, proc.stderr.read() if proc.stderr else ""
+
+
+T = TypeVar("T")
+
+
+def patient(transaction: Callable[[], T], seconds: float = 10.0) -> T:
+    """Run an SDK transaction again while it times out or comes back garbled, for `seconds`.
+
+    The emulator is a process like any other: on a loaded machine it can miss the SDK's ~35 ms
+    timeout. Tests that check what the bus says (not when) ask again; any other outcome is
+    returned at once, and an emulator that never answers still fails the test. `transaction`
+    returns what the SDK does: a result code, (result, error) or (value, result, error).
+    """
+    import dynamixel_sdk as dxl
+
+    deadline = time.monotonic() + seconds
+    while True:
+        outcome = transaction()
+        if isinstance(outcome, int):
+            result = outcome
+        else:
+            assert isinstance(outcome, tuple)
+            result = outcome[0] if len(outcome) == 2 else outcome[1]
+        if result not in (dxl.COMM_RX_TIMEOUT, dxl.COMM_RX_CORRUPT) or time.monotonic() > deadline:
+            return outcome

@@ -15,6 +15,7 @@ import queue
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -26,6 +27,7 @@ from snakebot.errors import ConfigError
 if TYPE_CHECKING:
     from snakebot.emulation.bench import ServoBench
     from snakebot.emulation.physics import TwinMotion
+    from snakebot.emulation.pty_server import PtyServer
 
 
 def add_parser(subparsers: Any) -> None:
@@ -131,15 +133,17 @@ def run(args: argparse.Namespace) -> int:
     previous = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
     server = PtyServer(bench.chain)
     threading.Thread(target=_read_commands, args=(commands,), daemon=True).start()
+    def tick() -> None:
+        while plugs:
+            _command(args, bench, plugs.pop())
+        while not commands.empty():
+            _command(args, bench, commands.get())
+        bench.save()
+
     try:
         server.start()
         _announce(args, robot, server.device_path, baud, bench, motion)
-        while not stop.wait(0.1):
-            while plugs:
-                _command(args, bench, plugs.pop())
-            while not commands.empty():
-                _command(args, bench, commands.get())
-            bench.save()
+        serve_until(stop, server, tick)
     finally:
         server.stop()
         bench.save()
@@ -148,8 +152,17 @@ def run(args: argparse.Namespace) -> int:
         if motion is not None:
             motion.twin.close()
     if motion is not None:
-        _summary(args, robot, motion)
+        _summary(args, robot, motion, bench)
     return 0
+
+
+def serve_until(stop: threading.Event, server: PtyServer, tick: Callable[[], None]) -> None:
+    """Run ``tick`` every 0.1 s until ``stop`` is set; PtyServerCrashedError (a bug, exit 3) as
+    soon as the server thread has died, so a dead emulator never looks like a silent bus."""
+    while not stop.wait(0.1):
+        server.check()
+        tick()
+    server.check()
 
 
 def _announce(args: argparse.Namespace, robot: RobotConfig, port: str, baud: int,
@@ -192,12 +205,25 @@ def _command(args: argparse.Namespace, bench: ServoBench, command: str) -> None:
         print(text, flush=True)
 
 
-def _summary(args: argparse.Namespace, robot: RobotConfig, motion: TwinMotion) -> None:
-    summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary()}
+def _summary(
+    args: argparse.Namespace, robot: RobotConfig, motion: TwinMotion, bench: ServoBench
+) -> None:
+    stats, servos = bench.chain.parser_stats, bench.chain.servos
+    bus = {
+        "received_bytes": stats.received_bytes,
+        "packets": stats.packets,
+        "dropped_bytes": stats.dropped_bytes,
+        "crc_errors": stats.crc_errors,
+        "stale_resets": stats.stale_resets,
+        "watchdog_trips": sum(s.watchdog_trips for s in servos),
+    }
+    summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary(), "bus": bus}
     if args.json:
         print_json(summary)
     else:
         print(
             f"twin: moved {summary['distance_m']:.3f} m at heading "
-            f"{summary['heading_deg']:.1f} deg in {summary['duration_s']:.1f} s"
+            f"{summary['heading_deg']:.1f} deg in {summary['duration_s']:.1f} s; bus: "
+            f"{bus['packets']} packets, {bus['dropped_bytes']} bytes dropped, "
+            f"{bus['watchdog_trips']} watchdog trips"
         )

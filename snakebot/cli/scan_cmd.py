@@ -1,24 +1,26 @@
 """``snakebot scan``: which servos answer on a port, with model, firmware and baud rate.
 
-Servos that share an ID are reported: their replies collide, which shows up as corrupt packets or
-contradicting model numbers (see snakebot/setup/duplicates.py). A colliding ID drops out of the
-broadcast ping, so the IDs missing below the highest one found (and ID 1, where new servos
-collide) are pinged one by one.
+The search is ``snakebot.setup.scan``; this module prints what it found and says what went wrong
+in the words of what was seen: two servos sharing an ID (contradicting or always-corrupt
+replies), a line that garbles everything, or line noise (a warning: the servos answer).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from snakebot.cli.common import print_json
 from snakebot.config.loader import BAUD_RATES
 from snakebot.errors import BusError, SnakebotError
 
+if TYPE_CHECKING:
+    from snakebot.setup.scan import ScanEntry, ScanReport
+
 # The SDK's PortHandler accepts these (4.5 Mbps needs a custom handler).
 SCAN_BAUDS = tuple(b for b in BAUD_RATES if b <= 4_000_000)
-FACTORY_ID = 1
 
 
 def add_parser(subparsers: Any) -> None:
@@ -47,60 +49,94 @@ def model_name(model_number: int) -> str:
         return f"model {model_number}"
 
 
-def scan(port: str, bauds: tuple[int, ...], protocol: float = 2.0) -> list[dict[str, Any]]:
-    """Broadcast-ping at each rate; one entry per servo that answered, or whose ID collides.
-
-    An entry with ``"duplicate"`` set says why its replies look like several servos.
-    """
-    from snakebot.setup.duplicates import collision_reason
-    from snakebot.setup.link import Link
-
-    found: list[dict[str, Any]] = []
-    with Link(port, bauds[0]) as link:
-        for baud in bauds:
-            pinged = link.at(baud).broadcast_ping()
-            # A shared ID garbles its broadcast slot and drops out: check the gaps too.
-            gaps = range(1, max(pinged, default=0) + 3)
-            for servo_id in sorted({*pinged, *gaps, FACTORY_ID}):
-                reason = collision_reason(link, servo_id, baud)
-                if servo_id not in pinged and reason is None:
-                    continue
-                number, firmware = pinged.get(servo_id, (0, 0))
-                found.append(
-                    {
-                        "id": servo_id,
-                        "model": model_name(number) if number else "?",
-                        "model_number": number,
-                        "firmware": firmware,
-                        "baud": baud,
-                        "duplicate": reason,
-                    }
-                )
-    return found
-
-
 def run(args: argparse.Namespace) -> int:
-    """Print the servos found; exit 1 when none answer or IDs collide."""
-    from snakebot.setup.errors import DuplicateIdError
+    """Print the servos found; exit 1 when none answer, IDs collide or the line garbles all."""
+    from snakebot.setup.link import Link
+    from snakebot.setup.scan import scan
 
     bauds = SCAN_BAUDS if args.all_bauds else (args.baud,)
     start = time.monotonic()
-    servos = scan(args.port, bauds, args.protocol)
+    with Link(args.port, bauds[0]) as link:
+        report = scan(link, bauds, notify=lambda text: print(f"scan: {text}", file=sys.stderr))
     elapsed = time.monotonic() - start
+    bad_lines = report.bad_lines
+    servos = [_as_dict(e, bad_lines) for e in report.entries]
     if args.json:
         print_json({"port": args.port, "servos": servos, "seconds": round(elapsed, 2)})
     else:
-        for s in servos:
-            clash = f"  DUPLICATE ID: {s['duplicate']}" if s["duplicate"] else ""
-            print(
-                f"ID {s['id']:>3}  {s['model']:<12} firmware {s['firmware']:<3} at {s['baud']} "
-                f"baud{clash}"
-            )
+        for entry in report.entries:
+            print(_line(entry, bad_lines))
         print(f"{len(servos)} servo(s) on {args.port} in {elapsed:.1f} s")
-    clashes = [(s["id"], s["baud"], s["duplicate"]) for s in servos if s["duplicate"]]
+    _warn_noise(report)
+    _raise_problems(args, report)
+    return 0
+
+
+def _as_dict(entry: ScanEntry, bad_lines: list[int]) -> dict[str, Any]:
+    clash = (entry.shared or entry.garbled) and entry.baud not in bad_lines
+    return {
+        "id": entry.servo_id,
+        "model": model_name(entry.model_number) if entry.model_number else "?",
+        "model_number": entry.model_number,
+        "firmware": entry.firmware,
+        "baud": entry.baud,
+        "duplicate": entry.verdict.reason if clash else None,
+        "verdict": entry.verdict.kind.value,
+        "note": None if clash else (entry.verdict.reason or None),
+        "in_broadcast": entry.in_broadcast,
+        "corrupt_replies": entry.corrupt,
+        "replies": entry.replies,
+    }
+
+
+def _line(entry: ScanEntry, bad_lines: list[int]) -> str:
+    text = _as_dict(entry, bad_lines)
+    line = (f"ID {entry.servo_id:>3}  {text['model']:<12} firmware {entry.firmware:<3} at "
+            f"{entry.baud} baud")
+    if text["duplicate"]:
+        label = "DUPLICATE ID" if entry.shared else "DUPLICATE ID?"
+        return f"{line}  {label}: {text['duplicate']}"
+    notes = [text["note"]] if text["note"] else []
+    if not entry.in_broadcast and not text["note"]:
+        notes.append("missing from the broadcast ping, answered on its own")
+    if entry.corrupt and not entry.garbled:
+        notes.append(f"{entry.corrupt} of {entry.replies} replies corrupt")
+    return f"{line}  ({'; '.join(notes)})" if notes else line
+
+
+def _warn_noise(report: ScanReport) -> None:
+    noisy = report.noisy
+    if not noisy:
+        return
+    corrupt = sum(e.corrupt for e in noisy)
+    replies = sum(e.replies for e in noisy)
+    ids = ", ".join(str(e.servo_id) for e in noisy)
+    print(
+        f"snakebot: warning: {corrupt} of {replies} replies from ID(s) {ids} were corrupt, yet "
+        "each of these servos also answered cleanly: the line is noisy (a loose connector, a "
+        "long cable without termination, power wires beside the data line, or a baud rate too "
+        "high for the wiring), not shared IDs",
+        file=sys.stderr,
+    )
+
+
+def _raise_problems(args: argparse.Namespace, report: ScanReport) -> None:
+    from snakebot.setup.errors import DuplicateIdError
+
+    for baud in report.bad_lines:
+        ids = [e.servo_id for e in report.entries if e.baud == baud]
+        raise BusError(
+            args.port, ids,
+            f"at {baud} baud every reply was corrupt ({len(ids)} IDs answered, none cleanly): "
+            "this is the line, not shared IDs. Check the cable and connectors, the RS-485 "
+            "termination and the power supply, and that nothing else drives the bus",
+        )
+    clashes = [
+        (e.servo_id, e.baud, _clash_text(e)) for e in report.problems
+    ]
     if clashes:
         raise DuplicateIdError(args.port, clashes)
-    if not servos:
+    if not report.entries:
         rates = "any rate" if args.all_bauds else f"{args.baud} baud"
         raise BusError(
             args.port,
@@ -108,4 +144,11 @@ def run(args: argparse.Namespace) -> int:
             f"no servo answered at {rates}: check power (the LED blinks at power "
             "on), the cable, the port name, or try --all-bauds",
         )
-    return 0
+
+
+def _clash_text(entry: ScanEntry) -> str:
+    if entry.garbled:
+        return (f"{entry.verdict.reason} while other IDs answer cleanly: two servos sharing the "
+                "ID garble each other's replies (if only one servo has it, its cable or "
+                "connector is damaged)")
+    return entry.verdict.reason

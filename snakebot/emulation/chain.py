@@ -86,31 +86,41 @@ class EmulatedChain:
         return self._parser.stats
 
     # ------------------------------------------------------------------ time and traffic
-    def advance(self, dt_s: float) -> None:
-        """Let `dt_s` seconds of bus time pass: `physics` (if any), then every servo's own step."""
+    def advance(self, dt_s: float, *, bytes_waiting: bool = False) -> None:
+        """Let `dt_s` seconds of bus time pass: `physics` (if any), then every servo's own step.
+
+        `bytes_waiting`: host bytes that arrived at some unknown moment within `dt_s` are still
+        unread (a transport that was starved of CPU); feed them next with `receive`. The Bus
+        Watchdog then fires no earlier than the following advance, so the transport's own lost
+        time is not charged to a host that kept writing.
+        """
         if dt_s <= 0.0:
             return
         with self.lock:
             self.now_s += dt_s
             if self.physics is not None:
                 self.physics.advance(self._servos, dt_s)
+            judge = not bytes_waiting
             for servo in self._servos:
-                servo.step(dt_s)
+                servo.step(dt_s, judge_watchdog=judge)
 
     def byte_time_s(self) -> float:
         """Seconds per byte at the line rate."""
         return byte_time_s(self.baud)
 
-    def receive(self, data: bytes | bytearray) -> list[BusReply]:
+    def receive(self, data: bytes | bytearray, *, idle_s: float | None = None) -> list[BusReply]:
         """Take bytes the host sent (ending now) and return the replies, timed from now.
 
         Complete packets are executed in order; each later packet's replies follow the earlier
-        ones. Garbage and damaged packets are dropped silently, as a servo's receiver does.
+        ones. Garbage and damaged packets are dropped silently, as a servo's receiver does; a
+        partial packet is dropped when the line was idle too long before `data` (`idle_s`, by
+        default the bus time since the last bytes; a transport that cannot tell when bytes
+        arrived passes the idle time it saw).
         """
         with self.lock:
             replies: list[BusReply] = []
             offset = 0.0
-            for packet in self._parser.feed(data, self.now_s):
+            for packet in self._parser.feed(data, self.now_s, idle_s=idle_s):
                 hearing = [
                     s
                     for s in self._servos

@@ -18,6 +18,7 @@ from snakebot.emulation.protocol import (
     StatusError,
     build_status,
     crc16,
+    fast_reply_bytes,
     fast_status_header,
     fast_status_segment,
 )
@@ -169,6 +170,11 @@ def _reads(
     instruction: int,
 ) -> list[Slot]:
     """Slots of a (Fast) Sync/Bulk Read in parameter order; fast replies form one packet."""
+    if fast and fast_reply_bytes(length for _, _, length in requests) > MAX_PACKET_BYTES:
+        # The servos share one packet that no buffer holds (the SDK's is 1024 bytes, and its
+        # 16-bit LEN may overflow): nobody answers, as ROBOTIS's reference slave
+        # (Dynamixel2Arduino `Slave`) sends nothing when a reply would not fit its buffer.
+        return []
     by_id: dict[int, list[VirtualServo]] = {}
     for servo in servos:
         by_id.setdefault(servo.servo_id, []).append(servo)

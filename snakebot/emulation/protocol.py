@@ -7,7 +7,7 @@ parser that finds packets in arbitrary chunks and resyncs after garbage. Referen
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -122,6 +122,12 @@ def fast_status_header(entries: Sequence[tuple[int, int, bytes]]) -> bytes:
     return HEADER + bytes([BROADCAST_ID, length & 0xFF, length >> 8, Instruction.STATUS])
 
 
+def fast_reply_bytes(lengths: Iterable[int]) -> int:
+    """Wire bytes of a Fast Sync/Bulk Read reply with these data lengths, one per servo:
+    header(7), 0x55, then error, ID, data and CRC per servo, unstuffed (8 + N·4 + ΣL)."""
+    return 8 + sum(length + 4 for length in lengths)
+
+
 def fast_status_segment(crc_so_far: int, servo_id: int, error: int, data: bytes) -> bytes:
     """One servo's part of a fast reply: error, ID, data, then the CRC of the packet so far
     (`crc_so_far` is the CRC of every byte sent before this part)."""
@@ -178,8 +184,9 @@ class Packet:
 
 @dataclass
 class ParserStats:
-    """Counts of what the stream parser threw away, for diagnostics and tests."""
+    """Counts of what the stream parser took in and threw away, for diagnostics and tests."""
 
+    received_bytes: int = 0
     packets: int = 0
     dropped_bytes: int = 0
     crc_errors: int = 0
@@ -211,15 +218,24 @@ class StreamParser:
         """Bytes held while waiting for the rest of a packet."""
         return len(self._buffer)
 
-    def feed(self, data: bytes | bytearray, now_s: float = 0.0) -> list[Packet]:
-        """Add received bytes (at time `now_s`) and return every packet they complete."""
+    def feed(
+        self, data: bytes | bytearray, now_s: float = 0.0, *, idle_s: float | None = None
+    ) -> list[Packet]:
+        """Add received bytes (at time `now_s`) and return every packet they complete.
+
+        `idle_s`: how long the line was idle before `data` (default: `now_s` minus the time of
+        the last bytes); a partial packet is discarded when it exceeds `stale_after_s`.
+        """
         stale = self._stale_after_s
-        if self._buffer and stale is not None and now_s - self._last_byte_s > stale:
+        if idle_s is None:
+            idle_s = now_s - self._last_byte_s
+        if self._buffer and stale is not None and idle_s > stale:
             self.stats.stale_resets += 1
             self.reset()
         if data:
             self._last_byte_s = now_s
         self._buffer += data
+        self.stats.received_bytes += len(data)
         packets: list[Packet] = []
         while True:
             packet, consumed = self._next()

@@ -55,6 +55,7 @@ class VirtualServo:
             input_voltage_v=self.table.specs.nominal_voltage_v, temperature_c=temperature_c
         )
         self.uptime_s = 0.0
+        self.watchdog_trips = 0
         self._since_packet_s = 0.0
         self._overload_s = 0.0
         self._watchdog_tripped = False
@@ -111,7 +112,8 @@ class VirtualServo:
 
     @property
     def watchdog_tripped(self) -> bool:
-        """Whether the Bus Watchdog has fired and not been cleared by writing 0."""
+        """Whether the Bus Watchdog has fired and not been cleared by writing 0 (how often it
+        fired since the servo was made: `watchdog_trips`)."""
         return self._watchdog_tripped
 
     def peek(self, key: str) -> int:
@@ -201,8 +203,13 @@ class VirtualServo:
             self.memory.set("torque_enable", 0)
 
     # ----------------------------------------------------------------- time
-    def step(self, dt_s: float) -> None:
-        """Let `dt_s` seconds pass: motion, Bus Watchdog and fault detection."""
+    def step(self, dt_s: float, *, judge_watchdog: bool = True) -> None:
+        """Let `dt_s` seconds pass: motion, Bus Watchdog and fault detection.
+
+        With `judge_watchdog` False the time still counts towards the Bus Watchdog, but it fires
+        no earlier than the next step: instruction bytes that arrived within `dt_s` are still
+        to be fed (see `EmulatedChain.advance`).
+        """
         if dt_s <= 0.0:
             return
         self.uptime_s += dt_s
@@ -212,7 +219,8 @@ class VirtualServo:
         self.motion.step(self, dt_s)
         rules = self._step_rules()  # the motion model may have changed the table
         if (
-            rules.torque_enabled
+            judge_watchdog
+            and rules.torque_enabled
             and not self._watchdog_tripped
             and rules.watchdog_s > 0
             and self._since_packet_s > rules.watchdog_s
@@ -259,6 +267,7 @@ class VirtualServo:
     def _trip_watchdog(self) -> None:
         """Bus Watchdog fired: stop where it is; reads -1 until 0 is written (e-Manual §2.4)."""
         self._watchdog_tripped = True
+        self.watchdog_trips += 1
         self.memory.set("bus_watchdog", -1)
         self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
         self.memory.set("goal_velocity", 0)

@@ -1,38 +1,177 @@
-"""Tell one servo from two sharing an ID: colliding replies come back corrupt or contradictory.
+"""What the replies to one ID show: one servo, two servos sharing the ID, or a noisy line.
 
 Two servos with one ID answer the same instruction at nearly the same time; a UART receiving both
-sees garbage (a CRC error) unless the replies are bit-for-bit equal. Pings of identical models can
-be equal, so Present Position (which differs between shafts) is read as well, and the model number
-in the ping is compared with the Model Number register (mixed models sharing an ID).
+sees garbage (a CRC error) unless the replies are bit-for-bit equal, so every reply to that ID is
+corrupt. Pings of identical models can be equal, so Present Position (which differs between
+shafts) is read as well, and the model number in the ping is compared with the Model Number
+register (mixed models sharing an ID). Line noise corrupts replies now and then, to any ID: an ID
+that answers cleanly even once is one servo on a noisy line, not two servos.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from enum import Enum
+
 from snakebot.backends.dynamixel import sdk
 from snakebot.setup.link import Link
 
+TRIES = 4
+"""Attempts per question before an ID counts as always corrupt: at 10 % line noise, four corrupt
+replies in a row happen once in 10,000."""
+
 CORRUPT = (sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL)
+_INFO_BYTES = 7  # Model Number (0-1), Model Information (2-5), Firmware Version (6)
+
+
+@dataclass(frozen=True)
+class Tally:
+    """Replies to one question: clean, corrupt (CRC or framing errors) and missing."""
+
+    clean: int = 0
+    corrupt: int = 0
+    silent: int = 0
+
+    @property
+    def replies(self) -> int:
+        """Replies that came back at all (clean or corrupt)."""
+        return self.clean + self.corrupt
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """Everything learnt from asking one ID at one baud rate.
+
+    ``pings``, ``reads`` (of Present Position) and ``info`` (reads of the table's first bytes)
+    stop at the first clean reply; ``models`` are the model numbers of clean ping replies;
+    ``model_register`` and ``firmware`` come from ``info`` (None if it never came back clean).
+    """
+
+    servo_id: int
+    baud: int
+    pings: Tally
+    reads: Tally
+    info: Tally
+    models: tuple[int, ...]
+    model_register: int | None
+    firmware: int | None
+
+    @property
+    def answered(self) -> bool:
+        """Whether anything at all came back (clean or corrupt)."""
+        return self.pings.replies > 0
+
+    @property
+    def clean(self) -> bool:
+        """Whether at least one ping came back clean."""
+        return bool(self.models)
+
+    @property
+    def corrupt(self) -> int:
+        """Corrupt replies among all the questions asked."""
+        return self.pings.corrupt + self.reads.corrupt + self.info.corrupt
+
+    @property
+    def replies(self) -> int:
+        """Replies among all the questions asked (clean or corrupt)."""
+        return self.pings.replies + self.reads.replies + self.info.replies
+
+
+class Kind(Enum):
+    """What the replies to one ID say."""
+
+    ABSENT = "absent"
+    ONE_SERVO = "one servo"
+    SHARED = "shared ID"
+    GARBLED = "always corrupt"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``kind`` and, unless one clean servo, ``reason``: what was seen, in words."""
+
+    kind: Kind
+    reason: str = ""
+
+
+def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Evidence:
+    """Ping ``servo_id`` at ``baud``, then read Present Position and the model and firmware.
+
+    Each question is asked up to :data:`TRIES` times, until one clean reply. Unless ``patient``,
+    an ID whose first two pings get no reply at all is taken as absent (two timeouts, about 70 ms
+    on a real port; one alone can be a hiccup of a busy host).
+    """
+    position = link.bus.table["present_position"]
+    models: list[int] = []
+    clean = corrupt = silent = 0
+    for attempt in range(TRIES):
+        probe = link.probe(servo_id, baud, tries=1)
+        corrupt += probe.corrupt
+        silent += probe.silent
+        if probe.models:
+            models.extend(probe.models)
+            clean += 1
+            break
+        if silent == attempt + 1 >= 2 and not patient:
+            break
+    pings = Tally(clean, corrupt, silent)
+    if not models:
+        return Evidence(servo_id, baud, pings, Tally(), Tally(), (), None, None)
+    reads = _ask(link, servo_id, position.address, position.size)[0]
+    info, data = _ask(link, servo_id, 0, _INFO_BYTES, tries=2)
+    model_register = firmware = None
+    if data is not None:
+        model_register, firmware = data[0] | data[1] << 8, data[6]
+    return Evidence(servo_id, baud, pings, reads, info, tuple(models), model_register, firmware)
+
+
+def _ask(
+    link: Link, servo_id: int, address: int, length: int, tries: int = TRIES
+) -> tuple[Tally, list[int] | None]:
+    """Read until one clean reply: the tally and the clean data (None if none came).
+
+    A read that gets no reply at all ends the questions (Status Return Level 0 answers pings
+    only, and silence says nothing about collisions).
+    """
+    corrupt = 0
+    for _ in range(tries):
+        data, result = link.raw_read(servo_id, address, length)
+        if result == sdk.COMM_SUCCESS and len(data) == length:
+            return Tally(1, corrupt, 0), list(data)
+        if result != sdk.COMM_SUCCESS and result not in CORRUPT:
+            return Tally(0, corrupt, 1), None
+        corrupt += 1  # damaged, or a status packet of the wrong length
+    return Tally(0, corrupt, 0), None
+
+
+def judge(evidence: Evidence) -> Verdict:
+    """One servo, two servos on one ID, an ID whose every reply was corrupt, or nobody."""
+    if not evidence.answered:
+        return Verdict(Kind.ABSENT)
+    if not evidence.clean:
+        n = evidence.pings.corrupt
+        return Verdict(Kind.GARBLED, f"all {n} ping replies were corrupt")
+    models = sorted(set(evidence.models))
+    if len(models) > 1:
+        listed = ", ".join(map(str, models))
+        return Verdict(Kind.SHARED, f"ping replies name different models ({listed})")
+    reads = evidence.reads
+    if reads.clean == 0 and reads.corrupt >= TRIES:
+        return Verdict(
+            Kind.SHARED,
+            f"pings came back clean but all {reads.corrupt} reads of Present Position were "
+            "corrupt: servos of one model answer together and their shafts differ",
+        )
+    register = evidence.model_register
+    if register is not None and register != models[0]:
+        return Verdict(
+            Kind.SHARED, f"ping says model {models[0]}, the Model Number register says {register}"
+        )
+    return Verdict(Kind.ONE_SERVO)
 
 
 def collision_reason(link: Link, servo_id: int, baud: int) -> str | None:
-    """Why the replies of ``servo_id`` at ``baud`` look like several servos; None if like one."""
-    probe = link.probe(servo_id, baud, tries=2)
-    if probe.collides:
-        return probe.clash()
-    models = sorted(set(probe.models))
-    if not models:
-        return None
-    table = link.bus.table
-    position = table["present_position"]
-    for _ in range(2):
-        _data, result = link.raw_read(servo_id, position.address, position.size)
-        if result in CORRUPT:
-            return "replies to a read of Present Position were corrupt"
-    data, result = link.raw_read(servo_id, table["model_number"].address, 2)
-    if result in CORRUPT:
-        return "replies to a read of Model Number were corrupt"
-    if result == sdk.COMM_SUCCESS and len(data) == 2:
-        number = data[0] | data[1] << 8
-        if number != models[0]:
-            return f"ping says model {models[0]}, the Model Number register says {number}"
-    return None
+    """Why the replies of ``servo_id`` at ``baud`` look like several servos; None if like one
+    (or like none). An ID whose every reply is corrupt counts as shared here."""
+    verdict = judge(gather(link, servo_id, baud))
+    return verdict.reason if verdict.kind in (Kind.SHARED, Kind.GARBLED) else None

@@ -32,6 +32,7 @@ class DuplicateIdError(BusError):
         lines = "; ".join(f"ID {i} at {b} baud: {why}" for i, b, why in self.problems)
         super().__init__(
             port, sorted({i for i, _, _ in self.problems}),
-            f"{lines}. Two servos probably share an ID: connect one at a time and give each its "
-            "own ID with `snakebot config assign-id` (Dynamixel Wizard's ID Inspection also works)",
+            f"{lines}. Where two servos share an ID, connect them one at a time and give each "
+            "its own ID with `snakebot config assign-id` (Dynamixel Wizard's ID Inspection also "
+            "works)",
         )

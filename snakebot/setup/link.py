@@ -153,6 +153,20 @@ class Link:
                 silent += 1
         return Probe(servo_id, baud, tuple(models), corrupt, silent)
 
+    def broadcast(self, baud: int) -> tuple[dict[int, tuple[int, int]], bool]:
+        """A broadcast ping at ``baud``: ``({id: (model number, firmware)}, garbled)``.
+
+        ``garbled`` says the SDK was left with bytes it could not parse (a reply slot garbled by
+        a collision or noise; the SDK drops that slot). Slow: the SDK always waits its whole
+        window (about 0.8 s at 1 Mbps).
+        """
+        self.at(baud)
+        found, result = self.bus.run([], "broadcast ping", self._raw.broadcast_ping)
+        if result == sdk.COMM_PORT_BUSY:
+            self._raw.release()
+        pinged = {int(i): (int(v[0]), int(v[1])) for i, v in found.items()}
+        return pinged, result in (sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL)
+
     def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
         """One Read without retries: (data, SDK result code); for collision checks."""
         data, result, _error = self.bus.run(

@@ -212,3 +212,13 @@ def test_duplicate_id_vanishes_from_a_broadcast_ping(
     found, result = packet_handler.broadcastPing(port)
     assert result == dxl.COMM_SUCCESS
     assert sorted(found) == [i for i in IDS if i != 2]  # the SDK skips the garbled slot
+
+
+def test_fast_sync_read_too_long_for_one_packet_times_out_and_the_bus_lives_on(
+    port: Port, packet_handler: PH
+) -> None:
+    reader = dxl.GroupSyncRead(port, packet_handler, 0, 1000)
+    for servo_id in range(1, 71):
+        reader.addParam(servo_id)
+    assert reader.fastSyncRead() == dxl.COMM_RX_TIMEOUT
+    assert packet_handler.ping(port, 7) == (1020, dxl.COMM_SUCCESS, 0)

@@ -1,6 +1,7 @@
 """The stock dynamixel_sdk.PortHandler on a real pseudo-terminal served by PtyServer."""
 
 import os
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -8,6 +9,7 @@ import dynamixel_sdk as dxl
 import pytest
 
 from snakebot.emulation import EmulatedChain, EmulationError, make_chain_for_ids
+from tests.pty_emulator import patient
 
 pytestmark = [
     pytest.mark.pty,
@@ -38,23 +40,24 @@ def port(served: tuple[EmulatedChain, str]) -> Iterator[dxl.PortHandler]:
 def test_ping_read_and_sync_read_twelve_servos(port: dxl.PortHandler) -> None:
     ph = dxl.PacketHandler(2.0)
     for servo_id in IDS:
-        assert ph.ping(port, servo_id) == (1060, dxl.COMM_SUCCESS, 0)
-    assert ph.read2ByteTxRx(port, 4, 144) == (111, dxl.COMM_SUCCESS, 0)
+        assert patient(lambda i=servo_id: ph.ping(port, i)) == (1060, dxl.COMM_SUCCESS, 0)
+    assert patient(lambda: ph.read2ByteTxRx(port, 4, 144)) == (111, dxl.COMM_SUCCESS, 0)
     reader = dxl.GroupSyncRead(port, ph, 132, 4)
     for servo_id in IDS:
         reader.addParam(servo_id)
-    assert reader.txRxPacket() == dxl.COMM_SUCCESS
+    assert patient(reader.txRxPacket) == dxl.COMM_SUCCESS
     assert [reader.getData(i, 132, 4) for i in IDS] == [2048] * 12
-    assert reader.fastSyncRead() == dxl.COMM_SUCCESS
+    assert patient(reader.fastSyncRead) == dxl.COMM_SUCCESS
     assert [reader.getData(i, 132, 4) for i in IDS] == [2048] * 12
 
 
 def test_writes_move_the_servos_in_real_time(port: dxl.PortHandler) -> None:
     ph = dxl.PacketHandler(2.0)
-    assert ph.write1ByteTxRx(port, 2, 64, 1) == (dxl.COMM_SUCCESS, 0)
-    assert ph.write4ByteTxRx(port, 2, 116, 2100) == (dxl.COMM_SUCCESS, 0)
-    for _ in range(200):
-        position, result, _ = ph.read4ByteTxRx(port, 2, 132)
+    assert patient(lambda: ph.write1ByteTxRx(port, 2, 64, 1)) == (dxl.COMM_SUCCESS, 0)
+    assert patient(lambda: ph.write4ByteTxRx(port, 2, 116, 2100)) == (dxl.COMM_SUCCESS, 0)
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        position, result, _ = patient(lambda: ph.read4ByteTxRx(port, 2, 132))
         if position == 2100:
             break
     assert (position, result) == (2100, dxl.COMM_SUCCESS)
@@ -73,7 +76,8 @@ def test_spy_url_dumps_the_traffic(served: tuple[EmulatedChain, str], tmp_path: 
     dump = tmp_path / "traffic.txt"
     handler = EmulatedPortHandler(f"spy://{served[1]}?file={dump}")
     assert handler.openPort() and handler.setBaudRate(BAUD)
-    assert dxl.PacketHandler(2.0).ping(handler, 3) == (1060, dxl.COMM_SUCCESS, 0)
+    ping = patient(lambda: dxl.PacketHandler(2.0).ping(handler, 3))
+    assert ping == (1060, dxl.COMM_SUCCESS, 0)
     handler.closePort()
     text = dump.read_text()
     assert "FF FF FD 00 03 03 00 01" in text.upper().replace("  ", " ")
@@ -100,7 +104,7 @@ def test_serve_forever_blocks_until_stopped(stop_from: str) -> None:
         handler.openPort()
         handler.setBaudRate(BAUD)
         try:
-            results.append(dxl.PacketHandler(2.0).ping(handler, 1)[1])
+            results.append(patient(lambda: dxl.PacketHandler(2.0).ping(handler, 1))[1])
             handler.closePort()
         except OSError:  # the server may hang up the terminal before the reply is read
             results.append(dxl.COMM_RX_FAIL)
@@ -111,7 +115,7 @@ def test_serve_forever_blocks_until_stopped(stop_from: str) -> None:
     thread.start()
     server.serve_forever()
     thread.join(timeout=5)
-    assert seen == ["rx", "tx"]
+    assert seen[0] == "rx" and "tx" in seen  # (a loaded machine may need the ping again)
     if stop_from == "client thread":
         assert results == [dxl.COMM_SUCCESS]
     with pytest.raises(EmulationError, match="stopped"):

@@ -253,3 +253,27 @@ def test_two_packets_in_one_chunk_are_answered_in_turn(chain: EmulatedChain) -> 
     replies: list[BusReply] = chain.receive(data)
     assert [parse_packets(r.data)[0].servo_id for r in replies] == [1, 2]
     assert replies[1].start_s >= replies[0].end_s(BAUD)
+
+
+def test_bytes_left_waiting_by_a_starved_transport_are_fed_before_the_watchdog_judges() -> None:
+    chain = make_chain_for_ids("XL430-W250", [1, 2], BAUD)
+    for servo_id in (1, 2):
+        ask(chain, servo_id, Instruction.WRITE, write_params(64, 1, 1))  # torque on
+        ask(chain, servo_id, Instruction.WRITE, write_params(98, 5, 1))  # 100 ms watchdog
+    chain.advance(0.5, bytes_waiting=True)  # a ping to ID 1 arrived somewhere in that 0.5 s
+    ask(chain, 1, Instruction.PING)
+    chain.advance(0.001)
+    assert not chain.servo(1).watchdog_tripped
+    assert chain.servo(2).watchdog_tripped  # nothing was sent to it: the time still counts
+    chain.advance(0.5)
+    assert chain.servo(1).watchdog_tripped
+
+
+def test_a_partial_packet_survives_a_starved_gap_but_not_an_idle_line() -> None:
+    chain = make_chain_for_ids("XL430-W250", [1], BAUD)
+    ping = build_instruction(1, Instruction.PING)
+    assert chain.receive(ping[:5]) == []
+    chain.advance(0.5)
+    assert len(chain.receive(ping[5:], idle_s=0.0)) == 1
+    assert chain.receive(ping[:5]) == []
+    assert chain.receive(ping[5:], idle_s=0.05) == []  # the receiver gave up on the first half

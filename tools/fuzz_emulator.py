@@ -1,0 +1,323 @@
+"""Seeded fuzzing of the emulated Dynamixel bus, in-process and over a real pseudo-terminal.
+
+Each input (tools/fuzz_packets.py: random bytes, field-aware packets, bit flips, truncations,
+wrong and huge lengths, stuffing edge cases, bad CRCs, splices) goes to a chain of three XL430
+servos (IDs 1-3), followed by 1024 zero bytes whenever it could leave a packet half-received.
+Then the campaign checks:
+
+- crash: the chain raised (in-process) or the pty server thread died;
+- hang: the chain spent over 1 s of CPU on one input, or answered nothing (input or probe) for
+  30 s (on a loaded machine a starved emulator is slow, not hung: the slowest input's wall time
+  is reported);
+- corruption: a probe (a ping and a read of Model Number, one servo in turn) was not answered
+  exactly right; a servo that no valid packet in the input addressed with a write-like
+  instruction changed a control-table byte (present values aside); an input without any valid
+  packet got a reply; a reply packet outgrew 1024 bytes; a lone unicast Write the servo
+  rejected changed its table, or one it accepted is not in its table (in-process, where the
+  replies are seen).
+
+State a valid input changed legitimately is put back (fresh servos) before the probe. "Valid"
+is judged by tools/fuzz_packets.candidates, which uses the SDK's CRC, not the emulator's.
+
+Usage: python tools/fuzz_emulator.py [--packets 100000] [--seed 1] [--transport inproc|pty|both]
+       [--pty-packets N] [--json] [--replay INDEX]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any
+
+from fuzz_packets import (
+    BROADCAST,
+    READ_ONLY,
+    RESET,
+    WRITE,
+    Candidate,
+    Inputs,
+    candidates,
+    may_leave_partial,
+)
+from fuzz_targets import (
+    IDS,
+    CrashError,
+    HangError,
+    InProcess,
+    OverPty,
+    Tables,
+    Target,
+    make_servos,
+)
+
+from snakebot.emulation import VirtualServo
+from snakebot.emulation.protocol import MAX_PACKET_BYTES
+
+FILLER = bytes(MAX_PACKET_BYTES)
+VOLATILE = (
+    "realtime_tick", "moving", "moving_status", "present_pwm", "present_load", "present_current",
+    "present_velocity", "present_position", "velocity_trajectory", "position_trajectory",
+    "present_input_voltage", "present_temperature",
+)
+IDENTITY = (7, 8, 12, 13, 68)  # ID, baud, secondary ID, protocol, status return level
+GOAL_ITEMS = ("goal_pwm", "goal_current", "goal_velocity", "goal_position")
+MODE_RESETS = (
+    "velocity_i_gain", "velocity_p_gain", "position_d_gain", "position_i_gain", "position_p_gain",
+    "profile_acceleration", "profile_velocity", "goal_pwm", "goal_current",
+)
+
+
+class Layout:
+    """Which bytes of the table count as state, and which belong to which item."""
+
+    def __init__(self, servo: VirtualServo) -> None:
+        memory = servo.memory
+        self.size = len(memory.data)
+        self.volatile = bytearray(self.size)
+        self.owner: list[str | None] = [None] * self.size
+        for register in memory.items.values():
+            for address in range(register.address, register.address + register.size):
+                self.owner[address] = register.key
+                if register.key in VOLATILE:
+                    self.volatile[address] = 1
+
+        self.stable: list[tuple[int, int]] = []  # runs of addresses that are not volatile
+        start = None
+        for address in range(self.size + 1):
+            steady = address < self.size and not self.volatile[address]
+            if steady and start is None:
+                start = address
+            elif not steady and start is not None:
+                self.stable.append((start, address))
+                start = None
+
+    def changed(self, before: bytes, after: bytes) -> list[int]:
+        """Addresses whose byte changed, present values aside."""
+        if before == after or all(before[a:b] == after[a:b] for a, b in self.stable):
+            return []
+        return [a for a in range(self.size) if before[a] != after[a] and not self.volatile[a]]
+
+
+@dataclass
+class Report:
+    """What a campaign found."""
+
+    transport: str
+    seed: int
+    packets: int = 0
+    seconds: float = 0.0
+    crashes: int = 0
+    hangs: int = 0
+    corruptions: int = 0
+    slowest_s: float = 0.0
+    families: Counter[str] = field(default_factory=Counter)
+    kinds: Counter[str] = field(default_factory=Counter)
+    examples: list[dict[str, Any]] = field(default_factory=list)
+
+    def note(self, what: str, kind: str, index: int, family: str, data: bytes, detail: str) -> None:
+        setattr(self, what, getattr(self, what) + 1)
+        self.kinds[kind] += 1
+        if len(self.examples) < 20:
+            self.examples.append({"index": index, "family": family, "kind": kind,
+                                  "input": data.hex(" "), "detail": detail[-2000:]})
+
+    def as_dict(self) -> dict[str, Any]:
+        rate = self.packets / self.seconds if self.seconds else 0.0
+        return {"transport": self.transport, "seed": self.seed, "packets": self.packets,
+                "seconds": round(self.seconds, 2), "packets_per_s": round(rate),
+                "crashes": self.crashes, "hangs": self.hangs, "corruptions": self.corruptions,
+                "slowest_input_s": round(self.slowest_s, 3),
+                "kinds": dict(self.kinds), "families": dict(self.families),
+                "examples": self.examples}
+
+
+class Campaign:
+    """Runs inputs of campaign `seed` against one target, noting what goes wrong in `report`."""
+
+    def __init__(self, target: Target, seed: int, report: Report) -> None:
+        self.target = target
+        self.seed = seed
+        self.report = report
+        self.inputs = Inputs(IDS)
+        self.layout = Layout(make_servos(1_000_000)[0])
+        self.baseline = self.target.tables().memory
+
+    def run(self, indices: range) -> None:
+        start = time.perf_counter()
+        for index in indices:
+            self.one(index)
+        self.report.seconds += time.perf_counter() - start
+        self.report.packets += len(indices)
+
+    def one(self, index: int) -> None:
+        family, data = self.inputs.make(self.seed, index)
+        self.report.families[family] += 1
+        sent = data + FILLER if may_leave_partial(data) else data
+        before = self.target.tables()
+        began = time.perf_counter()
+        try:
+            replies, after = self.target.send(sent)
+        except HangError as exc:
+            self._fail("hangs", "input not taken in", index, family, data, str(exc))
+            return
+        except CrashError as exc:
+            self._fail("crashes", "chain raised", index, family, data, str(exc))
+            return
+        self.report.slowest_s = max(self.report.slowest_s, time.perf_counter() - began)
+        for kind, detail in self.judge(sent, before, after, replies):
+            self.report.note("corruptions", kind, index, family, data, detail)
+        if any(self.layout.changed(b, a) for b, a in zip(self.baseline, after.memory,
+                                                          strict=False)) \
+                or len(after.memory) != len(self.baseline):
+            self.target.restore()
+        try:
+            self.target.probe(IDS[index % len(IDS)])
+        except HangError as exc:
+            self._fail("hangs", "probe unanswered", index, family, data, str(exc))
+        except AssertionError as exc:
+            self.report.note("corruptions", "probe", index, family, data, str(exc))
+            self.target.restore()
+
+    def _fail(self, what: str, kind: str, index: int, family: str, data: bytes,
+              detail: str) -> None:
+        self.report.note(what, kind, index, family, data, detail)
+        self.target.restart()
+
+    def judge(self, sent: bytes, before: Tables, after: Tables,
+              replies: list[bytes] | None) -> list[tuple[str, str]]:
+        """Corruption findings for one input (see the module docstring)."""
+        found = candidates(sent)
+        problems: list[tuple[str, str]] = []
+        if replies is not None:
+            if not found and replies:
+                problems.append(("reply to garbage", b"".join(replies).hex(" ")))
+            if _long_header(b"".join(replies)):
+                problems.append(("oversized reply", "a LEN field beyond 1017"))
+        writers = [c for c in found if c.instruction not in READ_ONLY]
+        identities = list(before.identities)
+        addressed = _addressed(writers, identities)
+        for number, (old, new) in enumerate(zip(before.memory, after.memory, strict=False)):
+            changed = self.layout.changed(old, new)
+            if changed and number not in addressed:
+                problems.append(("unexplained change",
+                                 f"servo #{number} (ID {identities[number][0]}) bytes {changed}"))
+        if replies is not None and len(writers) == 1 and writers[0].instruction == WRITE:
+            problems += self._check_write(writers[0], found, identities, before.memory,
+                                          after.memory, replies)
+        return problems
+
+    def _check_write(self, write: Candidate, found: list[Candidate],
+                     identities: list[tuple[int, int | None]], before: tuple[bytes, ...],
+                     after: tuple[bytes, ...], replies: list[bytes]) -> list[tuple[str, str]]:
+        """The lone write of an input: rejected, nothing changed; accepted, its bytes stored."""
+        owners = [n for n, (servo_id, _) in enumerate(identities) if servo_id == write.servo_id]
+        others = [c for c in found if c is not write
+                  and c.servo_id in (write.servo_id, BROADCAST)]
+        statuses = [s for s in candidates(b"".join(replies)) if s.servo_id == write.servo_id]
+        if len(owners) != 1 or others or len(statuses) != 1 or len(write.params) < 3:
+            return []
+        number = owners[0]
+        error = statuses[0].params[0] & 0x7F if statuses[0].params else 0
+        if error:
+            changed = self.layout.changed(before[number], after[number])
+            return [("rejected write changed state", f"error {error}, bytes {changed}")] \
+                if changed else []
+        address = write.params[0] | write.params[1] << 8
+        data = write.params[2:]
+        keys = {self.layout.owner[a] for a in range(address, address + len(data))
+                if a < self.layout.size}
+        skip = {"torque_enable"} if keys & set(GOAL_ITEMS) else set()
+        skip |= set(MODE_RESETS) if "operating_mode" in keys else set()
+        wrong = [
+            a for a, byte in zip(range(address, address + len(data)), data, strict=False)
+            if a < self.layout.size and (key := self.layout.owner[a]) is not None
+            and not key.startswith("indirect_data") and key not in skip
+            and after[number][a] != byte
+        ]
+        return [("accepted write not stored", f"addresses {wrong}")] if wrong else []
+
+
+def _addressed(writers: list[Candidate], identities: list[tuple[int, int | None]]) -> set[int]:
+    """Servos (by position) that the write-like packets may have changed."""
+    everyone = set(range(len(identities)))
+    if any(c.servo_id == BROADCAST or c.instruction == RESET or _touches_identity(c)
+           for c in writers):
+        return everyone
+    ids = {c.servo_id for c in writers}
+    return {n for n, (servo_id, shadow) in enumerate(identities)
+            if servo_id in ids or shadow in ids}
+
+
+def _touches_identity(candidate: Candidate) -> bool:
+    if len(candidate.params) < 3:
+        return False
+    address = candidate.params[0] | candidate.params[1] << 8
+    return any(address <= a < address + len(candidate.params) - 2 for a in IDENTITY)
+
+
+def _long_header(data: bytes) -> bool:
+    """Whether a status header in `data` announces more than a 1024-byte packet."""
+    start = data.find(b"\xff\xff\xfd\x00")
+    while start >= 0 and start + 8 <= len(data):
+        if data[start + 7] == 0x55 and (data[start + 5] | data[start + 6] << 8) > 1017:
+            return True
+        start = data.find(b"\xff\xff\xfd\x00", start + 1)
+    return False
+
+
+def run_campaign(transport: str, seed: int, count: int, first: int = 0) -> Report:
+    """Fuzz `count` inputs of campaign `seed` over `transport` ("inproc" or "pty")."""
+    target: Target = InProcess() if transport == "inproc" else OverPty()
+    report = Report(transport, seed)
+    try:
+        Campaign(target, seed, report).run(range(first, first + count))
+    finally:
+        target.close()
+    return report
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--packets", type=int, default=100_000, help="inputs per transport")
+    parser.add_argument("--pty-packets", type=int, help="inputs over the pty (default --packets)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--transport", choices=("inproc", "pty", "both"), default="both")
+    parser.add_argument("--replay", type=int, metavar="INDEX", help="run only input INDEX")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    args = parser.parse_args(argv)
+    transports = ("inproc", "pty") if args.transport == "both" else (args.transport,)
+    reports = []
+    for transport in transports:
+        count = args.packets if transport == "inproc" else (args.pty_packets or args.packets)
+        first = 0
+        if args.replay is not None:
+            count, first = 1, args.replay
+        reports.append(run_campaign(transport, args.seed, count, first))
+    summary = {
+        "command": "python tools/fuzz_emulator.py " + " ".join(argv or sys.argv[1:]),
+        "python": platform.python_version(), "machine": platform.machine(),
+        "cpus": os.cpu_count(), "reports": [r.as_dict() for r in reports],
+    }
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for r in reports:
+            d = r.as_dict()
+            print(f"{d['transport']:>6}: {d['packets']} inputs (seed {d['seed']}) in "
+                  f"{d['seconds']} s, {d['packets_per_s']}/s: {d['crashes']} crashes, "
+                  f"{d['hangs']} hangs, {d['corruptions']} corruptions {d['kinds'] or ''}")
+            for example in d["examples"][:5]:
+                print(f"  #{example['index']} {example['family']}: {example['kind']}: "
+                      f"{example['detail'][:300]}\n    input: {example['input'][:200]}")
+    bad = sum(r.crashes + r.hangs + r.corruptions for r in reports)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,267 @@
+"""Ways into an emulated chain for tools/fuzz_emulator.py: in-process, and over a real pty.
+
+Both start from the same three XL430 servos (IDs 1-3, return delay 0). The pty target runs the
+chain and its `PtyServer` in a child process, as `snakebot emulate` does, and probes it through
+the unmodified SDK; the child says an input was taken in once its parser has counted the bytes
+and no reply is left in flight, and sends the control tables back over a pipe.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import threading
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from multiprocessing.connection import Connection
+from typing import Any, Protocol
+
+from fuzz_packets import packet
+
+from snakebot.emulation import EmulatedChain, VirtualServo
+
+MODEL, MODEL_NUMBER, IDS = "XL430-W250", 1060, (1, 2, 3)
+HANG_S = 1.0
+"""CPU time the emulator may spend on one input before it counts as hung."""
+STALL_S = 30.0
+"""Wall time without an answer that counts as hung whatever the CPU did (a starved emulator on
+a loaded machine is slow, not hung, so wall time alone is judged far more leniently)."""
+
+
+class HangError(Exception):
+    """The chain spent over HANG_S of CPU on an input, or answered nothing for STALL_S."""
+
+
+class CrashError(Exception):
+    """The chain raised, or the pty server thread died (the text says how)."""
+
+
+@dataclass(frozen=True)
+class Tables:
+    """Every servo's control-table bytes and (ID, secondary ID), in chain order."""
+
+    memory: tuple[bytes, ...]
+    identities: tuple[tuple[int, int | None], ...]
+
+
+def make_servos(baud: int) -> list[VirtualServo]:
+    """The three servos every input starts from (return delay 0, so the pty runs fast)."""
+    servos = []
+    for serial, servo_id in enumerate(IDS, start=1):
+        servo = VirtualServo(MODEL, servo_id, baud=baud, processing_time_s=20e-6 + 4e-6 * serial)
+        servo.poke("return_delay_time", 0)
+        servos.append(servo)
+    return servos
+
+
+def tables(chain: EmulatedChain) -> Tables:
+    """The chain's state as the campaign compares it."""
+    with chain.lock:
+        servos = chain.servos
+        return Tables(
+            tuple(bytes(s.memory.data) for s in servos),
+            tuple((s.servo_id, s.secondary_id) for s in servos),
+        )
+
+
+def restore(chain: EmulatedChain) -> None:
+    """Fresh servos in place of the fuzzed ones (same chain, so the transport stays)."""
+    with chain.lock:
+        for servo in chain.servos:
+            chain.remove(servo)
+        for servo in make_servos(chain.baud):
+            chain.add(servo)
+
+
+class Target(Protocol):
+    """A way into a chain (see the module docstring)."""
+
+    def tables(self) -> Tables:
+        """The state before an input."""
+
+    def send(self, data: bytes) -> tuple[list[bytes] | None, Tables]:
+        """Feed `data`; its replies (None where they are not seen) and the state after.
+        Raises HangError or CrashError."""
+
+    def restore(self) -> None:
+        """Put fresh servos back."""
+
+    def probe(self, servo_id: int) -> None:
+        """Ping `servo_id` and read its Model Number; AssertionError if either is wrong,
+        HangError if no answer comes within HANG_S."""
+
+    def restart(self) -> None:
+        """Start over after a crash or hang."""
+
+    def close(self) -> None:
+        """Release what the target holds."""
+
+
+class InProcess:
+    """Bytes straight into `EmulatedChain.receive`; the replies are seen."""
+
+    BAUD = 1_000_000
+
+    def __init__(self) -> None:
+        self.restart()
+
+    def restart(self) -> None:
+        self.chain = EmulatedChain(make_servos(self.BAUD), baud=self.BAUD)
+        firmware = self.chain.servos[0].peek("firmware_version")
+        model = MODEL_NUMBER.to_bytes(2, "little")
+        self._probes = {
+            servo_id: [
+                (packet(servo_id, 0x01, b""), packet(servo_id, 0x55, b"\x00" + model +
+                                                      bytes([firmware]))),
+                (packet(servo_id, 0x02, b"\x00\x00\x02\x00"), packet(servo_id, 0x55,
+                                                                     b"\x00" + model)),
+            ]
+            for servo_id in IDS
+        }
+
+    def tables(self) -> Tables:
+        return tables(self.chain)
+
+    def send(self, data: bytes) -> tuple[list[bytes] | None, Tables]:
+        began = time.thread_time()
+        try:
+            replies = [reply.data for reply in self.chain.receive(data)]
+        except Exception as exc:
+            raise CrashError(traceback.format_exc()) from exc
+        if time.thread_time() - began > HANG_S:
+            raise HangError(f"{time.thread_time() - began:.1f} s of CPU for {len(data)} bytes")
+        return replies, tables(self.chain)
+
+    def restore(self) -> None:
+        restore(self.chain)
+
+    def probe(self, servo_id: int) -> None:
+        for question, answer in self._probes[servo_id]:
+            got = b"".join(r.data for r in self.chain.receive(question))
+            assert got == answer, f"ID {servo_id}: {question.hex(' ')} got {got.hex(' ')}"
+
+    def close(self) -> None:
+        pass
+
+
+def _serve(conn: Connection, baud: int) -> None:
+    """The child process: a chain on a PtyServer, and commands from the campaign on `conn`."""
+    from snakebot.emulation.pty_server import PtyServer
+
+    chain = EmulatedChain(make_servos(baud), baud=baud)
+    server = PtyServer(chain).start()
+    conn.send(server.device_path)
+    while True:
+        command, argument = conn.recv()
+        if command == "tables":
+            with chain.lock:
+                conn.send((chain.parser_stats.received_bytes, tables(chain)))
+        elif command == "settle":
+            conn.send(_settle(chain, server, argument))
+        elif command == "restore":
+            restore(chain)
+            conn.send(None)
+        else:
+            server.stop()
+            conn.send(None)
+            return
+
+
+def _settle(chain: EmulatedChain, server: Any, received: int) -> tuple[str, Any]:
+    """Wait until `received` bytes are in and answered; the server thread's CPU time judges."""
+    thread = next(t for t in threading.enumerate() if t.name.startswith("pty-server"))
+    clock = time.pthread_getcpuclockid(thread.ident or 0)
+    cpu, wall = time.clock_gettime(clock), time.monotonic()
+    while True:
+        with chain.lock:
+            if chain.parser_stats.received_bytes >= received and server.replies_in_flight == 0:
+                return "ok", tables(chain)
+        if server.failure is not None:
+            return "crash", repr(server.failure)
+        busy = time.clock_gettime(clock) - cpu
+        if busy > HANG_S or time.monotonic() - wall > STALL_S:
+            taken = chain.parser_stats.received_bytes
+            return "hang", f"{taken} of {received} bytes taken in; {busy:.2f} s of CPU"
+        time.sleep(100e-6)
+
+
+class OverPty:
+    """Bytes written to a pseudo-terminal served by `PtyServer` in a child process; the probes
+    run through the unmodified SDK. Replies to fuzz inputs are not seen (the SDK drops them)."""
+
+    BAUD = 1_000_000
+
+    def __init__(self) -> None:
+        self._start()
+
+    def _start(self) -> None:
+        import dynamixel_sdk as dxl
+
+        self._conn, child = multiprocessing.get_context("fork").Pipe()
+        self._process = multiprocessing.get_context("fork").Process(
+            target=_serve, args=(child, self.BAUD), daemon=True
+        )
+        self._process.start()
+        device = self._conn.recv()
+        self.port = dxl.PortHandler(device)
+        if not (self.port.openPort() and self.port.setBaudRate(self.BAUD)):
+            raise RuntimeError(f"cannot open {device}")
+        self.packets = dxl.PacketHandler(2.0)
+        self._dxl = dxl
+        self._received = 0
+
+    def _ask(self, command: str, argument: Any = None) -> Any:
+        self._conn.send((command, argument))
+        if not self._conn.poll(2 * STALL_S):
+            raise HangError(f"the emulator process did not answer {command!r}")
+        return self._conn.recv()
+
+    def tables(self) -> Tables:
+        self._received, state = self._ask("tables")
+        assert isinstance(state, Tables)
+        return state
+
+    def send(self, data: bytes) -> tuple[list[bytes] | None, Tables]:
+        os.write(self.port.ser.fileno(), data)
+        outcome, detail = self._ask("settle", self._received + len(data))
+        if outcome == "crash":
+            raise CrashError(detail)
+        if outcome == "hang":
+            raise HangError(detail)
+        return None, detail
+
+    def restore(self) -> None:
+        self._ask("restore")
+
+    def probe(self, servo_id: int) -> None:
+        # A loaded machine can delay an answer past the SDK's ~35 ms timeout: ask again, for up
+        # to STALL_S; a wrong answer fails at once.
+        dxl, deadline = self._dxl, time.monotonic() + STALL_S
+        questions: tuple[Callable[[], tuple[int, int, int]], ...] = (
+            lambda: self.packets.ping(self.port, servo_id),
+            lambda: self.packets.read2ByteTxRx(self.port, servo_id, 0),
+        )
+        for ask in questions:
+            while True:
+                model, result, error = ask()
+                if result == dxl.COMM_SUCCESS:
+                    assert (model, error) == (MODEL_NUMBER, 0), f"ID {servo_id}: {model}, {error}"
+                    break
+                if time.monotonic() > deadline:
+                    raise HangError(f"ID {servo_id}: no answer (SDK result {result})")
+
+    def restart(self) -> None:
+        self.close()
+        self._start()
+
+    def close(self) -> None:
+        self.port.closePort()
+        if self._process.is_alive():
+            with contextlib.suppress(EOFError, OSError, HangError):
+                self._ask("stop")
+            self._process.join(timeout=5)
+        if self._process.is_alive():
+            self._process.kill()
