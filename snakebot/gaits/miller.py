@@ -14,14 +14,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
-import numpy.typing as npt
 
 from snakebot.errors import GaitError
-from snakebot.gaits.base import FloatArray, Gait, as_times, check_finite, check_joint_count, shaped
-from snakebot.gaits.spec import GaitSpec, ParamSpec, ParamValues
+from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_finite, check_joint_count
+from snakebot.gaits.spec import GaitSpec, LiveRoles, ParamSpec, ParamValues
 
 AXES = ("yaw", "pitch", "axial")
 SHAPES = ("sine", "square")
@@ -35,11 +34,12 @@ DEFAULT_CHANNELS = "yaw,pitch,axial"
 
 
 @dataclass(frozen=True)
-class MillerGait(Gait):
+class MillerGait(PhasedGait):
     """Travelling waves on the yaw, pitch and axial channels of every segment.
 
     Amplitudes in rad (yaw, pitch) and strain (axial); ``omega`` in rad/s; ``waves`` per body
-    length; ``pitch_shift`` in rad is the pitch wave's lead over the yaw and axial waves.
+    length; ``pitch_shift`` in rad is the pitch wave's lead over the yaw and axial waves. One
+    phase, phi = omega*t: ``targets_at_phase([phi])``.
     """
 
     joint_count: int
@@ -52,6 +52,7 @@ class MillerGait(Gait):
     pitch_shift: float = math.pi / 2
     shape: str = "sine"
     name: str = "miller"
+    _rates: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         n = check_joint_count(self.name, self.joint_count)
@@ -77,6 +78,17 @@ class MillerGait(Gait):
                     f"{self.name} drives the {axis} channel, but channels="
                     f"{','.join(self.channels)} has none; use a body with {axis} muscles"
                 )
+        object.__setattr__(self, "_rates", np.array([self.omega]))
+
+    @property
+    def gait_label(self) -> str:
+        """The gait's registered name."""
+        return self.name
+
+    @property
+    def phase_rates_rad_s(self) -> FloatArray:
+        """[omega] in rad/s."""
+        return self._rates
 
     @property
     def segments(self) -> int:
@@ -92,18 +104,17 @@ class MillerGait(Gait):
         wave: FloatArray = np.sin(phase)
         return np.sign(wave) if self.shape == "square" else wave
 
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """Channel targets: (N,) for a scalar time in s, (T, N) for times (T,)."""
-        t, scalar = as_times(self.name, time_s)
+    def _at_phases(self, phases: FloatArray) -> FloatArray:
         segment = np.arange(self.segments, dtype=np.float64)
-        phase = self.omega * t[:, None] - 2.0 * math.pi * self.waves * segment / self.segments
+        phase = phases[:, :1] - 2.0 * math.pi * self.waves * segment / self.segments
         by_axis = {
             "yaw": self.yaw_amplitude * self._wave(phase),
             "pitch": self.pitch_amplitude * self._wave(phase + self.pitch_shift),
             "axial": self.axial_amplitude * self._wave(phase),
         }
         table = np.stack([by_axis[c] for c in self.channels], axis=2)
-        return shaped(table.reshape(t.shape[0], self.joint_count), scalar)
+        out: FloatArray = table.reshape(phases.shape[0], self.joint_count)
+        return out
 
 
 def _channels_param() -> ParamSpec:
@@ -193,6 +204,9 @@ SPECS = (
             _channels_param(),
         ),
         factory=_rectilinear,
+        live=LiveRoles(
+            amplitude=("amplitude",), frequency=("omega",), spatial_frequency=("waves",)
+        ),
     ),
     GaitSpec(
         name="undulation",
@@ -215,6 +229,9 @@ SPECS = (
             _channels_param(),
         ),
         factory=_undulation,
+        live=LiveRoles(
+            amplitude=("amplitude",), frequency=("omega",), spatial_frequency=("waves",)
+        ),
     ),
     GaitSpec(
         name="miller_sidewinding",
@@ -251,5 +268,9 @@ SPECS = (
             _channels_param(),
         ),
         factory=_sidewinding,
+        live=LiveRoles(
+            amplitude=("amplitude", "amplitude_pitch"), frequency=("omega",),
+            spatial_frequency=("waves",),
+        ),
     ),
 )

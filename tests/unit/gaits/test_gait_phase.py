@@ -13,7 +13,10 @@ from snakebot.gaits.base import PhasedGait
 from snakebot.gaits.registry import GAITS
 
 SHIPPED = sorted(name for name in GAITS.names() if GAITS.origin(name).kind == "built-in")
-PHASES = {"serpenoid": 1, "dft": 0, "simple": 0, "dft_shift": 1, "keyframes": 1}
+PHASES = {
+    "serpenoid": 1, "dft": 0, "simple": 0, "dft_shift": 1, "keyframes": 1,
+    "rectilinear": 1, "undulation": 1, "miller_sidewinding": 1,
+}
 
 
 def phased(name: str, joints: int = 12, **params: object) -> PhasedGait:
