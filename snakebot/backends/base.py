@@ -146,7 +146,7 @@ class Backend(abc.ABC):
         try:
             self.close()
         except Exception as error:  # the error already on its way out says what went wrong first
-            log.warning("while stopping after %s: %s", type(exc).__name__, error)
+            log.warning("also, while stopping: %s", error)
             exc.add_note(f"while stopping: {error}")
 
     # -- the cycle ---------------------------------------------------------------------------

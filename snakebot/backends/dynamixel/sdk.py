@@ -13,6 +13,15 @@ from typing import Protocol
 
 import dynamixel_sdk as _sdk
 
+try:
+    import termios
+except ImportError:  # Windows: pyserial reports everything as OSError (SerialException)
+    PORT_ERRORS: tuple[type[Exception], ...] = (OSError,)
+else:
+    # pyserial lets termios.error (not an OSError) out of reset_input_buffer's tcflush when the
+    # device vanished under it (a USB adapter unplugged, a pty whose far end closed).
+    PORT_ERRORS = (OSError, termios.error)
+
 COMM_SUCCESS: int = _sdk.COMM_SUCCESS
 COMM_PORT_BUSY: int = _sdk.COMM_PORT_BUSY
 COMM_TX_FAIL: int = _sdk.COMM_TX_FAIL
@@ -170,10 +179,13 @@ class SdkLink:
             return bool(self.port.setBaudRate(baud))
 
     def close(self) -> None:
-        """Close the port (idempotent)."""
+        """Close the port (idempotent; a port that vanished is closed as far as it can be)."""
         self.port.is_using = False
         if self.port.is_open:
-            self.port.closePort()
+            try:
+                self.port.closePort()
+            except PORT_ERRORS:
+                self.port.is_open = False
 
     @property
     def port_name(self) -> str:

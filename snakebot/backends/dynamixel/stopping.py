@@ -83,19 +83,23 @@ class StopSequence:
         unreached: list[int] = []
         policy_error: BusError | None = None
         try:
-            if b.torque_may_be_on:
+            if b.torque_may_be_on and b.bus.vanished is None:
                 b.catch_up = None
                 try:
                     interrupt, unreached = self._ramp_out(hurry)
                 except BusError as exc:  # a servo or the port is gone: the policy still goes out
-                    log.warning("%s: stop ramp interrupted: %s", b.port, exc)
+                    if b.bus.vanished is None:
+                        log.warning("%s: stop ramp interrupted: %s", b.port, exc)
                 except Exception as exc:
                     failure = exc
+            if b.torque_may_be_on and b.bus.vanished is None:
                 try:
                     with deferred_interrupts():
                         policy_error = self.apply_policy()
                 except KeyboardInterrupt as exc:
                     interrupt = interrupt or exc
+            if b.torque_may_be_on and b.bus.vanished is not None:
+                policy_error = self._vanished_error()
         finally:
             b.bus.close()
         if interrupt is not None:
@@ -108,6 +112,15 @@ class StopSequence:
             raise StopIncompleteError(
                 b.port, unreached, "their Goal Position is not the safe pose after the ramp "
                 "(a Bus Watchdog that keeps tripping, or a servo refusing goals)")
+
+    def _vanished_error(self) -> BusError:
+        b = self.b
+        return BusError(
+            b.port, b.ids, f"the port vanished, so the stop policy ({b.stop_policy}) could not be "
+            f"sent: the servos stopped when their Bus Watchdog tripped "
+            f"({b.watchdog_ticks * 0.02:.2f} s) and hold where they are, torque on, until they "
+            "are power-cycled or a new session connects"
+        )
 
     def apply_policy(self) -> BusError | None:
         """Hold (watchdog disarmed) or limp (torque off) every servo; read back, write again to
@@ -123,6 +136,8 @@ class StopSequence:
                 b.bus.sync_write("bus_watchdog", dict.fromkeys(b.ids, 0))
                 self._confirm("bus_watchdog", 0)
         except BusError as exc:
+            if b.bus.vanished is not None:
+                return self._vanished_error()
             log.warning("%s: could not apply the stop policy (%s): %s", b.port, b.stop_policy, exc)
             return exc
         b.torque_may_be_on = b.stop_policy == "hold"
