@@ -7,9 +7,11 @@ typed, and never leave the port's busy flag stuck (see :meth:`SdkLink.guard`).
 
 from __future__ import annotations
 
+import os
+import select
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Protocol
+from typing import Any, Protocol
 
 import dynamixel_sdk as _sdk
 
@@ -140,9 +142,37 @@ class GroupBulkReadLike(Protocol):
         """Whether the last read holds data for that ID and range."""
 
 
+class WaitingPortHandler(_sdk.PortHandler):  # type: ignore[misc]
+    """The SDK's ``PortHandler`` whose reads, when nothing has arrived, wait on the port.
+
+    The SDK's receive loop polls a non-blocking read until its timeout, spinning a core at 100 %
+    for every reply. Here an empty read waits up to ``WAIT_S`` in ``select`` for the next byte and
+    returns as soon as one arrives, so the loop sleeps in the kernel instead: replies come no
+    later, timeouts at most ``WAIT_S`` later, and on a loaded machine the CPU goes to whoever is
+    producing the reply (an emulator on the same host, the USB stack). POSIX only; elsewhere the
+    SDK's own polling stays.
+    """
+
+    WAIT_S = 0.001
+    ser: Any
+
+    def readPort(self, length: int) -> bytes:  # noqa: N802 - the SDK's name
+        """Up to ``length`` bytes; waits up to ``WAIT_S`` for the first one when none is there."""
+        data: bytes = self.ser.read(length)
+        if data or os.name != "posix":
+            return data
+        try:
+            select.select([self.ser.fileno()], [], [], self.WAIT_S)
+        except (OSError, ValueError, AttributeError):
+            return data  # a port that cannot be waited on: poll as the SDK does
+        more: bytes = self.ser.read(length)
+        return more
+
+
 def default_port_handler(port: str) -> PortHandlerLike:
-    """The SDK's own ``PortHandler`` (plain ``serial.Serial``: device paths only, no URLs)."""
-    handler: PortHandlerLike = _sdk.PortHandler(port)
+    """The SDK's ``PortHandler`` for a device path (plain ``serial.Serial``: no URLs), with
+    reads that wait on the port instead of spinning (:class:`WaitingPortHandler`)."""
+    handler: PortHandlerLike = WaitingPortHandler(port)
     return handler
 
 
