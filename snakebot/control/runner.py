@@ -69,6 +69,7 @@ class _Loop:
         self.dt, self.log, self.on_cycle = dt, log, on_cycle
         self.state: JointState = backend.read_state()
         self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target
+        self.command: np.ndarray = self.state.position_rad.copy()  # the last command sent
         self.use_gait = True
         self.cycle = 0
         self.stage = "gait"
@@ -83,7 +84,7 @@ class _Loop:
             target = self.target
         self.stage = "safety"
         command = self.safety.filter(target, self.dt, amplitude)
-        self.target = target
+        self.target, self.command = target, command
         self.stage = "backend"
         backend.send_command(JointCommand(command))
         backend.advance(self.dt)
@@ -171,6 +172,9 @@ def _ramp_out(
 ) -> None:
     """Ramp the amplitude to zero over ``safety.ramp_s``; the last command is the rest pose.
 
+    Late cycles (a loaded host) shorten the ramp in cycles, not in time; the slew limit may then
+    hold the command back, so the ramp goes on at zero amplitude until it reaches the rest pose.
+
     A KeyboardInterrupt here ends the ramp: it propagates when nothing else failed (the backend
     then stops fast), and gives way to ``failure`` otherwise. With ``failure`` pending, anything
     else that goes wrong also ends the ramp; ``failure`` is what the caller raises.
@@ -178,12 +182,19 @@ def _ramp_out(
     start_amplitude = safety.ramp_in(gait_end_s)
     fraction = 1.0
     try:
-        while fraction > 0.0:  # the last command is exactly the rest pose, whatever the timing
+        while fraction > 0.0:
             elapsed = loop.state.time_s - start_s - gait_end_s
             fraction = max(0.0, 1.0 - (elapsed + loop.dt) / safety.ramp_s)
             if fraction < slack / safety.ramp_s:
                 fraction = 0.0
             loop.step(gait_end_s + elapsed, start_amplitude * smooth_ramp(fraction), scored=False)
+        # The last command is exactly the rest pose, whatever the timing.
+        span = float(np.max(np.abs(loop.command - safety.rest_rad)))
+        for _ in range(math.ceil(span / (safety.max_speed_rad_s * loop.dt)) + 1):
+            if np.array_equal(loop.command, safety.rest_rad):
+                break
+            elapsed = loop.state.time_s - start_s - gait_end_s
+            loop.step(gait_end_s + elapsed, 0.0, scored=False)
     except KeyboardInterrupt:
         if failure is None:
             raise

@@ -133,3 +133,29 @@ def test_a_bus_error_is_raised_at_once_for_the_backend_to_stop(
     assert data.values.shape[0] == 80  # no ramp-out rows: the bus is not trusted
     others = [s for s in emulated.servos if s.servo_id != 4]
     assert {s.peek("goal_position") for s in others} == {2048}  # the backend's stop ramp
+
+
+def test_a_ramp_out_on_a_late_host_still_ends_on_the_rest_pose(
+    chain: tuple[EmulatedChain, str], tmp_path: Path
+) -> None:
+    emulated, url = chain
+    stalling = {"on": False}
+
+    def hook(cycle: int, gait_time_s: float) -> None:
+        if cycle == 150:
+            stalling["on"] = True  # from here every cycle comes 60 ms late (a loaded host)
+        if stalling["on"]:
+            emulated.advance(0.06)
+
+    robot = snake12()
+    backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
+                               clock=lambda: emulated.now_s, sleep=emulated.advance)
+    log_path = tmp_path / "run.csv"
+    with CsvTelemetryWriter(log_path, 12) as log, backend:
+        result = run_gait(backend, make_gait("sidewinding", 12), SafetyLayer.for_robot(robot),
+                          RunPlan(duration_s=1.6), RunMetrics(12, robot.body_length_m,
+                                                              robot.total_mass_kg),
+                          log=log, on_cycle=hook)
+    assert result.summary["overruns"] > 5
+    commands = read_log(log_path).joints("command_rad")
+    np.testing.assert_array_equal(commands[-1], np.zeros(12))
