@@ -161,7 +161,7 @@ def run_gait(
     summary["rate_hz"] = plan.rate_hz
     summary["achieved_rate_hz"] = _achieved_rate(metrics, dt)
     summary["overruns"] = backend.stats.overruns
-    summary["backend"] = dict(backend.stats.extra)
+    summary["backend_stats"] = dict(backend.stats.extra)
     summary["interrupted"] = interrupted
     return RunResult(summary, interrupted, 0 if log is None else log.rows)
 

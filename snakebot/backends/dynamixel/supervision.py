@@ -21,17 +21,19 @@ class TrackingLimits:
     A joint is flagged when its Present Position has stayed within ``still_rad`` for ``window_s``
     while its Goal Position travelled at least ``min_travel_rad`` and it now sits at least
     ``min_error_rad`` from its goal. The defaults suit XL430/XC430/XM430 chains: a loaded joint
-    that lags, or one pushing against an obstacle but still moving, is never flagged (it moves more
-    than 0.35° in half a second); a joint that does not move at all while a gait sweeps its goal
-    through 0.3 rad is (a tripped Bus Watchdog, a servo that lost torque, a jammed joint).
+    that lags, one pushing against an obstacle but still moving (more than 0.35° in a second), or
+    one on soft gains held by friction a little off its goal (as gain tuning tries) is never
+    flagged; a joint that does not move at all for a second while a gait sweeps its goal through
+    half a radian and leaves it 20° away is (a servo that lost torque, a jammed joint, readings
+    that froze). A tripped Bus Watchdog is found sooner, by reading its register.
     ``max_watchdog_trips`` trips within ``trip_window_s`` are recovered (clear, re-arm, catch up);
     one more stops the run.
     """
 
     still_rad: float = 0.006  # 4 ticks of a 4096-tick servo
-    window_s: float = 0.5
-    min_travel_rad: float = 0.3
-    min_error_rad: float = 0.15
+    window_s: float = 1.0
+    min_travel_rad: float = 0.5
+    min_error_rad: float = 0.35
     max_watchdog_trips: int = 3
     trip_window_s: float = 10.0
 

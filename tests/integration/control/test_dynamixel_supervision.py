@@ -112,7 +112,7 @@ def test_a_watchdog_trip_the_host_did_not_see_is_recovered(
     result = run(emulated, url, hook, presents=presents)
     assert longest_freeze_s(presents) <= 0.25  # noticed within two slow-rate periods
     assert_straight_and_holding(emulated)
-    assert result.summary["backend"]["watchdog_trips"] == 1  # type: ignore[index]
+    assert result.summary["backend_stats"]["watchdog_trips"] == 1  # type: ignore[index]
 
 
 def test_a_trip_just_before_the_end_does_not_leave_a_bent_pose(
@@ -165,7 +165,7 @@ def test_a_jammed_joint_stops_the_run_naming_it(
     error = info.value
     assert (error.joints, error.servo_ids) == ((4,), (5,))
     assert "joint 4 (servo 5)" in str(error) and "blocked or jammed" in str(error)
-    assert len(presents) < 60 + 80  # noticed within 0.8 s, not at the end of the 5 s run
+    assert len(presents) < 60 + 160  # noticed within 1.6 s, not at the end of the 5 s run
     for servo in emulated.servos:
         assert servo.torque_enabled == (policy == "hold")
         assert servo.peek("bus_watchdog") == 0
