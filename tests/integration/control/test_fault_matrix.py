@@ -1,6 +1,6 @@
 """A reduced fault matrix (tools/fault_matrix.py --quick) in CI: its must-be-zero figures are 0.
 
-Every fault mode once, both stop policies, 1 s of gait each, real SDK over the emulator in
+Every fault mode once, both stop policies, 2 s of gait each, real SDK over the emulator in
 virtual time (a few seconds of CPU). The checker itself is tested too: it must see a goal
 outside the limits and a servo left in the wrong state.
 """
@@ -16,7 +16,7 @@ from tools.fault_matrix import Fault, GoalAudit, faults, final_mismatches, run_m
 
 
 def test_reduced_fault_matrix_has_no_untyped_errors_bad_goals_or_wrong_final_states() -> None:
-    results = run_matrix(faults(quick=True), duration_s=1.0)
+    results = run_matrix(faults(quick=True), duration_s=2.0)
     figures = totals(results)
     details = [(r.fault, r.policy, r.outcome, r.final_mismatches) for r in results if not r.ok]
     assert figures["untyped_errors"] == 0, details
