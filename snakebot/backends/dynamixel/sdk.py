@@ -142,6 +142,12 @@ class GroupBulkReadLike(Protocol):
         """Whether the last read holds data for that ID and range."""
 
 
+def is_pseudo_terminal(port: str) -> bool:
+    """Whether ``port`` is a pseudo-terminal (Linux /dev/pts/N, macOS /dev/ttysNNN)."""
+    path = os.path.realpath(port)
+    return path.startswith("/dev/pts/") or path.startswith("/dev/ttys")
+
+
 class WaitingPortHandler(_sdk.PortHandler):  # type: ignore[misc]
     """The SDK's ``PortHandler`` whose reads, when nothing has arrived, wait on the port.
 
@@ -151,10 +157,26 @@ class WaitingPortHandler(_sdk.PortHandler):  # type: ignore[misc]
     later, timeouts at most ``WAIT_S`` later, and on a loaded machine the CPU goes to whoever is
     producing the reply (an emulator on the same host, the USB stack). POSIX only; elsewhere the
     SDK's own polling stays.
+
+    On a pseudo-terminal the far end is a process (``snakebot emulate --pty``, a socat bridge),
+    which the OS may not schedule for tens of milliseconds on a loaded host: each reply wait gets
+    ``PTY_SLACK_MS`` more than the SDK's (about 34 ms), so a busy emulator is not taken for a
+    missing servo. A real adapter keeps the SDK's timeouts.
     """
 
     WAIT_S = 0.001
+    PTY_SLACK_MS = 100.0
     ser: Any
+    packet_timeout: float
+
+    def __init__(self, port_name: str) -> None:
+        super().__init__(port_name)
+        self.slack_ms = self.PTY_SLACK_MS if is_pseudo_terminal(port_name) else 0.0
+
+    def setPacketTimeout(self, packet_length: int) -> None:  # noqa: N802 - the SDK's name
+        """The SDK's reply timeout for ``packet_length`` bytes, plus the pty slack."""
+        super().setPacketTimeout(packet_length)
+        self.packet_timeout += self.slack_ms
 
     def readPort(self, length: int) -> bytes:  # noqa: N802 - the SDK's name
         """Up to ``length`` bytes; waits up to ``WAIT_S`` for the first one when none is there."""
