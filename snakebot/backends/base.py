@@ -6,6 +6,7 @@ Everything here is SI (radians, seconds, newton-metres); servo ticks never cross
 from __future__ import annotations
 
 import abc
+import logging
 from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Literal
@@ -15,6 +16,8 @@ import numpy as np
 from snakebot.errors import BackendStateError
 
 StopPolicy = Literal["hold", "limp"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -86,6 +89,10 @@ class Backend(abc.ABC):
         self._closed = False
         self.stats = CycleStats()
         self.torque_enabled = False
+        self.hurry_stop = False
+        """Set when a KeyboardInterrupt is on its way out through the context manager (a second
+        Ctrl-C or SIGTERM while the runner was already ramping out): the stop ramp then runs at
+        the joint speed limit. A hurried stop still ends in the stop policy."""
 
     # -- lifecycle -------------------------------------------------------------------------
     def connect(self) -> None:
@@ -98,7 +105,11 @@ class Backend(abc.ABC):
         self._connected = True
 
     def close(self) -> None:
-        """Leave the joints safe (ramp, then hold or limp per ``stop_policy``) and release."""
+        """Leave the joints safe (ramp, then hold or limp per ``stop_policy``) and release.
+
+        Raises what kept the servos from being left safe (e.g. BusError when the port is gone);
+        a KeyboardInterrupt that arrived during the stop is raised after the stop policy.
+        """
         if not self._connected or self._closed:
             self._closed = True
             return
@@ -128,7 +139,15 @@ class Backend(abc.ABC):
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        self.close()
+        if exc is None:
+            self.close()
+            return
+        self.hurry_stop = self.hurry_stop or isinstance(exc, KeyboardInterrupt)
+        try:
+            self.close()
+        except Exception as error:  # the error already on its way out says what went wrong first
+            log.warning("also, while stopping: %s", error)
+            exc.add_note(f"while stopping: {error}")
 
     # -- the cycle ---------------------------------------------------------------------------
     def read_state(self) -> JointState:

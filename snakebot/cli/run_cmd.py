@@ -88,6 +88,12 @@ def add_parser(subparsers: Any) -> None:
         "--port", type=port_arg, help="serial port for --backend dynamixel (default: robot config)"
     )
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    parser.add_argument(
+        "--allow-extra-servos",
+        action="store_true",
+        help="--backend dynamixel: servos on the bus that the robot file does not name are "
+        "expected (left alone); without it connect refuses, naming them",
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     parser.set_defaults(handler=run)
 
@@ -136,7 +142,9 @@ def make_backend(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> B
         )
     from snakebot.backends.dynamixel import DynamixelBackend
 
-    return DynamixelBackend(robot, port=args.port, baud=args.baud)
+    return DynamixelBackend(
+        robot, port=args.port, baud=args.baud, allow_extra_servos=args.allow_extra_servos
+    )
 
 
 @contextlib.contextmanager

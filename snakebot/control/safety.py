@@ -1,7 +1,9 @@
 """The safety layer between gait and backend: limits, joint speed, and amplitude ramps.
 
 Whatever a gait asks for, what leaves here is finite, within the joint limits and no faster than
-the servo can move; a gait that returns NaN stops the run instead of reaching a servo.
+the servo can move; a gait that returns NaN stops the run instead of reaching a servo. A joint
+that starts outside its limits (measured there at ``reset``) is brought inside at the slew limit,
+moving only inwards, never stepped onto the limit.
 """
 
 from __future__ import annotations
@@ -51,8 +53,13 @@ class SafetyLayer:
         return cls(robot.lower_rad, robot.upper_rad, robot.max_speed_rad_s, robot.safety.ramp_s)
 
     def reset(self, measured_rad: np.ndarray) -> None:
-        """Start from the measured pose, so the first command never jumps."""
-        self._last = np.clip(np.asarray(measured_rad, float), self.lower_rad, self.upper_rad)
+        """Start from the measured pose, so the first command never jumps (even from a pose
+        outside the limits: the slew limit then brings the joint in)."""
+        measured = np.asarray(measured_rad, dtype=float)
+        if measured.shape != self.lower_rad.shape or not np.isfinite(measured).all():
+            raise SafetyLimitError(f"measured pose {measured} is not {self.lower_rad.shape} finite "
+                                   "angles")
+        self._last = measured.copy()
 
     def ramp_in(self, elapsed_s: float) -> float:
         """Amplitude factor ``elapsed_s`` into a run."""
@@ -73,6 +80,9 @@ class SafetyLayer:
         if self._last is not None:
             max_step = self.max_speed_rad_s * dt_s
             command = self._last + np.clip(command - self._last, -max_step, max_step)
-            np.clip(command, self.lower_rad, self.upper_rad, out=command)
+            # Inside the limits, or on the way in from a start outside them: never outwards.
+            low = np.minimum(self.lower_rad, self._last)
+            high = np.maximum(self.upper_rad, self._last)
+            np.clip(command, low, high, out=command)
         self._last = command
         return command  # type: ignore[no-any-return]

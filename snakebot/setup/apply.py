@@ -5,11 +5,15 @@ a reboot if a hardware error is latched, torque off before EEPROM items (the joi
 Operating Mode before the other EEPROM items (a mode change resets gains and profiles, e-Manual
 Operating Mode), a reboot after settings that act at boot, then RAM items. Baud rates change last,
 one servo at a time, each found again at its new rate before the next. IDs never change here: a
-servo is known by its ID (``assign-id`` changes IDs). Torque is left off.
+servo is known by its ID (``assign-id`` changes IDs). Torque is left off. Before the first write,
+a servo that stands outside the Min/Max Position Limit about to be written is warned about
+(:class:`PositionOutsideLimitsWarning`): it could not hold there with torque on.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
@@ -22,6 +26,11 @@ from snakebot.setup.settings import REBOOT_KEYS, ChainSettings, Setting
 
 Action = Literal["write", "torque_off", "reboot", "baud"]
 FIRST_KEYS = ("status_return_level",)
+LIMIT_KEYS = ("min_position_limit", "max_position_limit")
+
+
+class PositionOutsideLimitsWarning(UserWarning):
+    """A servo stands outside the Min/Max Position Limit that ``config apply`` is about to write."""
 
 
 @dataclass(frozen=True)
@@ -174,6 +183,37 @@ class Applier:
             raise VerifyError(self.link.port, servo_id, "baud_rate", index, back)
 
 
+def outside_new_limits(link: Link, chain: ChainSettings, plan: ApplyPlan, diff: ChainDiff
+                       ) -> list[str]:
+    """One line per servo whose Present Position lies outside the position limits ``plan`` writes.
+
+    Such a servo cannot hold where it stands once torque is on (a goal there is refused; the
+    backend refuses to start), so the user should move the joint inside by hand first.
+    """
+    changing = {s.servo_id for s in plan.steps if s.setting is not None and s.setting.key in
+                LIMIT_KEYS}
+    notes = []
+    for wanted in chain.servos:
+        if wanted.servo_id not in changing:
+            continue
+        low, high = (wanted.get(key) for key in LIMIT_KEYS)
+        bus = link.at(diff.servos[wanted.servo_id].baud)
+        present = bus.read(wanted.servo_id, "present_position")
+        if low.raw <= present <= high.raw:
+            continue
+        resolution = bus.table.specs.resolution
+        angle = (present - resolution // 2) * 2 * math.pi / resolution
+        lo_text, unit = low.show(low.raw)
+        hi_text, _ = high.show(high.raw)
+        notes.append(
+            f"servo {wanted.servo_id} stands at {angle:.3f} rad from centre (tick {present}), "
+            f"outside the Min/Max Position Limit {lo_text}..{hi_text} {unit or 'ticks'} about to "
+            "be written: with torque on it cannot hold there (`snakebot run` refuses to start). "
+            "Move the joint inside by hand (torque is off) before running"
+        )
+    return notes
+
+
 def apply(
     link: Link,
     chain: ChainSettings,
@@ -182,6 +222,8 @@ def apply(
     on_step: Callable[[Step], None] | None = None,
 ) -> ChainDiff:
     """Run ``plan`` (from ``plan_apply(chain, diff)``), then diff again; SetupError unless empty."""
+    for note in outside_new_limits(link, chain, plan, diff):
+        warnings.warn(note, PositionOutsideLimitsWarning, stacklevel=2)
     applier = Applier(link, diff)
     for step in plan.steps:
         if on_step is not None:

@@ -9,12 +9,18 @@ from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import (
     ChainMismatchError,
     DynamixelSettingsWarning,
+    ExtraServosWarning,
     HardwareFaultError,
+    PoseOutsideLimitsError,
     ServoSettingsError,
     ServoStatusError,
+    StopIncompleteError,
     SyncReadError,
+    TrackingError,
+    WatchdogTripError,
     decode_hardware_error,
 )
+from snakebot.backends.dynamixel.supervision import TrackingLimits
 from snakebot.backends.dynamixel.ticks import TickConverter, rad_to_ticks, ticks_to_rad
 
 __all__ = [
@@ -22,11 +28,17 @@ __all__ = [
     "DynamixelBackend",
     "DynamixelBus",
     "DynamixelSettingsWarning",
+    "ExtraServosWarning",
     "HardwareFaultError",
+    "PoseOutsideLimitsError",
     "ServoSettingsError",
     "ServoStatusError",
+    "StopIncompleteError",
     "SyncReadError",
     "TickConverter",
+    "TrackingError",
+    "TrackingLimits",
+    "WatchdogTripError",
     "decode_hardware_error",
     "rad_to_ticks",
     "ticks_to_rad",

@@ -1,8 +1,11 @@
 """The Backend contract on a real Dynamixel chain: SI units outside, ticks only at the bus edge.
 
 One control cycle is one Sync Write of goal positions (``send_command``) and one (Fast) Sync Read
-of load/current, velocity and position (``read_state``); every ``slow_every`` reads one extra
-read fetches Hardware Error Status, or input voltage and temperature, in turn.
+of load/current, velocity and position (``read_state``). Every ``slow_every`` reads one extra read
+fetches Hardware Error Status (and the tracking check runs on what the cycle read); half-way
+between, one extra read fetches input voltage and temperature, or the Bus Watchdog, in turn.
+Stopping (``close``, a failed ``connect``) is in ``stopping.py``, connect-time checks in
+``checks.py``, the tracking check in ``supervision.py``.
 """
 
 from __future__ import annotations
@@ -10,12 +13,11 @@ from __future__ import annotations
 import logging
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from snakebot.backends.base import Backend, JointState, ServoGains
-from snakebot.backends.dynamixel import shutdown
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.checks import (
     LIMIT_KEYS,
@@ -29,11 +31,16 @@ from snakebot.backends.dynamixel.checks import (
 )
 from snakebot.backends.dynamixel.faults import (
     DynamixelSettingsWarning,
+    ExtraServosWarning,
     HardwareFaultError,
+    PoseOutsideLimitsError,
     ServoSettingsError,
 )
+from snakebot.backends.dynamixel.plans import Row
 from snakebot.backends.dynamixel.sdk import PortHandlerFactory
 from snakebot.backends.dynamixel.state import StateDecoder
+from snakebot.backends.dynamixel.stopping import StopSequence
+from snakebot.backends.dynamixel.supervision import CatchUp, TrackingLimits, TrackingMonitor
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.backends.pacing import Pacer
 from snakebot.config.schema import RobotConfig
@@ -43,6 +50,7 @@ from snakebot.servo_tables import supported_models, table_for_model
 log = logging.getLogger(__name__)
 
 WATCHDOG_UNIT_S = 0.02  # Bus Watchdog (98) counts in 20 ms (e-Manual control_table_buswatchdog)
+GoalTerms = list[tuple[float, float, int, int]]
 
 
 class DynamixelBackend(Backend):
@@ -52,7 +60,14 @@ class DynamixelBackend(Backend):
     handler (tests pass the emulator's). ``read_current=False`` drops load/current from the cycle
     read (``effort_nm`` is then zeros). ``enable_torque`` turns torque on at the end of
     ``connect`` (Goal Position = Present Position first). ``watchdog_s`` is the Bus Watchdog armed
-    while torque is on. ``clock``/``sleep`` are the wall clock the pacing and the stop ramp use.
+    while torque is on. ``allow_extra_servos`` accepts servos on the bus that the robot does not
+    name (otherwise connect refuses, naming them). ``tracking`` sets when joints count as no longer
+    following their goals (None switches that check off). ``clock``/``sleep`` are the wall clock
+    the pacing and the stop ramp use.
+
+    Raises at connect: ChainMismatchError, ServoSettingsError, HardwareFaultError,
+    PoseOutsideLimitsError, BusError; during the cycle: BusError, HardwareFaultError,
+    TrackingError, WatchdogTripError.
     """
 
     def __init__(
@@ -67,6 +82,8 @@ class DynamixelBackend(Backend):
         watchdog_s: float = 0.1,
         slow_every: int = 10,
         retries: int = 2,
+        allow_extra_servos: bool = False,
+        tracking: TrackingLimits | None = TrackingLimits(),  # noqa: B008 - frozen, shared safely
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
     ) -> None:
@@ -89,24 +106,37 @@ class DynamixelBackend(Backend):
         self._watchdog_margin_s = (self.watchdog_ticks - 1) * WATCHDOG_UNIT_S
         self.slow_every = max(2, slow_every)
         self.enable_torque = enable_torque
+        self.allow_extra_servos = allow_extra_servos
+        self.tracking = tracking
         self.fast_read = True
         """Whether the cycle uses Fast Sync Read (decided by a probe at connect)."""
         self.torque_enabled = False
         """Whether the backend has the chain's torque on (set by connect, set_torque, close)."""
+        self.torque_may_be_on = False
+        """Whether any servo may have torque on: from just before Torque Enable goes out until
+        the stop policy has been applied. While it is set, every way out applies the policy."""
         self.health: dict[str, np.ndarray] = {}
         """Latest slow-rate readings, shape (N,): ``input_voltage_v``, ``temperature_c``."""
-        self._clock, self._sleep = clock, sleep
+        self.clock, self.sleep = clock, sleep
+        self.max_ticks_per_s = robot.max_speed_rad_s / self.converter.rad_per_tick
+        self.last_state: JointState | None = None
+        self.last_rows: list[Row] | None = None
+        self.last_goal_ticks: list[int] | None = None
+        self.goal_terms: GoalTerms = self.converter.goal_terms
+        """Goal bounds in use: the joint limits, widened for a joint found outside them."""
+        self.catch_up: CatchUp | None = None
         self._pacer: Pacer | None = None
         self._cycle = 0
-        self._last_state: JointState | None = None
-        self._last_goal_ticks: list[int] | None = None
         self._fed_s = 0.0  # clock() at the start of the last transaction to every servo
         self._warned_slow = False
         self._position_limits: list[tuple[int, int]] = []  # EEPROM Min/Max per servo, head first
-
+        self._outside: list[int] = []  # joints being brought inside their limits
+        self._monitor = None if tracking is None else TrackingMonitor(
+            tracking, self.joint_count, self.converter.rad_per_tick)
         self._decoder = StateDecoder(robot, self.bus.table, self.converter, read_current)
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
         self._goal_plan = self.bus.sync_write_plan("goal_position", self.ids)
+        self.stopper = StopSequence(self, tracking or TrackingLimits())
 
     @property
     def port(self) -> str:
@@ -121,27 +151,40 @@ class DynamixelBackend(Backend):
             self._probe_fast_read()
             self._check_faults()
             self._check_settings()
-            self._write_watchdog(0)  # clears a trip left by a dead session
+            self.write_watchdog(0)  # clears a trip left by a dead session
             self._set_gains(self.robot.gains)
             torque = self.bus.sync_read("torque_enable", self.ids)
-            self.torque_enabled = all(v["torque_enable"] for v in torque.values())
+            on = [i for i, v in torque.items() if v["torque_enable"]]
+            self.torque_may_be_on = bool(on)
+            self.torque_enabled = len(on) == len(self.ids)
             if self.torque_enabled:  # left holding by a previous session: guard it again
-                self._write_watchdog(self.watchdog_ticks)
-            self._pacer = Pacer(self.stats, clock=self._clock, sleep=self._sleep)
+                self.write_watchdog(self.watchdog_ticks)
+            self._pacer = Pacer(self.stats, clock=self.clock, sleep=self.sleep)
             if self.enable_torque and not self.torque_enabled:
                 self._set_torque(True)
             self._read_state()
+            assert self.last_rows is not None
+            self._open_bounds([row[-1] for row in self.last_rows])
         except BaseException:
-            self.bus.close()
+            self.stopper.abort_connect()
             raise
 
+    def _close(self) -> None:
+        """Ramp to the safe pose, then hold or limp; with torque off nothing moves or energises."""
+        self.stopper.close(hurry=self.hurry_stop)
+
     def _check_chain(self) -> None:
-        found = self.bus.ping_all(self.ids)
-        report = chain_report(self.ids, self.robot.servo.model_number, found)
-        if report.ok:
-            return
+        """One broadcast ping finds every servo; IDs it missed (garbled replies) get pinged."""
         on_bus = {i: model for i, (model, _) in self.bus.broadcast_ping().items()}
+        found = {i: on_bus[i] for i in self.ids if i in on_bus}
+        found.update(self.bus.ping_all([i for i in self.ids if i not in on_bus]))
         report = chain_report(self.ids, self.robot.servo.model_number, found, on_bus)
+        if report.ok and (not report.unexpected or self.allow_extra_servos):
+            if report.unexpected:
+                extra = ", ".join(map(str, report.unexpected))
+                warnings.warn(f"{self.port}: servo ID(s) {extra} are on the bus but not in the "
+                              f"robot file; they are left alone", ExtraServosWarning, stacklevel=4)
+            return
         names = {}
         for name in supported_models():
             names[table_for_model(name).model_number] = name
@@ -180,55 +223,72 @@ class DynamixelBackend(Backend):
             log.warning("%s: Fast Sync Read got no valid reply (firmware too old?); using Sync "
                         "Read, which costs one status packet per servo", self.port)
 
-    def _close(self) -> None:
-        """Ramp to the safe pose, then hold or limp; with torque off nothing moves or energises."""
-        try:
-            if self.torque_enabled:
-                try:
-                    self._ramp_to_safe_pose()
-                except BusError as exc:  # still apply the stop policy below
-                    log.warning("%s: stop ramp interrupted: %s", self.port, exc)
-                if self.stop_policy == "limp":
-                    self._set_torque(False)
-                else:  # hold: stay on at the safe pose; nobody will feed the watchdog now
-                    self._write_watchdog(0)
-        finally:
-            self.bus.close()
+    def _open_bounds(self, present: Sequence[int]) -> None:
+        """Widen the goal bounds of joints found outside their limits to where they stand.
 
-    def _ramp_to_safe_pose(self) -> None:
-        try:
-            start = self._decoder.decode(self._state_plan.read_rows(fast=self.fast_read))[0]
-        except BusError:
-            if self._last_state is not None:
-                start = self._last_state.position_rad
-            elif self._last_goal_ticks is not None:
-                start = self.converter.to_rad(np.array(self._last_goal_ticks))
-            else:
-                raise
-        t0 = self._clock()
-        target = shutdown.safe_pose(self.robot)
-        for at_s, pose in shutdown.ramp_poses(start, target, self.robot.safety.ramp_s):
-            self._write_goals(self.converter.goal_ticks(pose)[0])
-            remaining = t0 + at_s - self._clock()
-            if remaining > 0:
-                self._sleep(remaining)
+        Goal = Present at torque on holds them there; the safety layer then brings them inside at
+        its slew limit and the bounds close behind them (``_close_bounds``), never a clipped step.
+        """
+        terms = self.converter.goal_terms
+        for j, ((gain, bias, low, high), p) in enumerate(zip(terms, present, strict=True)):
+            if p > high or p < low:
+                terms[j] = (gain, bias, min(low, p), max(high, p))
+                self._outside.append(j)
+        self.goal_terms = terms
+        if self._outside:
+            angles = self.converter.to_rad(np.array(present))
+            where = ", ".join(f"joint {j} at {angles[j]:.3f} rad (limits "
+                              f"{self.converter.lower_rad[j]:.3f}..{self.converter.upper_rad[j]:.3f}"
+                              ")" for j in self._outside)
+            log.warning("%s: %s outside the joint limits: brought inside at the joint speed limit",
+                        self.port, where)
+
+    def _close_bounds(self, ticks: Sequence[int]) -> None:
+        limits = self.converter.goal_terms
+        outside = []
+        for j in self._outside:
+            gain, bias, low, high = self.goal_terms[j]
+            limit_low, limit_high = limits[j][2], limits[j][3]
+            low, high = min(limit_low, max(low, ticks[j])), max(limit_high, min(high, ticks[j]))
+            self.goal_terms[j] = (gain, bias, low, high)
+            if low < limit_low or high > limit_high:
+                outside.append(j)
+        self._outside = outside
 
     # -- the cycle -------------------------------------------------------------------------------
     def _read_state(self) -> JointState:
-        self._fed_s = self._clock()
-        position, velocity, effort = self._decoder.decode(
-            self._state_plan.read_rows(fast=self.fast_read)
-        )
+        self._fed_s = self.clock()
+        rows = self._state_plan.read_rows(fast=self.fast_read)
+        position, velocity, effort = self._decoder.decode(rows)
         assert self._pacer is not None
         state = JointState(self._pacer.now_s(), position, velocity, effort)
-        self._last_state = state
+        self.last_state, self.last_rows = state, rows
         self._cycle += 1
         phase = self._cycle % self.slow_every
         if phase == 0:
             self._check_faults()
+            if self._monitor is not None and self.torque_enabled and self.catch_up is None:
+                self._supervise(rows)
         elif phase == self.slow_every // 2:
-            self._read_health()
+            if (self._cycle // self.slow_every) % 2:
+                self.stopper.check_watchdog()
+            else:
+                self._read_health()
         return state
+
+    def _supervise(self, rows: list[Row]) -> None:
+        assert self._monitor is not None
+        if self.last_goal_ticks is None:
+            return
+        stalls = self._monitor.check(self.clock(), [r[-1] for r in rows], self.last_goal_ticks)
+        if stalls:
+            self.stopper.diagnose(stalls)
+            self._monitor.reset()
+
+    def reset_tracking(self) -> None:
+        """Forget the tracking history (after a recovery)."""
+        if self._monitor is not None:
+            self._monitor.reset()
 
     def _read_health(self) -> None:
         keys = ("present_input_voltage", "present_temperature")
@@ -242,12 +302,18 @@ class DynamixelBackend(Backend):
         self.stats.extra["min_input_voltage_v"] = float(self.health["input_voltage_v"].min())
 
     def _send_command(self, position_rad: np.ndarray) -> None:
-        ticks, clipped = self.converter.goal_ticks(position_rad)
+        ticks, clipped = self.converter.goal_ticks(position_rad, self.goal_terms)
         if clipped:
             self.stats.extra["clipped_commands"] = self.stats.extra.get("clipped_commands", 0) + 1
-        self._write_goals(ticks)
+        if self.catch_up is not None:
+            ticks = self.catch_up.limit(ticks, self.clock())
+            if self.catch_up.done:
+                self.catch_up = None
+        if self._outside:
+            self._close_bounds(ticks)
+        self.write_goals(ticks)
 
-    def _write_goals(self, ticks: list[int]) -> None:
+    def write_goals(self, ticks: list[int]) -> None:
         """One Sync Write of N goal ticks, re-arming the Bus Watchdog first after a long pause.
 
         The pause counts from the start of the last transaction that addressed every servo (single
@@ -255,19 +321,26 @@ class DynamixelBackend(Backend):
         the servos have stopped and ignore Goal Position until register 98 is written 0 (e-Manual
         control_table_buswatchdog). The margin is one 20 ms watchdog unit short of the period.
         """
-        now = self._clock()
+        now = self.clock()
         if self.torque_enabled and now - self._fed_s > self._watchdog_margin_s:
-            self._write_watchdog(0)
-            self._write_watchdog(self.watchdog_ticks)
+            self.write_watchdog(0)
+            self.write_watchdog(self.watchdog_ticks)
             self.stats.extra["watchdog_rearms"] = self.stats.extra.get("watchdog_rearms", 0) + 1
         self._fed_s = now
-        self._goal_plan.write(ticks, checked=False)  # clipped to the joint limits
-        self._last_goal_ticks = ticks
+        self._goal_plan.write(ticks, checked=False)  # clipped to the goal bounds
+        self.last_goal_ticks = ticks
 
-    def _write_watchdog(self, value: int) -> None:
+    def write_watchdog(self, value: int) -> None:
         """Bus Watchdog (98) of every servo: 0 disarms (and clears a trip), 1..127 x 20 ms arms."""
-        self._fed_s = self._clock()
+        self._fed_s = self.clock()
         self.bus.sync_write("bus_watchdog", dict.fromkeys(self.ids, value))
+
+    def read_present_ticks(self) -> list[int]:
+        """Present Position of every servo, head to tail (one group read; BusError if one is
+        silent)."""
+        rows = self._state_plan.read_rows(fast=self.fast_read)
+        self.last_rows = rows
+        return [row[-1] for row in rows]
 
     def _set_gains(self, gains: ServoGains) -> None:
         pid = (gains.position_d, gains.position_i, gains.position_p)
@@ -277,19 +350,23 @@ class DynamixelBackend(Backend):
     def _set_torque(self, enabled: bool) -> None:
         if not enabled:
             self.bus.sync_write("torque_enable", dict.fromkeys(self.ids, 0))
-            self._write_watchdog(0)
-            self.torque_enabled = False
+            self.write_watchdog(0)
+            self.torque_enabled = self.torque_may_be_on = False
             return
-        self._write_watchdog(0)
-        present = [row[-1] for row in self._state_plan.read_rows(fast=self.fast_read)]
-        # Goal = Present before torque on, or the servo jumps to a stale goal. A goal outside
-        # Min/Max Position Limit is refused (Data Limit Error, silent in a Sync Write), which
-        # would leave the stale goal in place: use the nearest limit instead.
-        present = [min(max(p, low), high) for p, (low, high) in zip(
-            present, self._position_limits, strict=True)]
+        self.write_watchdog(0)
+        present = self.read_present_ticks()
+        # Goal = Present before torque on, or the servo jumps to a stale goal. A servo standing
+        # beyond its Min/Max Position Limit refuses that goal (Data Limit Error, silent in a Sync
+        # Write) and would jump to the limit: refuse instead, naming the joint.
+        for j, (p, (low, high)) in enumerate(zip(present, self._position_limits, strict=True)):
+            if not low <= p <= high:
+                limit = high if p > high else low
+                angle, bound = self._joint_angles(j, p, limit)
+                raise PoseOutsideLimitsError(self.port, j, self.ids[j], angle, bound)
         self._goal_plan.write(present)
-        self._last_goal_ticks = present
-        self._write_watchdog(self.watchdog_ticks)
+        self.last_goal_ticks = present
+        self.write_watchdog(self.watchdog_ticks)
+        self.torque_may_be_on = True
         self.bus.sync_write("torque_enable", dict.fromkeys(self.ids, 1))
         self.torque_enabled = True
         state = self.bus.sync_read("torque_enable", self.ids)
@@ -297,6 +374,10 @@ class DynamixelBackend(Backend):
         if off:
             self._check_faults()
             raise BusError(self.port, off, "torque did not turn on (Torque Enable reads 0)")
+
+    def _joint_angles(self, joint: int, *ticks: int) -> tuple[float, ...]:
+        gain, bias = self.converter.state_terms()[joint]
+        return tuple(t * gain + bias for t in ticks)
 
     def _advance(self, dt_s: float) -> None:
         assert self._pacer is not None

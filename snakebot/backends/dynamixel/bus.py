@@ -94,6 +94,11 @@ class DynamixelBus:
         return self.transport.alerts
 
     @property
+    def vanished(self) -> BusError | None:
+        """The BusError of the first OS error on the port, once it vanished; None while it works."""
+        return self.transport.vanished
+
+    @property
     def last_instruction_s(self) -> float:
         """``clock()`` when the last instruction was sent."""
         return self.transport.last_instruction_s
@@ -103,7 +108,7 @@ class DynamixelBus:
         """Open the port at the bus baud rate; BusError if the port or rate is unusable."""
         try:
             ok = self._link.open(self.baud)
-        except OSError as exc:
+        except sdk.PORT_ERRORS as exc:
             raise BusError(
                 self.port, [], f"cannot open the port: {exc}. Check the adapter is plugged in and "
                 "the name (ls /dev/ttyUSB* /dev/serial/by-id/; COMx on Windows)"

@@ -58,10 +58,19 @@ def chain_report(
     return ChainReport(dict(found), missing, unexpected, mismatched)
 
 
+EXTRA_SERVOS_HINT = (
+    "the robot file does not name them: is this the right robot file? If they are meant to be on "
+    "the bus, pass --allow-extra-servos (DynamixelBackend(allow_extra_servos=True)); a new servo "
+    "is ID 1 at 57600 bit/s: give it its configured ID"
+)
+
+
 def chain_error(
-    port: str, baud: int, report: ChainReport, model_names: Mapping[int, str]
+    port: str, baud: int, report: ChainReport, model_names: Mapping[int, str],
+    extra_hint: str = EXTRA_SERVOS_HINT,
 ) -> ChainMismatchError:
-    """The connect failure for a report that is not ok; every line says what to check."""
+    """The connect failure for a report that is not ok (or has extras); every line says what to
+    check. ``extra_hint`` follows the list of unexpected IDs."""
     def name(number: int) -> str:
         return model_names.get(number, f"model {number}")
 
@@ -73,8 +82,7 @@ def chain_error(
         lines.append(f"servo {servo_id} is a {name(got)}, the config expects a {name(want)}")
     if report.unexpected:
         extra = ", ".join(f"{i} ({name(m)})" for i, m in report.unexpected.items())
-        lines.append(f"unexpected servo ID(s) on the bus: {extra} (a new servo is ID 1 at "
-                     "57600 bit/s; give it its configured ID)")
+        lines.append(f"unexpected servo ID(s) on the bus: {extra} ({extra_hint})")
     return ChainMismatchError(
         port, missing=report.missing, unexpected=tuple(report.unexpected),
         mismatched=report.mismatched, message="; ".join(lines),

@@ -100,7 +100,7 @@ class ChainMismatchError(BusError):
         self.missing = tuple(missing)
         self.unexpected = tuple(unexpected)
         self.mismatched = dict(mismatched)
-        super().__init__(port, sorted({*missing, *mismatched}), message)
+        super().__init__(port, sorted({*missing, *mismatched}) or self.unexpected, message)
 
 
 class ServoSettingsError(BackendError):
@@ -116,5 +116,91 @@ class ServoSettingsError(BackendError):
         )
 
 
+class PoseOutsideLimitsError(BackendError):
+    """A joint stands where its servo cannot hold it (beyond the EEPROM Min/Max Position Limit).
+
+    Torque on would jump it to the limit; the backend refuses instead. Angles in rad.
+    """
+
+    def __init__(
+        self, port: str, joint: int, servo_id: int, angle_rad: float, limit_rad: float
+    ) -> None:
+        self.port = port
+        self.joint = joint
+        self.servo_id = servo_id
+        self.angle_rad = angle_rad
+        self.limit_rad = limit_rad
+        super().__init__(
+            f"{port}: joint {joint} (servo {servo_id}) measures {angle_rad:.3f} rad, beyond its "
+            f"servo's position limit at {limit_rad:.3f} rad (EEPROM Min/Max Position Limit), "
+            "where it cannot hold: torque "
+            "on would jump it to the limit. Move the joint inside by hand (its torque is off), or "
+            "widen the limit with `snakebot config apply`"
+        )
+
+
+class TrackingError(BackendError):
+    """Joints stopped following their goals and the backend could not bring them back.
+
+    ``joints`` are joint indices (head = 0), ``servo_ids`` their servos; ``present_rad`` and
+    ``goal_rad`` where each stands and where it was told to go.
+    """
+
+    def __init__(
+        self,
+        port: str,
+        joints: Sequence[int],
+        servo_ids: Sequence[int],
+        present_rad: Sequence[float],
+        goal_rad: Sequence[float],
+        reason: str,
+    ) -> None:
+        self.port = port
+        self.joints = tuple(joints)
+        self.servo_ids = tuple(servo_ids)
+        self.present_rad = tuple(present_rad)
+        self.goal_rad = tuple(goal_rad)
+        where = "; ".join(
+            f"joint {j} (servo {i}) at {p:.3f} rad, goal {g:.3f} rad"
+            for j, i, p, g in zip(joints, servo_ids, present_rad, goal_rad, strict=True)
+        )
+        super().__init__(f"{port}: position feedback stopped following the goals: {where}. "
+                         f"{reason}")
+
+
+class WatchdogTripError(BackendError):
+    """The Bus Watchdog tripped more often than the backend recovers from: the host cannot feed it.
+
+    ``trips`` is how many trips came within ``window_s`` seconds.
+    """
+
+    def __init__(self, port: str, servo_ids: Sequence[int], trips: int, window_s: float,
+                 watchdog_s: float) -> None:
+        self.port = port
+        self.servo_ids = tuple(servo_ids)
+        self.trips = trips
+        super().__init__(
+            f"{port}: the Bus Watchdog ({watchdog_s * 1000:.0f} ms) of servo(s) "
+            f"{', '.join(map(str, servo_ids))} tripped {trips} times within {window_s:.0f} s: the "
+            "servos stop whenever no instruction reaches them within the watchdog period. The "
+            "host is too loaded or the USB link stalls; close other programs, lower the control "
+            "rate, or raise watchdog_s"
+        )
+
+
+class StopIncompleteError(BackendError):
+    """After the stop ramp some servos that answer do not hold the safe pose (hold policy)."""
+
+    def __init__(self, port: str, servo_ids: Sequence[int], detail: str) -> None:
+        self.port = port
+        self.servo_ids = tuple(servo_ids)
+        super().__init__(f"{port}: servo(s) {', '.join(map(str, servo_ids))} did not take the "
+                         f"safe pose at stop: {detail}")
+
+
 class DynamixelSettingsWarning(UserWarning):
     """A servo or adapter setting that works but costs loop rate (latency timer, return delay)."""
+
+
+class ExtraServosWarning(UserWarning):
+    """Servos on the bus that the robot file does not name, accepted with ``allow_extra_servos``."""

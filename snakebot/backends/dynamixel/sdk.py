@@ -7,11 +7,22 @@ typed, and never leave the port's busy flag stuck (see :meth:`SdkLink.guard`).
 
 from __future__ import annotations
 
+import os
+import select
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Protocol
+from typing import Any, Protocol
 
 import dynamixel_sdk as _sdk
+
+try:
+    import termios
+except ImportError:  # Windows: pyserial reports everything as OSError (SerialException)
+    PORT_ERRORS: tuple[type[Exception], ...] = (OSError,)
+else:
+    # pyserial lets termios.error (not an OSError) out of reset_input_buffer's tcflush when the
+    # device vanished under it (a USB adapter unplugged, a pty whose far end closed).
+    PORT_ERRORS = (OSError, termios.error)
 
 COMM_SUCCESS: int = _sdk.COMM_SUCCESS
 COMM_PORT_BUSY: int = _sdk.COMM_PORT_BUSY
@@ -131,9 +142,59 @@ class GroupBulkReadLike(Protocol):
         """Whether the last read holds data for that ID and range."""
 
 
+def is_pseudo_terminal(port: str) -> bool:
+    """Whether ``port`` is a pseudo-terminal (Linux /dev/pts/N, macOS /dev/ttysNNN)."""
+    path = os.path.realpath(port)
+    return path.startswith("/dev/pts/") or path.startswith("/dev/ttys")
+
+
+class WaitingPortHandler(_sdk.PortHandler):  # type: ignore[misc]
+    """The SDK's ``PortHandler`` whose reads, when nothing has arrived, wait on the port.
+
+    The SDK's receive loop polls a non-blocking read until its timeout, spinning a core at 100 %
+    for every reply. Here an empty read waits up to ``WAIT_S`` in ``select`` for the next byte and
+    returns as soon as one arrives, so the loop sleeps in the kernel instead: replies come no
+    later, timeouts at most ``WAIT_S`` later, and on a loaded machine the CPU goes to whoever is
+    producing the reply (an emulator on the same host, the USB stack). POSIX only; elsewhere the
+    SDK's own polling stays.
+
+    On a pseudo-terminal the far end is a process (``snakebot emulate --pty``, a socat bridge),
+    which the OS may not schedule for tens of milliseconds on a loaded host: each reply wait gets
+    ``PTY_SLACK_MS`` more than the SDK's (about 34 ms), so a busy emulator is not taken for a
+    missing servo. A real adapter keeps the SDK's timeouts.
+    """
+
+    WAIT_S = 0.001
+    PTY_SLACK_MS = 100.0
+    ser: Any
+    packet_timeout: float
+
+    def __init__(self, port_name: str) -> None:
+        super().__init__(port_name)
+        self.slack_ms = self.PTY_SLACK_MS if is_pseudo_terminal(port_name) else 0.0
+
+    def setPacketTimeout(self, packet_length: int) -> None:  # noqa: N802 - the SDK's name
+        """The SDK's reply timeout for ``packet_length`` bytes, plus the pty slack."""
+        super().setPacketTimeout(packet_length)
+        self.packet_timeout += self.slack_ms
+
+    def readPort(self, length: int) -> bytes:  # noqa: N802 - the SDK's name
+        """Up to ``length`` bytes; waits up to ``WAIT_S`` for the first one when none is there."""
+        data: bytes = self.ser.read(length)
+        if data or os.name != "posix":
+            return data
+        try:
+            select.select([self.ser.fileno()], [], [], self.WAIT_S)
+        except (OSError, ValueError, AttributeError):
+            return data  # a port that cannot be waited on: poll as the SDK does
+        more: bytes = self.ser.read(length)
+        return more
+
+
 def default_port_handler(port: str) -> PortHandlerLike:
-    """The SDK's own ``PortHandler`` (plain ``serial.Serial``: device paths only, no URLs)."""
-    handler: PortHandlerLike = _sdk.PortHandler(port)
+    """The SDK's ``PortHandler`` for a device path (plain ``serial.Serial``: no URLs), with
+    reads that wait on the port instead of spinning (:class:`WaitingPortHandler`)."""
+    handler: PortHandlerLike = WaitingPortHandler(port)
     return handler
 
 
@@ -170,10 +231,13 @@ class SdkLink:
             return bool(self.port.setBaudRate(baud))
 
     def close(self) -> None:
-        """Close the port (idempotent)."""
+        """Close the port (idempotent; a port that vanished is closed as far as it can be)."""
         self.port.is_using = False
         if self.port.is_open:
-            self.port.closePort()
+            try:
+                self.port.closePort()
+            except PORT_ERRORS:
+                self.port.is_open = False
 
     @property
     def port_name(self) -> str:

@@ -18,6 +18,21 @@ def safe_pose(robot: RobotConfig) -> np.ndarray:
     return pose
 
 
+def ramp_duration_s(span_rad: float, max_speed_rad_s: float, duration_s: float) -> float:
+    """The stop ramp's length in s: ``duration_s``, stretched so no joint beats the speed limit.
+
+    A cosine ramp over T seconds peaks at (pi / 2) * span / T, so the shortest ramp that keeps
+    every joint under ``max_speed_rad_s`` lasts (pi / 2) * span / max_speed (``span_rad`` is the
+    largest distance a joint travels).
+    """
+    return max(duration_s, fastest_ramp_s(span_rad, max_speed_rad_s))
+
+
+def fastest_ramp_s(span_rad: float, max_speed_rad_s: float) -> float:
+    """The shortest cosine ramp over ``span_rad`` whose peak speed stays under the limit (s)."""
+    return 0.5 * math.pi * abs(span_rad) / max_speed_rad_s
+
+
 def ramp_poses(
     start_rad: np.ndarray, target_rad: np.ndarray, duration_s: float, rate_hz: float = RAMP_RATE_HZ
 ) -> list[tuple[float, np.ndarray]]:

@@ -112,15 +112,26 @@ class TickConverter:
         clipped: np.ndarray = np.minimum(np.maximum(ticks, self.lower_ticks), self.upper_ticks)
         return clipped
 
-    def goal_ticks(self, angle_rad: np.ndarray | Sequence[float]) -> tuple[list[int], bool]:
+    @property
+    def goal_terms(self) -> list[tuple[float, float, int, int]]:
+        """Per joint (tick gain, tick bias, lowest and highest goal tick): the joint limits."""
+        return list(self._goal_terms)
+
+    def goal_ticks(
+        self,
+        angle_rad: np.ndarray | Sequence[float],
+        terms: Sequence[tuple[float, float, int, int]] | None = None,
+    ) -> tuple[list[int], bool]:
         """Goal ticks clipped to the limits, and whether any joint was clipped; ValueError for NaN.
 
-        Plain floats on purpose: this runs once per control cycle, where a few numpy calls on
-        cold caches cost more than the loop (see plans.py).
+        ``terms`` replaces :attr:`goal_terms` (the backend widens a joint's bounds while it
+        brings a joint found outside its limits back in). Plain floats on purpose: this runs once
+        per control cycle, where a few numpy calls on cold caches cost more than the loop (see
+        plans.py).
         """
         angles = angle_rad.tolist() if isinstance(angle_rad, np.ndarray) else list(angle_rad)
         ticks, clipped = [], False
-        for angle, (gain, bias, low, high) in zip(angles, self._goal_terms, strict=True):
+        for angle, (gain, bias, low, high) in zip(angles, terms or self._goal_terms, strict=True):
             value = angle * gain + bias
             if not low <= value <= high:  # NaN fails both comparisons
                 if not math.isfinite(value):

@@ -44,18 +44,24 @@ class Transport:
         self.group_fallbacks = 0
         self.alerts: set[int] = set()
         self.last_instruction_s = 0.0
+        self.vanished: BusError | None = None
+        """The first OS error on the port (it vanished); later transactions fail the same way."""
         self._clock = clock
 
     def run(self, ids: Sequence[int], what: str, op: Callable[[], T]) -> T:
-        """Run one SDK transaction: stamp ``last_instruction_s``, turn OSError into BusError."""
+        """Run one SDK transaction: stamp ``last_instruction_s``; any OS error on the port
+        (OSError, pyserial's SerialException, termios.error) becomes a BusError."""
         self.last_instruction_s = self._clock()
         try:
             return op()
-        except OSError as exc:
-            raise BusError(
-                self.port, ids, f"{what}: serial port failed ({exc}); is the adapter still "
-                "plugged in?"
-            ) from exc
+        except sdk.PORT_ERRORS as exc:
+            error = BusError(
+                self.port, ids, f"{what}: the serial port vanished or failed ({exc}): adapter "
+                "unplugged, cable pulled, or the emulator behind it stopped? Plug it back in and "
+                "check the port name (ls /dev/serial/by-id/)"
+            )
+            self.vanished = self.vanished or error
+            raise error from exc
 
     def fail(self, result: int, ids: Sequence[int], what: str) -> BusError:
         """The BusError for an SDK result, with the SDK's own text."""

@@ -26,7 +26,9 @@ pytestmark = [
 ]
 
 
-def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
+def read_all(port: str, address: int, size: int, ids: range, signed: bool = False) -> list[int]:
+    """One register of every servo with the bare SDK; a few tries each, as the emulator may be
+    starved of CPU for a moment on a loaded machine."""
     handler = dynamixel_sdk.PortHandler(port)
     assert handler.openPort() and handler.setBaudRate(1_000_000)
     packets = dynamixel_sdk.PacketHandler(2.0)
@@ -34,8 +36,13 @@ def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
     try:
         values = []
         for servo_id in ids:
-            value, result, _ = read(handler, servo_id, address)
+            for _ in range(5):
+                value, result, _ = read(handler, servo_id, address)
+                if result == dynamixel_sdk.COMM_SUCCESS:
+                    break
             assert result == dynamixel_sdk.COMM_SUCCESS
+            if signed and value >= 1 << (8 * size - 1):
+                value -= 1 << (8 * size)
             values.append(value)
         return values
     finally:
@@ -71,3 +78,79 @@ def test_sigint_ramps_out_and_leaves_torque_as_configured(
     data = read_log(log)
     assert data.values.shape[0] > 40
     assert np.abs(data.joints("command_rad")[-1]).max() < 1e-6
+
+
+def start_run(robot: Path, port: str, log: Path) -> subprocess.Popen[bytes]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
+         "--robot", str(robot), "--gait", "sidewinding", "--duration", "60", "--log", str(log),
+         "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )
+
+
+def wait_for_rows(log: Path, rows: int, run: subprocess.Popen[bytes]) -> None:
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and run.poll() is None:
+        if log.exists() and log.read_text().count("\n") > rows:
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"the run did not log {rows} rows")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("policy", ["hold", "limp"])
+def test_repeated_signals_shorten_the_stop_and_still_end_in_the_policy(
+    policy: str, signum: int, config_dir: Path, tmp_path: Path
+) -> None:
+    # ramp_s = 3: the runner's ramp-out and the backend's stop ramp last long enough for the
+    # second signal to land in the first and the third in the second, even on a loaded machine.
+    robot = edit_robot(config_dir, "snake12", 'stop_policy = "hold"', f'stop_policy = "{policy}"')
+    robot.write_text(robot.read_text().replace("ramp_s = 1.0", "ramp_s = 3.0", 1))
+    log = tmp_path / "run.csv"
+    with emulator("--robot", str(robot)) as emu:
+        run = start_run(robot, emu.port, log)
+        wait_for_rows(log, 40, run)
+        started = time.monotonic()
+        for at_s in (0.0, 1.0, 2.0):  # gait -> runner ramp-out -> backend's (hurried) stop ramp
+            time.sleep(max(0.0, started + at_s - time.monotonic()))
+            if run.poll() is None:
+                run.send_signal(signum)
+        _out, err = run.communicate(timeout=60)
+        stopped_s = time.monotonic() - started
+        torque = read_all(emu.port, 64, 1, range(1, 13))
+        watchdog = read_all(emu.port, 98, 1, range(1, 13), signed=True)
+        goals = read_all(emu.port, 116, 4, range(1, 13))
+    assert run.returncode == 130, err.decode()
+    assert b"Traceback" not in err
+    assert stopped_s < 5.0  # not the 3 s ramp-out plus a 3 s stop ramp
+    assert torque == [1 if policy == "hold" else 0] * 12
+    assert watchdog == [0] * 12  # disarmed, not tripped (-1)
+    if policy == "hold":
+        assert max(abs(g - 2048) for g in goals) <= 2  # the hurried ramp still got there
+    assert read_log(log).values.shape[0] > 40
+
+
+@pytest.mark.parametrize("policy", ["hold", "limp"])
+def test_ctrl_c_while_connecting_leaves_no_traceback_and_the_servos_per_policy(
+    policy: str, config_dir: Path, tmp_path: Path
+) -> None:
+    robot = edit_robot(config_dir, "snake12", 'stop_policy = "hold"', f'stop_policy = "{policy}"')
+    log = tmp_path / "run.csv"
+    with emulator("--robot", str(robot)) as emu:
+        run = start_run(robot, emu.port, log)
+        deadline = time.monotonic() + 60
+        while not log.exists() and time.monotonic() < deadline:  # the log opens just before
+            time.sleep(0.002)  # connect, whose broadcast ping alone takes ~0.8 s
+        time.sleep(0.3)
+        run.send_signal(signal.SIGINT)
+        out, err = run.communicate(timeout=60)
+        time.sleep(0.3)  # longer than the Bus Watchdog: a servo left armed would trip
+        torque = read_all(emu.port, 64, 1, range(1, 13))
+        watchdog = read_all(emu.port, 98, 1, range(1, 13), signed=True)
+    assert run.returncode == 130, err.decode()
+    assert b"Traceback" not in err
+    assert out == b""  # stopped during start-up: no run summary
+    if policy == "limp":
+        assert torque == [0] * 12
+    assert watchdog == [0] * 12  # torque on or off, nobody is left armed to trip

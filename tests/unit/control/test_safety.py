@@ -30,10 +30,11 @@ def test_no_command_leaves_limits_or_speed(
 ) -> None:
     layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
     layer.reset(start)
-    previous = np.clip(start, LOWER, UPPER)
+    previous = start  # a joint may start outside its limits: it comes in, never goes further out
     for target in targets:
         command = layer.filter(target, dt, amplitude)
-        assert np.all(command >= LOWER) and np.all(command <= UPPER)
+        assert np.all(command >= np.minimum(LOWER, previous) - 1e-12)
+        assert np.all(command <= np.maximum(UPPER, previous) + 1e-12)
         assert np.all(np.abs(command - previous) <= VMAX * dt + 1e-9)
         previous = command
 
@@ -69,3 +70,16 @@ def test_speed_limit_comes_from_the_servo() -> None:
     layer = SafetyLayer.for_robot(robot)
     # 0.9 of the XL430-W250's 57 rpm no-load speed
     assert layer.max_speed_rad_s == pytest.approx(0.9 * 57 * 2 * np.pi / 60, rel=1e-3)
+
+
+def test_a_joint_found_outside_its_limits_comes_in_at_the_slew_limit() -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
+    start = np.zeros(N)
+    start[0] = 2.5  # limit 1.5
+    layer.reset(start)
+    dt = 0.01
+    path = [layer.filter(np.zeros(N), dt, amplitude=0.0)[0] for _ in range(60)]
+    assert path[0] == pytest.approx(2.5 - VMAX * dt)  # the first command is one step, not 1 rad
+    steps = np.diff([2.5, *path])
+    assert np.all(steps <= 0) and np.all(steps >= -VMAX * dt - 1e-12)
+    assert path[-1] == pytest.approx(0.0)

@@ -64,3 +64,21 @@ def bench() -> Iterator[Bench]:
     chain = make_bench(range(1, 13))
     with registered(chain) as url:
         yield Bench(chain, url)
+
+
+class ChainWatcher:
+    """A ``ChainPhysics`` that moves nothing: it calls ``callback(chain)`` whenever bus time passes.
+
+    The emulator calls its physics hook from inside every transaction (wire time, reply waits), so
+    a callback can inject a fault at the exact moment the bus reaches a state, e.g. one servo going
+    silent right after its torque comes on, or a Ctrl-C arriving mid-transaction.
+    """
+
+    def __init__(self, chain: EmulatedChain, callback: Any) -> None:
+        self.chain = chain
+        self.callback = callback
+        self.calls = 0
+
+    def advance(self, servos: Any, dt_s: float) -> None:
+        self.calls += 1
+        self.callback(self.chain)

@@ -9,11 +9,12 @@ import pytest
 from snakebot.backends.dynamixel.faults import (
     ChainMismatchError,
     DynamixelSettingsWarning,
+    ExtraServosWarning,
     HardwareFaultError,
     ServoSettingsError,
 )
 from snakebot.emulation import HardwareError, registered
-from tests.integration.backends.dynamixel.conftest import Bench, make_bench
+from tests.integration.backends.dynamixel.conftest import Bench, make_bench, robot_variant
 
 
 def test_connect_reads_the_chain_and_turns_torque_on(bench: Bench) -> None:
@@ -100,3 +101,40 @@ def test_a_tripped_watchdog_from_a_dead_session_is_cleared(bench: Bench) -> None
         assert {s.peek("bus_watchdog") for s in bench.chain.servos} == {5}
     finally:
         second.close()
+
+
+def test_servos_the_robot_does_not_name_refuse_connect_naming_them_and_the_option(
+    bench: Bench,
+) -> None:
+    backend = bench.backend(robot_variant("snake8", ramp_s=0.2))  # 8 servos; the bus holds 12
+    with pytest.raises(ChainMismatchError) as info:
+        backend.connect()
+    error = info.value
+    assert error.unexpected == (9, 10, 11, 12)
+    assert error.servo_ids == (9, 10, 11, 12)
+    assert "unexpected servo ID(s) on the bus: 9 (XL430-W250), 10" in str(error)
+    assert "--allow-extra-servos" in str(error)
+    assert not any(s.torque_enabled for s in bench.chain.servos)
+    assert not backend.bus.is_open
+
+
+def test_extra_servos_said_to_be_expected_are_left_alone(bench: Bench) -> None:
+    backend = bench.backend(robot_variant("snake8", ramp_s=0.2), allow_extra_servos=True)
+    with pytest.warns(ExtraServosWarning, match=r"servo ID\(s\) 9, 10, 11, 12 are on the bus"):
+        backend.connect()
+    try:
+        assert [s.torque_enabled for s in bench.chain.servos] == [True] * 8 + [False] * 4
+    finally:
+        backend.close()
+    assert {s.peek("bus_watchdog") for s in bench.chain.servos} == {0}
+
+
+def test_connect_costs_one_broadcast_ping_window_of_bus_time(bench: Bench) -> None:
+    start_s = bench.chain.now_s
+    backend = bench.backend()
+    backend.connect()
+    took_s = bench.chain.now_s - start_s
+    backend.close()
+    # The SDK's broadcast ping waits its whole window (3 ms per possible ID, ~0.8 s at 1 Mbps);
+    # everything else in connect is a few ms of bus time.
+    assert took_s < 0.9

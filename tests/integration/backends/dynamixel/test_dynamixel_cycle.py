@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from snakebot.backends.base import JointCommand, ServoGains
+from snakebot.backends.dynamixel.faults import PoseOutsideLimitsError
 from snakebot.backends.dynamixel.ticks import rad_to_ticks
 from snakebot.config.loader import load_servo_model
 from snakebot.config.schema import RobotConfig
@@ -87,15 +88,22 @@ def test_torque_on_sets_goal_to_present_first(bench: Bench) -> None:
         assert all(s.torque_enabled for s in bench.chain.servos)
 
 
-def test_torque_on_beyond_a_position_limit_does_not_jump_to_a_stale_goal(bench: Bench) -> None:
+def test_a_joint_beyond_its_servo_position_limit_is_refused_not_stepped(bench: Bench) -> None:
     servo = bench.servo(3)
     servo.poke("max_position_limit", 3100)  # still covers the joint's 1.5 rad (tick 3025)
     servo.state = dataclasses.replace(servo.state, position_rad=1.7)  # tick 3156: beyond it
     servo.poke("goal_position", 2048)
-    with bench.backend() as backend:
-        assert servo.peek("goal_position") == 3100
-        backend.advance(0.5)
-        assert servo.peek("present_position") == 3100  # to the limit, not back to 2048
+    backend = bench.backend()
+    with pytest.raises(PoseOutsideLimitsError) as info:
+        backend.connect()
+    error = info.value
+    assert (error.joint, error.servo_id) == (2, 3)
+    assert error.angle_rad == pytest.approx(1.7, abs=2e-3)
+    assert error.limit_rad == pytest.approx((3100 - 2048) * 2 * math.pi / 4096)
+    assert "joint 2 (servo 3) measures 1.700 rad" in str(error)
+    assert not any(s.torque_enabled for s in bench.chain.servos)  # nothing moved
+    bench.chain.advance(0.5)
+    assert servo.peek("present_position") == 3156
 
 
 def test_gains_are_written_to_the_position_pid_registers(bench: Bench) -> None:

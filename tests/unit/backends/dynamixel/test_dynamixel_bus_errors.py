@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -135,7 +137,7 @@ def test_exception_mid_transaction_does_not_leave_the_port_busy(
 ) -> None:
     port.script = [status(1, 0, le(7, 4))]
     port.fail_on_read = OSError(5, "Input/output error")
-    with pytest.raises(BusError, match="serial port failed"):
+    with pytest.raises(BusError, match="the serial port vanished or failed"):
         bus.read(1, "present_position")
     assert port.is_using is False
     port.fail_on_read = KeyboardInterrupt()
@@ -245,3 +247,17 @@ def test_a_baud_the_sdk_refuses_is_named() -> None:
     bus = DynamixelBus("/dev/ttyUSB-snakebot-missing", 4_500_000)
     with pytest.raises(BusError, match="refuses 4500000 bit/s"):
         bus.open()
+
+
+@pytest.mark.skipif(os.name != "posix", reason="termios is POSIX")
+def test_a_termios_error_from_a_vanished_port_is_a_bus_error(
+    bus: DynamixelBus, port: ScriptedPort
+) -> None:
+    import termios
+
+    port.script = [status(1, 0, le(7, 4))]
+    port.fail_on_read = termios.error(5, "Input/output error")  # pyserial's tcflush lets it out
+    with pytest.raises(BusError, match="the serial port vanished or failed") as info:
+        bus.read(1, "present_position")
+    assert bus.vanished is info.value
+    assert port.is_using is False

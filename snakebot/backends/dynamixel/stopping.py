@@ -1,0 +1,300 @@
+"""Every way out of a connected Dynamixel backend, and the recoveries short of one.
+
+Once any servo may have torque on, every exit applies the stop policy to the servos that still
+answer: ``close`` ramps to the safe pose first (hold: torque on, Bus Watchdog disarmed; limp:
+torque off), a failed ``connect`` applies it where the servos stand (nothing has moved yet).
+
+- Ctrl-C or SIGTERM during the ramp finishes it at the joint speed limit; a second one skips to
+  the final state. A KeyboardInterrupt already on its way out when ``close`` starts (a second
+  Ctrl-C during the runner's ramp-out) starts with the fast ramp. The final writes run with those
+  signals deferred (``interrupts.py``); the KeyboardInterrupt is raised after them.
+- Any other exception in the ramp still ends in the policy, then is raised; a BusError in the
+  ramp (a servo gone) is logged, and the policy goes to the servos that answer.
+- A tripped Bus Watchdog refuses goals (e-Manual control_table_buswatchdog): it is cleared before
+  the ramp, and the ramp's last goal is read back; a servo that did not take it gets the ramp
+  again once, then StopIncompleteError (hold) after the policy.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from snakebot.backends.dynamixel.faults import (
+    HardwareFaultError,
+    StopIncompleteError,
+    SyncReadError,
+    TrackingError,
+    WatchdogTripError,
+)
+from snakebot.backends.dynamixel.interrupts import deferred_interrupts
+from snakebot.backends.dynamixel.shutdown import (
+    fastest_ramp_s,
+    ramp_duration_s,
+    ramp_poses,
+    safe_pose,
+)
+from snakebot.backends.dynamixel.supervision import CatchUp, Stall, TrackingLimits, TripCounter
+from snakebot.errors import BusError
+
+if TYPE_CHECKING:
+    from snakebot.backends.dynamixel.backend import DynamixelBackend
+
+log = logging.getLogger(__name__)
+
+SETTLED_RAD = 0.005
+"""A stop that starts this close to the safe pose writes it at once instead of ramping."""
+
+
+class StopSequence:
+    """The stop path and the watchdog/tracking recoveries of one backend (its friend class)."""
+
+    def __init__(self, backend: DynamixelBackend, limits: TrackingLimits) -> None:
+        self.b = backend
+        self.limits = limits
+        self.trips = TripCounter(limits.trip_window_s)
+
+    # -- ways out --------------------------------------------------------------------------------
+    def abort_connect(self) -> None:
+        """A connect failed (or was interrupted): apply the policy where the servos stand, close.
+
+        Errors here are logged: the exception that failed the connect is the one to report.
+        """
+        b = self.b
+        try:
+            if b.torque_may_be_on:
+                with deferred_interrupts():
+                    error = self.apply_policy()
+                if error is not None:
+                    log.warning("%s: stop policy after the failed connect: %s", b.port, error)
+        except KeyboardInterrupt:
+            pass  # the connect's own exception is already on its way out
+        finally:
+            b.bus.close()
+
+    def close(self, *, hurry: bool) -> None:
+        """Ramp out (fast if ``hurry``), apply the policy, close the port; see the module doc."""
+        b = self.b
+        interrupt: KeyboardInterrupt | None = None
+        failure: Exception | None = None
+        unreached: list[int] = []
+        policy_error: BusError | None = None
+        try:
+            if b.torque_may_be_on and b.bus.vanished is None:
+                b.catch_up = None
+                try:
+                    interrupt, unreached = self._ramp_out(hurry)
+                except BusError as exc:  # a servo or the port is gone: the policy still goes out
+                    if b.bus.vanished is None:
+                        log.warning("%s: stop ramp interrupted: %s", b.port, exc)
+                except Exception as exc:
+                    failure = exc
+            if b.torque_may_be_on and b.bus.vanished is None:
+                try:
+                    with deferred_interrupts():
+                        policy_error = self.apply_policy()
+                except KeyboardInterrupt as exc:
+                    interrupt = interrupt or exc
+            if b.torque_may_be_on and b.bus.vanished is not None:
+                policy_error = self._vanished_error()
+        finally:
+            b.bus.close()
+        if interrupt is not None:
+            raise interrupt
+        if failure is not None:
+            raise failure
+        if policy_error is not None:
+            raise policy_error
+        if unreached and b.stop_policy == "hold":
+            raise StopIncompleteError(
+                b.port, unreached, "their Goal Position is not the safe pose after the ramp "
+                "(a Bus Watchdog that keeps tripping, or a servo refusing goals)")
+
+    def _vanished_error(self) -> BusError:
+        b = self.b
+        return BusError(
+            b.port, b.ids, f"the port vanished, so the stop policy ({b.stop_policy}) could not be "
+            f"sent: the servos stopped when their Bus Watchdog tripped "
+            f"({b.watchdog_ticks * 0.02:.2f} s) and hold where they are, torque on, until they "
+            "are power-cycled or a new session connects"
+        )
+
+    def apply_policy(self) -> BusError | None:
+        """Hold (watchdog disarmed) or limp (torque off) every servo; read back, write again to
+        those that did not take it. The error if nothing could be sent."""
+        b = self.b
+        try:
+            if b.stop_policy == "limp":
+                b.bus.sync_write("torque_enable", dict.fromkeys(b.ids, 0))
+                b.torque_enabled = False
+                b.bus.sync_write("bus_watchdog", dict.fromkeys(b.ids, 0))
+                self._confirm("torque_enable", 0)
+            else:
+                b.bus.sync_write("bus_watchdog", dict.fromkeys(b.ids, 0))
+                self._confirm("bus_watchdog", 0)
+        except BusError as exc:
+            if b.bus.vanished is not None:
+                return self._vanished_error()
+            log.warning("%s: could not apply the stop policy (%s): %s", b.port, b.stop_policy, exc)
+            return exc
+        b.torque_may_be_on = b.stop_policy == "hold"
+        return None
+
+    def _confirm(self, key: str, value: int) -> None:
+        """Write ``key`` again, one servo at a time, where it does not read back ``value``."""
+        b = self.b
+        for servo_id, values in self._read_answering(key).items():
+            if values[key] != value:
+                try:
+                    b.bus.write(servo_id, key, value)
+                except BusError as exc:
+                    log.warning("%s: servo %d: %s", b.port, servo_id, exc)
+
+    def _read_answering(self, key: str) -> dict[int, Mapping[str, int]]:
+        """``key`` from every servo that answers (the silent ones are left out)."""
+        try:
+            return dict(self.b.bus.sync_read(key, self.b.ids))
+        except SyncReadError as exc:
+            return dict(exc.partial)
+
+    # -- the ramp --------------------------------------------------------------------------------
+    def _ramp_out(self, hurry: bool) -> tuple[KeyboardInterrupt | None, list[int]]:
+        """Ramp to the safe pose and check every servo took it; (interrupt, IDs that did not)."""
+        b = self.b
+        target = safe_pose(b.robot)
+        want = b.converter.goal_ticks(target, b.goal_terms)[0]
+        interrupt: KeyboardInterrupt | None = None
+        unreached: list[int] = []
+        for _ in range(2):
+            self._clear_tripped()
+            try:
+                interrupt = self._ramp(self._start_pose(), target, hurry) or interrupt
+            except KeyboardInterrupt as exc:  # a second one: skip to the final state
+                return exc, []
+            goals = self._read_answering("goal_position")
+            unreached = [i for j, i in enumerate(b.ids)
+                         if i in goals and goals[i]["goal_position"] != want[j]]
+            if not unreached or interrupt is not None:
+                break
+            log.warning("%s: servo(s) %s did not take the stop ramp's goals; ramping again",
+                        b.port, ", ".join(map(str, unreached)))
+            hurry = True
+        return interrupt, unreached
+
+    def _start_pose(self) -> np.ndarray:
+        b = self.b
+        try:
+            return b.converter.to_rad(np.array(b.read_present_ticks()))
+        except BusError:
+            if b.last_state is not None:
+                return b.last_state.position_rad
+            if b.last_goal_ticks is not None:
+                return b.converter.to_rad(np.array(b.last_goal_ticks))
+            raise
+
+    def _ramp(
+        self, start: np.ndarray, target: np.ndarray, hurry: bool
+    ) -> KeyboardInterrupt | None:
+        """Cosine ramp of goals; the first KeyboardInterrupt hurries it (returned at the end), a
+        second one (or one while hurrying) propagates."""
+        b = self.b
+        vmax = b.robot.max_speed_rad_s
+        span = float(np.max(np.abs(target - start)))
+        if span < SETTLED_RAD:
+            b.write_goals(b.converter.goal_ticks(target, b.goal_terms)[0])
+            return None
+        duration = fastest_ramp_s(span, vmax) if hurry else ramp_duration_s(
+            span, vmax, b.robot.safety.ramp_s)
+        poses, interrupt, last = ramp_poses(start, target, duration), None, start
+        t0, k = b.clock(), 0
+        while k < len(poses):
+            try:
+                at_s, pose = poses[k]
+                b.write_goals(b.converter.goal_ticks(pose, b.goal_terms)[0])
+                last = pose
+                remaining = t0 + at_s - b.clock()
+                if remaining > 0:
+                    b.sleep(remaining)
+                k += 1
+            except KeyboardInterrupt as exc:
+                if hurry:
+                    raise
+                hurry, interrupt = True, exc
+                log.warning("%s: interrupted again: finishing the stop ramp at the joint speed "
+                            "limit", b.port)
+                span = float(np.max(np.abs(target - last)))
+                poses, t0, k = ramp_poses(last, target, fastest_ramp_s(span, vmax)), b.clock(), 0
+        return interrupt
+
+    # -- the Bus Watchdog and tracking -----------------------------------------------------------
+    def _clear_tripped(self) -> None:
+        tripped = [i for i, v in self._read_answering("bus_watchdog").items()
+                   if v["bus_watchdog"] < 0]
+        if tripped:
+            log.warning("%s: Bus Watchdog tripped on servo(s) %s; cleared before the stop ramp",
+                        self.b.port, ", ".join(map(str, tripped)))
+            self._rearm()
+
+    def _rearm(self) -> None:
+        b = self.b
+        b.write_watchdog(0)  # clears the trip (e-Manual control_table_buswatchdog)
+        b.write_watchdog(b.watchdog_ticks)
+
+    def check_watchdog(self) -> None:
+        """Slow-rate read of the Bus Watchdog; a trip (reads -1) is cleared and recovered from."""
+        b = self.b
+        values = b.bus.sync_read("bus_watchdog", b.ids, fast=b.fast_read)
+        tripped = [i for i, v in values.items() if v["bus_watchdog"] < 0]
+        if tripped:
+            self.recover_watchdog(tripped)
+
+    def recover_watchdog(self, tripped: Sequence[int]) -> None:
+        """Clear and re-arm, then slew the goals from where the servos stopped to the commands.
+
+        WatchdogTripError when trips come more often than ``limits.max_watchdog_trips`` within
+        ``limits.trip_window_s``.
+        """
+        b = self.b
+        count = self.trips.add(b.clock())
+        b.stats.extra["watchdog_trips"] = self.trips.total
+        if count > self.limits.max_watchdog_trips:
+            raise WatchdogTripError(b.port, tripped, count, self.limits.trip_window_s,
+                                    b.watchdog_ticks * 0.02)
+        log.warning("%s: Bus Watchdog tripped on servo(s) %s (the servos stopped): cleared, "
+                    "re-armed, catching up at the joint speed limit", b.port,
+                    ", ".join(map(str, tripped)))
+        self._rearm()
+        present = b.read_present_ticks()
+        b.catch_up = CatchUp(present, b.max_ticks_per_s, b.clock())
+        b.reset_tracking()
+
+    def diagnose(self, stalls: Sequence[Stall]) -> None:
+        """Joints stood still while their goals moved: recover a tripped watchdog, else raise."""
+        b = self.b
+        watchdog = b.bus.sync_read("bus_watchdog", b.ids)
+        tripped = [i for i, v in watchdog.items() if v["bus_watchdog"] < 0]
+        if tripped:
+            self.recover_watchdog(tripped)
+            return
+        status = b.bus.sync_read(("torque_enable", "hardware_error_status"), b.ids)
+        faults = {i: v["hardware_error_status"] for i, v in status.items()
+                  if v["hardware_error_status"]}
+        if faults:
+            raise HardwareFaultError(b.port, faults)
+        joints = [s.joint for s in stalls]
+        ids = [b.ids[j] for j in joints]
+        off = [i for i in ids if not status[i]["torque_enable"]]
+        if off:
+            reason = (f"Torque Enable reads 0 on servo(s) {', '.join(map(str, off))}: it rebooted "
+                      "(a supply dip or a loose cable?). Check power and wiring, then run again")
+        else:
+            reason = (f"Torque is on and no fault is latched, yet the reading stood still for "
+                      f"{max(s.still_for_s for s in stalls):.1f} s while the goal moved: the "
+                      "joint is blocked or jammed, or its horn slipped. Free it and run again")
+        gain = b.converter.state_terms()
+        present = [s.present_ticks * gain[s.joint][0] + gain[s.joint][1] for s in stalls]
+        goal = [s.goal_ticks * gain[s.joint][0] + gain[s.joint][1] for s in stalls]
+        raise TrackingError(b.port, joints, ids, present, goal, reason)

@@ -1,0 +1,51 @@
+"""A reduced fault matrix (tools/fault_matrix.py --quick) in CI: its must-be-zero figures are 0.
+
+Every fault mode once, both stop policies, 2 s of gait each, real SDK over the emulator in
+virtual time (a few seconds of CPU). The checker itself is tested too: it must see a goal
+outside the limits and a servo left in the wrong state.
+"""
+
+from __future__ import annotations
+
+import struct
+
+from snakebot.config import load_robot
+from snakebot.emulation import make_chain_for_ids
+from snakebot.emulation.protocol import Instruction, build_instruction
+from tools.fault_matrix import Fault, GoalAudit, faults, final_mismatches, run_matrix, totals
+
+
+def test_reduced_fault_matrix_has_no_untyped_errors_bad_goals_or_wrong_final_states() -> None:
+    results = run_matrix(faults(quick=True), duration_s=2.0)
+    figures = totals(results)
+    details = [(r.fault, r.policy, r.outcome, r.final_mismatches) for r in results if not r.ok]
+    assert figures["untyped_errors"] == 0, details
+    assert figures["out_of_limit_goals"] == 0, details
+    assert figures["final_state_mismatches"] == 0, details
+    assert figures["goals_audited"] > 10_000
+    outcomes = {r.fault: r.outcome for r in results}
+    assert outcomes["none"] == "completed"
+    assert outcomes["silence"] == "SyncReadError"
+    assert outcomes["hardware_error(overload)"] == "HardwareFaultError"
+    assert outcomes["watchdog_trip(every 25 cycles)"] == "WatchdogTripError"
+    assert outcomes["jam"] == "TrackingError"
+
+
+def test_the_goal_audit_sees_a_goal_outside_the_joint_limits() -> None:
+    audit = GoalAudit(load_robot("snake12"))  # ±1.5 rad: ticks 1071..3025
+    params = struct.pack("<HH", 116, 4) + bytes([1]) + struct.pack("<i", 2048)
+    params += bytes([2]) + struct.pack("<i", 3100)
+    audit.feed(build_instruction(0xFE, Instruction.SYNC_WRITE, params))
+    audit.feed(build_instruction(3, Instruction.WRITE, struct.pack("<Hi", 116, 1000)))
+    assert audit.goals == 3
+    assert audit.out_of_limits == [(2, 3100), (3, 1000)]
+
+
+def test_the_final_state_check_sees_a_servo_left_wrong() -> None:
+    chain = make_chain_for_ids("XL430-W250", range(1, 13), baud=1_000_000)
+    none = Fault("none", "", lambda c, h, k: None)
+    assert final_mismatches(chain, "limp", none) == []
+    chain.servo(4).poke("torque_enable", 1)
+    chain.servo(4).poke("bus_watchdog", 5)
+    assert final_mismatches(chain, "limp", none) == [
+        "servo 4: torque on with limp", "servo 4: Bus Watchdog left armed"]

@@ -1,0 +1,351 @@
+"""Every fault the emulated bus can inject, at several rates, under both stop policies.
+
+Each case runs the real DynamixelBackend and runner (snake12, sidewinding, 100 Hz) through the
+unmodified dynamixel_sdk on the in-process emulator (``dxlemu://``, virtual time), injects one
+fault through the emulated chain, lets the run end however it ends, then checks:
+
+- how it ended: completed, a typed error (a SnakebotError subclass, exit 1 in the CLI), or an
+  untyped one (anything else: a bug, exit 3). Untyped errors must be 0.
+- every Goal Position the servos received (Sync Write or Write to register 116, decoded from the
+  bytes the host sent) against the robot's joint limits. Out-of-limit goals must be 0.
+- each servo's final state against the stop policy, 1 s after the end with nobody on the bus:
+  hold = torque on, Bus Watchdog disarmed (not tripped); limp = torque off. A servo the fault took
+  off the bus (silent, wrong baud) cannot be reached and is not counted; one whose firmware cut
+  its torque (a latched hardware error, a reboot) must be off. Mismatches must be 0.
+
+Usage: python tools/fault_matrix.py [--quick] [--duration 2.0] [--json]
+Exit status 1 if any must-be-zero figure is not zero.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import logging
+import struct
+import sys
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.config import RobotConfig, load_robot
+from snakebot.control.metrics import RunMetrics
+from snakebot.control.runner import RunPlan, run_gait
+from snakebot.control.safety import SafetyLayer
+from snakebot.emulation import (
+    EmulatedChain,
+    ExternalMotion,
+    HardwareError,
+    VirtualServo,
+    make_chain_for_ids,
+    registered,
+)
+from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.emulation.protocol import Instruction, StreamParser
+from snakebot.errors import SnakebotError
+from snakebot.gaits import make_gait
+
+GOAL_POSITION = 116
+SAFE_TICKS = 2048  # snake12's safe pose: every joint straight, zero offsets
+FAULT_CYCLE = 30
+TARGET = 5  # the servo most faults hit
+
+
+class HostClock:
+    """The host's clock: the bus clock minus bus time the host never saw pass."""
+
+    def __init__(self, chain: EmulatedChain) -> None:
+        self.chain = chain
+        self.unseen_s = 0.0
+
+    def __call__(self) -> float:
+        return self.chain.now_s - self.unseen_s
+
+    def stall_unseen(self, seconds: float) -> None:
+        """Bus time passes (the watchdogs count it) that the host does not notice."""
+        self.chain.advance(seconds)
+        self.unseen_s += seconds
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One way to break the bus: ``inject(chain, clock, cycle)`` runs after every cycle.
+
+    ``unreachable`` are servo IDs the fault takes off the bus (not counted in the final state);
+    ``torque_cut`` are servos whose firmware turns torque off (expected off whatever the policy).
+    """
+
+    mode: str
+    level: str
+    inject: Callable[[EmulatedChain, HostClock, int], None]
+    unreachable: tuple[int, ...] = ()
+    torque_cut: tuple[int, ...] = ()
+
+    @property
+    def name(self) -> str:
+        return f"{self.mode}({self.level})" if self.level else self.mode
+
+
+def at_cycle(action: Callable[[EmulatedChain, HostClock], None], cycle: int = FAULT_CYCLE
+             ) -> Callable[[EmulatedChain, HostClock, int], None]:
+    def inject(chain: EmulatedChain, clock: HostClock, k: int) -> None:
+        if k == cycle:
+            action(chain, clock)
+    return inject
+
+
+def every(action: Callable[[EmulatedChain, HostClock], None], period: int
+          ) -> Callable[[EmulatedChain, HostClock, int], None]:
+    def inject(chain: EmulatedChain, clock: HostClock, k: int) -> None:
+        if k >= FAULT_CYCLE and (k - FAULT_CYCLE) % period == 0:
+            action(chain, clock)
+    return inject
+
+
+def _jam(chain: EmulatedChain, clock: HostClock) -> None:
+    chain.servo(TARGET).motion = ExternalMotion()  # the shaft stops dead, torque on, no fault
+
+
+class SilenceAtTorqueOn:
+    """A ChainPhysics hook that moves nothing: it silences TARGET the moment its torque comes on
+    (a servo lost during connect, right after Torque Enable)."""
+
+    def advance(self, servos: Sequence[VirtualServo], dt_s: float) -> None:
+        for servo in servos:
+            if servo.servo_id == TARGET and servo.torque_enabled:
+                self.chain.silence(servo)
+
+    def __init__(self, chain: EmulatedChain) -> None:
+        self.chain = chain
+
+
+def _twin(chain: EmulatedChain, clock: HostClock) -> None:
+    chain.add(VirtualServo(chain.servo(TARGET).table, TARGET, baud=chain.baud))
+
+
+def faults(quick: bool = False) -> list[Fault]:
+    """Every fault mode at its rates; ``quick`` keeps one rate per mode."""
+    drop_rates = (0.02,) if quick else (0.001, 0.01, 0.05, 0.2)
+    corrupt_rates = (0.02,) if quick else (0.001, 0.01, 0.05, 0.2)
+    out = [Fault("none", "", lambda c, h, k: None),
+           Fault("silence_at_torque_on", "connect", lambda c, h, k: None, unreachable=(TARGET,))]
+    for p in drop_rates:
+        out.append(Fault("drop", f"p={p}", at_cycle(
+            lambda c, h, p=p: [c.drop_replies(s.servo_id, probability=p) for s in c.servos])))
+    for p in corrupt_rates:
+        out.append(Fault("corrupt", f"p={p}", at_cycle(
+            lambda c, h, p=p: [c.corrupt_replies(s.servo_id, probability=p) for s in c.servos])))
+    for delay in ((0.05,) if quick else (0.002, 0.02, 0.05)):
+        # 50 ms is past the SDK's ~34 ms timeout: the servo looks silent.
+        out.append(Fault("delay", f"{delay * 1000:g}ms", at_cycle(
+            lambda c, h, d=delay: c.delay_replies(TARGET, d))))
+    out.append(Fault("silence", "", at_cycle(lambda c, h: c.silence(TARGET)),
+                     unreachable=(TARGET,)))
+    out.append(Fault("wrong_baud", "", at_cycle(
+        lambda c, h: c.servo(TARGET).poke("baud_rate", 1)), unreachable=(TARGET,)))
+    for bits, level in ((HardwareError.OVERLOAD, "overload"),
+                        (HardwareError.OVERHEATING, "overheating")):
+        if quick and level != "overload":
+            continue
+        out.append(Fault("hardware_error", level, at_cycle(
+            lambda c, h, b=bits: c.latch_hardware_error(TARGET, b)), torque_cut=(TARGET,)))
+    for period in ((25,) if quick else (1000, 60, 25)):  # once, now and then, again and again
+        out.append(Fault("watchdog_trip", f"every {period} cycles", every(
+            lambda c, h: h.stall_unseen(0.15), period)))
+    out.append(Fault("jam", "", at_cycle(_jam)))
+    if not quick:
+        out.append(Fault("reboot", "", at_cycle(lambda c, h: c.servo(TARGET).reboot()),
+                         torque_cut=(TARGET,)))
+        out.append(Fault("duplicate_id", "", at_cycle(_twin), unreachable=(TARGET,)))
+    return out
+
+
+class GoalAudit:
+    """Decodes the host's instruction bytes and checks every Goal Position against joint limits."""
+
+    def __init__(self, robot: RobotConfig) -> None:
+        converter = TickConverter.for_robot(robot)
+        self.limits = {servo_id: (int(lo), int(hi)) for servo_id, lo, hi in zip(
+            robot.servo_ids, converter.lower_ticks, converter.upper_ticks, strict=True)}
+        self.parser = StreamParser(stale_after_s=None)
+        self.goals = 0
+        self.out_of_limits: list[tuple[int, int]] = []
+
+    def feed(self, data: bytes) -> None:
+        for packet in self.parser.feed(data):
+            params = packet.params
+            if packet.instruction == Instruction.SYNC_WRITE and len(params) >= 4:
+                address, size = struct.unpack_from("<HH", params)
+                if address == GOAL_POSITION and size == 4:
+                    for at in range(4, len(params) - 4, 5):
+                        servo_id = params[at]
+                        self._check(servo_id, struct.unpack_from("<i", params, at + 1)[0])
+            elif (packet.instruction == Instruction.WRITE and len(params) == 6
+                  and struct.unpack_from("<H", params)[0] == GOAL_POSITION):
+                self._check(packet.servo_id, struct.unpack_from("<i", params, 2)[0])
+
+    def _check(self, servo_id: int, ticks: int) -> None:
+        self.goals += 1
+        low, high = self.limits.get(servo_id, (0, -1))
+        if not low <= ticks <= high:
+            self.out_of_limits.append((servo_id, ticks))
+
+
+def audited_port(audit: GoalAudit) -> Callable[[str], EmulatedPortHandler]:
+    class AuditedPortHandler(EmulatedPortHandler):  # type: ignore[misc]
+        def writePort(self, packet: Any) -> int:  # noqa: N802 - the SDK's name
+            audit.feed(bytes(packet))
+            return int(super().writePort(packet))
+    return AuditedPortHandler
+
+
+@dataclass
+class CaseResult:
+    """What one (fault, policy) run gave."""
+
+    fault: str
+    policy: str
+    outcome: str  # "completed", the typed error's class name, or "UNTYPED <class>"
+    message: str
+    goals: int
+    out_of_limits: int
+    final_mismatches: list[str] = field(default_factory=list)
+    watchdog_trips: int = 0
+
+    @property
+    def untyped(self) -> bool:
+        return self.outcome.startswith("UNTYPED")
+
+    @property
+    def ok(self) -> bool:
+        return not (self.untyped or self.out_of_limits or self.final_mismatches)
+
+
+def snake12(policy: str, ramp_s: float) -> RobotConfig:
+    base = load_robot("snake12")
+    return dataclasses.replace(base, safety=dataclasses.replace(
+        base.safety, stop_policy=policy, ramp_s=ramp_s))
+
+
+def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0) -> CaseResult:
+    """One run of snake12 with ``fault``; see the module docstring for what is checked."""
+    robot = snake12(policy, ramp_s=0.3)
+    chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud, seed=seed)
+    for servo in chain.servos:
+        servo.poke("return_delay_time", 0)
+    audit = GoalAudit(robot)
+    clock = HostClock(chain)
+    if fault.mode == "silence_at_torque_on":
+        chain.physics = SilenceAtTorqueOn(chain)
+    outcome, message = "completed", ""
+    trips = 0
+    with registered(chain) as url:
+        backend = DynamixelBackend(robot, port=url, port_handler_factory=audited_port(audit),
+                                   clock=clock, sleep=chain.advance)
+        metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                with backend:
+                    run_gait(backend, make_gait("sidewinding", robot.joint_count),
+                             SafetyLayer.for_robot(robot), RunPlan(duration_s=duration_s),
+                             metrics, on_cycle=lambda k, t: fault.inject(chain, clock, k))
+        except SnakebotError as exc:
+            outcome, message = type(exc).__name__, str(exc)
+        except Exception as exc:
+            outcome, message = f"UNTYPED {type(exc).__name__}", repr(exc)
+        trips = int(backend.stats.extra.get("watchdog_trips", 0))
+    chain.physics = None
+    chain.clear_faults()
+    chain.advance(1.0)  # nobody on the bus: an armed watchdog would trip now
+    mismatches = final_mismatches(chain, policy, fault, started=audit.goals > robot.joint_count)
+    return CaseResult(fault.name, policy, outcome, message, audit.goals, len(audit.out_of_limits),
+                      mismatches, trips)
+
+
+def final_mismatches(chain: EmulatedChain, policy: str, fault: Fault, started: bool = True
+                     ) -> list[str]:
+    """Servos whose final state is not what the stop policy (or their firmware) says; with hold,
+    after a run that got going (``started``), that includes the safe pose (Goal Position)."""
+    out = []
+    seen: set[int] = set()
+    for servo in chain.servos:
+        servo_id = servo.servo_id
+        if servo_id in fault.unreachable or servo_id in seen:
+            continue
+        seen.add(servo_id)
+        torque = servo.torque_enabled
+        if servo_id in fault.torque_cut:
+            if torque:
+                out.append(f"servo {servo_id}: torque on after its firmware cut it")
+            continue
+        if torque != (policy == "hold"):
+            out.append(f"servo {servo_id}: torque {'on' if torque else 'off'} with {policy}")
+        if servo.watchdog_tripped:
+            out.append(f"servo {servo_id}: Bus Watchdog tripped after the stop")
+        elif torque and servo.peek("bus_watchdog") != 0:
+            out.append(f"servo {servo_id}: Bus Watchdog left armed")
+        elif torque and started and abs(servo.peek("goal_position") - SAFE_TICKS) > 2:
+            out.append(f"servo {servo_id}: holds goal {servo.peek('goal_position')}, not the "
+                       "safe pose")
+    return out
+
+
+def run_matrix(fault_list: Sequence[Fault], policies: Sequence[str] = ("hold", "limp"),
+               duration_s: float = 2.0) -> list[CaseResult]:
+    """Every fault under every policy."""
+    return [run_case(f, p, duration_s) for f in fault_list for p in policies]
+
+
+def totals(results: Sequence[CaseResult]) -> dict[str, int]:
+    """The must-be-zero figures and the counts around them."""
+    return {
+        "cases": len(results),
+        "completed": sum(r.outcome == "completed" for r in results),
+        "typed_errors": sum(not r.untyped and r.outcome != "completed" for r in results),
+        "untyped_errors": sum(r.untyped for r in results),
+        "goals_audited": sum(r.goals for r in results),
+        "out_of_limit_goals": sum(r.out_of_limits for r in results),
+        "final_state_mismatches": sum(len(r.final_mismatches) for r in results),
+    }
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="one rate per fault mode")
+    parser.add_argument("--duration", type=float, default=2.0, help="gait seconds per case")
+    parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    parser.add_argument("--verbose", action="store_true", help="show the backend's warnings")
+    args = parser.parse_args()
+    if not args.verbose:
+        logging.getLogger("snakebot").setLevel(logging.ERROR)
+    started = time.perf_counter()
+    results = run_matrix(faults(args.quick), duration_s=args.duration)
+    summary = totals(results)
+    summary["wall_s"] = round(time.perf_counter() - started, 1)
+    bad = summary["untyped_errors"] + summary["out_of_limit_goals"]
+    bad += summary["final_state_mismatches"]
+    if args.json:
+        print(json.dumps({"totals": summary, "cases": [dataclasses.asdict(r) for r in results]}))
+        return 1 if bad else 0
+    print("| fault | policy | outcome | goals | out of limits | final state | watchdog trips |")
+    print("|---|---|---|---|---|---|---|")
+    for r in results:
+        state = "; ".join(r.final_mismatches) or "as the policy says"
+        print(f"| {r.fault} | {r.policy} | {r.outcome} | {r.goals} | {r.out_of_limits} | "
+              f"{state} | {r.watchdog_trips} |")
+    print()
+    print(", ".join(f"{k} {v}" for k, v in summary.items()))
+    for r in results:
+        if r.untyped:
+            print(f"UNTYPED in {r.fault}/{r.policy}: {r.message}", file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
