@@ -52,6 +52,12 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--port", help="serial port for --backend dynamixel (default: robot)")
     parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
     parser.add_argument(
+        "--allow-extra-servos",
+        action="store_true",
+        help="--backend dynamixel: servos on the bus that the robot file does not name are "
+        "expected (left alone); without it connect refuses, naming them",
+    )
+    parser.add_argument(
         "--gaits",
         help="comma-separated gaits for keys 1-9 (default: serpenoid on all-yaw robots; "
         f"{','.join(SPATIAL_GAITS)} on yaw/pitch ones)",

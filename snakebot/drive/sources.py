@@ -88,6 +88,11 @@ class ScriptSource(InputSource):
             text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise ConfigError(path, "", f"cannot read the drive script ({exc.strerror})") from exc
+        except UnicodeDecodeError as exc:
+            raise ConfigError(
+                path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason}); a drive script is "
+                "'<time_s> <key>' lines"
+            ) from None
         return cls(parse_script(text, str(path)), f"script {path}")
 
     @property

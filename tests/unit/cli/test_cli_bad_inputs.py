@@ -38,6 +38,13 @@ def bad(*argv: str, code: int = 1, names: tuple[str, ...] = ()) -> Bad:
 
 SNAKE12 = ("--robot", "snake12")
 CASES = [
+    # drive
+    bad("drive", "--robot", "{binary}", "--script", "{script}", names=("{binary}", "not UTF-8")),
+    bad("drive", "--script", "{binary}", names=("{binary}", "not UTF-8")),
+    bad("drive", "--script", "{badscript}", names=("{badscript}:2",)),
+    bad("drive", "--script", "{script}", "--log", "/dev/full", names=("/dev/full",)),
+    bad("drive", "--backend", "dynamixel", "--script", "{script}", code=2, names=("--robot",)),
+    bad("drive", "--script", "{script}", "--rate", "nan", code=2, names=("--rate",)),
     # run
     bad("run", "--robot", "{binary}", names=("{binary}", "not UTF-8")),
     bad("run", "--robot", "{heavy}", names=("{heavy}", "link.mass_kg")),
@@ -128,6 +135,10 @@ def files(config_dir: Path, tmp_path: Path) -> dict[str, Path]:
     blocker.write_text("")
     csv = tmp_path / "run.csv"
     csv.write_text("time_s,cycle,command_rad_0\n0.0,0,abc\n")
+    script = tmp_path / "drive.txt"
+    script.write_text("0.5 w\n2.0 q\n")
+    badscript = tmp_path / "bad_drive.txt"
+    badscript.write_text("0.5 w\nsoon q\n")
     gait = tmp_path / "gait.toml"
     gait.write_text('gait = "serpenoid"\nspeed = 3\n')
     robots = config_dir / "robots"
@@ -139,6 +150,7 @@ def files(config_dir: Path, tmp_path: Path) -> dict[str, Path]:
     url.write_text((robots / "snake12.toml").read_text().replace(
         'port = "/dev/ttyUSB0"', 'port = "socket://127.0.0.1:9"', 1))
     return {"binary": binary, "blocker": blocker, "csv": csv, "gait": gait, "heavy": heavy,
+            "script": script, "badscript": badscript,
             "settings": settings, "url": url, "tmp": tmp_path}
 
 
