@@ -7,8 +7,10 @@ fault), 2 usage, 3 a bug in snakebot, 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
+import signal
 import sys
 import traceback
 import warnings
@@ -105,4 +107,24 @@ def entry_point() -> None:
     except KeyboardInterrupt:
         print("snakebot: interrupted", file=sys.stderr)
         code = EXIT_INTERRUPTED
+    _finish_despite_late_signals(code)
     sys.exit(code)
+
+
+def _finish_despite_late_signals(code: int) -> None:
+    """From here on a Ctrl-C or SIGTERM ends the process at once with ``code``.
+
+    The command is over (the servos are as its stop policy left them); a late signal, say an
+    impatient user's third Ctrl-C, must not turn its exit code into a death by signal nor drop
+    output still in a buffer. It ends the process right away, so a slow shutdown stays killable.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # closed or broken: nothing to save
+            stream.flush()
+
+    def leave(signum: int, frame: object) -> None:
+        os._exit(code)
+
+    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if signum is not None:
+            signal.signal(signum, leave)

@@ -45,3 +45,25 @@ def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) ->
     assert err.rstrip().endswith("snakebot: interrupted")
     assert proc.returncode == 130
     assert out == ""  # interrupted before the gait list
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(signum: int) -> None:
+    # The third Ctrl-C of an impatient user can land after the stop policy went out, while the
+    # process is already on its way out: the exit code and the printed output must be the
+    # command's, not a death by signal. The signal is sent from the same spot: sys.exit.
+    script = (
+        "import os, sys\n"
+        "from snakebot.cli import main\n"
+        "real_exit = sys.exit\n"
+        f"def exit_hit_by_a_signal(code):\n    os.kill(os.getpid(), {int(signum)})\n"
+        "    real_exit(code)\n"
+        "sys.exit = exit_hit_by_a_signal\n"
+        "sys.argv = ['snakebot', 'gaits', '--json']\n"
+        "main.entry_point()\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
+    assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert proc.returncode == 0
+    assert '"serpenoid"' in proc.stdout  # the gait list was printed, not lost
