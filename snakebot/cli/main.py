@@ -55,17 +55,25 @@ def _show_warning(
     print(f"snakebot: warning: {message}", file=file or sys.stderr)
 
 
+_decided_exit_code: int | None = None
+"""Set once the command is over: a signal from then on ends the process with this code."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit code.
 
     Ctrl-C at any point, building the parser (which imports every command) included, ends with
     ``snakebot: interrupted`` and 130, never a traceback.
     """
+    global _decided_exit_code
     try:
-        return _main(argv)
+        code = _main(argv)
     except KeyboardInterrupt:
+        _decided_exit_code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    _decided_exit_code = code
+    return code
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -96,7 +104,15 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 def entry_point() -> None:
-    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
+    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice.
+
+    SIGTERM is treated like Ctrl-C (a killed run still ramps out and applies the stop policy).
+    Once the command is over, a late SIGINT or SIGTERM (an impatient user's third Ctrl-C, say)
+    ends the process at once with the command's own exit code: never a death by signal that
+    hides it, never a shutdown that cannot be killed.
+    """
+    global _decided_exit_code
+    _install_signal_handlers()
     try:
         # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
         # on Linux without a display only EGL renders --video offscreen (twin/video.py).
@@ -105,26 +121,23 @@ def entry_point() -> None:
         warnings.showwarning = _show_warning
         code = main()
     except KeyboardInterrupt:
+        _decided_exit_code = code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
-        code = EXIT_INTERRUPTED
-    _finish_despite_late_signals(code)
     sys.exit(code)
 
 
-def _finish_despite_late_signals(code: int) -> None:
-    """From here on a Ctrl-C or SIGTERM ends the process at once with ``code``.
+def _on_signal(signum: int, frame: object) -> None:
+    if _decided_exit_code is not None:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):  # closed, broken or mid-write: nothing to save
+                stream.flush()
+        os._exit(_decided_exit_code)
+    raise KeyboardInterrupt
 
-    The command is over (the servos are as its stop policy left them); a late signal, say an
-    impatient user's third Ctrl-C, must not turn its exit code into a death by signal nor drop
-    output still in a buffer. It ends the process right away, so a slow shutdown stays killable.
-    """
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(OSError, ValueError):  # closed or broken: nothing to save
-            stream.flush()
 
-    def leave(signum: int, frame: object) -> None:
-        os._exit(code)
-
-    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
-        if signum is not None:
-            signal.signal(signum, leave)
+def _install_signal_handlers() -> None:
+    # SIGINT only where Python's own handler is in place (a background job keeps ignoring it).
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _on_signal)
+    if hasattr(signal, "SIGTERM") and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _on_signal)

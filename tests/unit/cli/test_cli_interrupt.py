@@ -47,18 +47,28 @@ def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) ->
     assert out == ""  # interrupted before the gait list
 
 
+@pytest.mark.parametrize("where", ["command_returned", "exiting"])
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
-def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(signum: int) -> None:
+def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(
+    signum: int, where: str
+) -> None:
     # The third Ctrl-C of an impatient user can land after the stop policy went out, while the
     # process is already on its way out: the exit code and the printed output must be the
-    # command's, not a death by signal. The signal is sent from the same spot: sys.exit.
+    # command's, not a death by signal. The signal is sent from those spots.
+    hook = {
+        "command_returned": "real = main.main\n"
+                            "def hit(argv=None):\n    code = real(argv)\n"
+                            "    kill()\n    return code\n"
+                            "main.main = hit\n",
+        "exiting": "real = sys.exit\n"
+                   "def hit(code):\n    kill()\n    real(code)\n"
+                   "sys.exit = hit\n",
+    }[where]
     script = (
         "import os, sys\n"
         "from snakebot.cli import main\n"
-        "real_exit = sys.exit\n"
-        f"def exit_hit_by_a_signal(code):\n    os.kill(os.getpid(), {int(signum)})\n"
-        "    real_exit(code)\n"
-        "sys.exit = exit_hit_by_a_signal\n"
+        f"def kill():\n    os.kill(os.getpid(), {int(signum)})\n"
+        + hook +
         "sys.argv = ['snakebot', 'gaits', '--json']\n"
         "main.entry_point()\n"
     )
