@@ -7,7 +7,6 @@ fault), 2 usage, 3 a bug in snakebot, 130 interrupted.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import importlib
 import os
 import signal
@@ -107,9 +106,10 @@ def entry_point() -> None:
     """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice.
 
     SIGTERM is treated like Ctrl-C (a killed run still ramps out and applies the stop policy).
-    Once the command is over, a late SIGINT or SIGTERM (an impatient user's third Ctrl-C, say)
-    ends the process at once with the command's own exit code: never a death by signal that
-    hides it, never a shutdown that cannot be killed.
+    Once the command is over, SIGINT and SIGTERM are ignored: the servos are as the stop policy
+    left them, and an impatient user's third Ctrl-C must not turn the command's exit code into
+    a death by signal while the interpreter shuts down (which takes a second on a loaded machine,
+    after Python has put the default handlers back).
     """
     global _decided_exit_code
     _install_signal_handlers()
@@ -123,16 +123,14 @@ def entry_point() -> None:
     except KeyboardInterrupt:
         _decided_exit_code = code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
+    _ignore_signals_from_now_on()
     sys.exit(code)
 
 
 def _on_signal(signum: int, frame: object) -> None:
-    if _decided_exit_code is not None:
-        for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(Exception):  # closed, broken or mid-write: nothing to save
-                stream.flush()
-        os._exit(_decided_exit_code)
-    raise KeyboardInterrupt
+    if _decided_exit_code is None:
+        raise KeyboardInterrupt
+    # The command is over; the exit code it decided stands.
 
 
 def _install_signal_handlers() -> None:
@@ -141,3 +139,10 @@ def _install_signal_handlers() -> None:
         signal.signal(signal.SIGINT, _on_signal)
     if hasattr(signal, "SIGTERM") and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
         signal.signal(signal.SIGTERM, _on_signal)
+
+
+def _ignore_signals_from_now_on() -> None:
+    # SIG_IGN, unlike a Python handler, survives the interpreter's shutdown.
+    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if signum is not None and signal.getsignal(signum) is _on_signal:
+            signal.signal(signum, signal.SIG_IGN)

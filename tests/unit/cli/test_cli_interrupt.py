@@ -47,14 +47,15 @@ def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) ->
     assert out == ""  # interrupted before the gait list
 
 
-@pytest.mark.parametrize("where", ["command_returned", "exiting"])
+@pytest.mark.parametrize("where", ["command_returned", "exiting", "tearing_down"])
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(
     signum: int, where: str
 ) -> None:
     # The third Ctrl-C of an impatient user can land after the stop policy went out, while the
-    # process is already on its way out: the exit code and the printed output must be the
-    # command's, not a death by signal. The signal is sent from those spots.
+    # process is already on its way out (shutting the interpreter down takes a second on a loaded
+    # machine): the exit code and the printed output must be the command's, not a death by
+    # signal. The signal is sent from those spots.
     hook = {
         "command_returned": "real = main.main\n"
                             "def hit(argv=None):\n    code = real(argv)\n"
@@ -63,6 +64,9 @@ def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(
         "exiting": "real = sys.exit\n"
                    "def hit(code):\n    kill()\n    real(code)\n"
                    "sys.exit = hit\n",
+        # module teardown, after Python has put the default signal handlers back
+        "tearing_down": "class Dying:\n    def __del__(self):\n        kill()\n"
+                        "dying = Dying()\n",
     }[where]
     script = (
         "import os, sys\n"
