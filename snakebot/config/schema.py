@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from snakebot.backends.base import ServoGains, StopPolicy
+from snakebot.types import ServoGains, StopPolicy
 
 Axis = Literal["yaw", "pitch"]
 GroundModel = Literal["anisotropic", "isotropic"]

@@ -10,13 +10,13 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from snakebot.backends.base import ServoGains
 from snakebot.config import bounds
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.schema import ServoModel, ServoPhysics
 from snakebot.config.servo_settings import parse_settings
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable, UnknownModelError, supported_models, table_for_model
+from snakebot.types import ServoGains
 
 _MODEL_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 

@@ -13,13 +13,13 @@ import math
 
 import numpy as np
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.backend import TwinBackend
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
 from snakebot.emulation.motion import MotorState, ServoCommand
 from snakebot.emulation.servo import VirtualServo
+from snakebot.types import ServoGains
 
 
 class TwinMotion:

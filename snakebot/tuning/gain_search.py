@@ -7,7 +7,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.base import ServoGains
 from snakebot.config.schema import RobotConfig
 from snakebot.tuning.config_edit import set_table_values
 from snakebot.tuning.gains import (
@@ -20,6 +19,7 @@ from snakebot.tuning.gains import (
     refine,
 )
 from snakebot.tuning.trace import FloatArray
+from snakebot.types import ServoGains
 
 Chirp = tuple[float, tuple[FloatArray, FloatArray, FloatArray]]
 Listener = Callable[[int, int, GainScore, GainScore], None]

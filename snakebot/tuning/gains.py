@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snakebot.backends.base import Backend, JointCommand, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
@@ -26,6 +26,7 @@ from snakebot.gaits import make_gait
 from snakebot.tuning.feasibility import SATURATION_FRACTION
 from snakebot.tuning.responses import StepMetrics, chirp_commands, rms, step_commands, step_metrics
 from snakebot.tuning.trace import FloatArray
+from snakebot.types import JointCommand, ServoGains
 
 REGISTER_MAX = 16383
 BackendSession = Callable[[], contextlib.AbstractContextManager[Backend]]

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand, ServoGains
 from snakebot.errors import BackendStateError
+from snakebot.types import JointCommand, ServoGains
 from tests.contract.conftest import BackendFactory
 
 

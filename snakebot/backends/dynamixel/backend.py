@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from snakebot.backends.base import Backend, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.checks import (
     LIMIT_KEYS,
@@ -46,6 +46,7 @@ from snakebot.backends.pacing import Pacer
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import BackendError, BusError
 from snakebot.servo_tables import supported_models, table_for_model
+from snakebot.types import JointState, ServoGains
 
 log = logging.getLogger(__name__)
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
@@ -24,6 +24,7 @@ from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.types import BodyState, JointState, ServoGains
 
 _BAD_WARNINGS = np.array(
     [

@@ -9,7 +9,7 @@ from typing import Protocol
 import mujoco
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.model_builder import (
@@ -22,6 +22,7 @@ from snakebot.backends.twin.model_builder import (
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.types import BodyState, JointState, ServoGains
 
 JointSelection = int | slice | Sequence[int] | np.ndarray
 """Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""

@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from snakebot.backends.base import ServoGains
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, ServoPhysics
+from snakebot.types import ServoGains
 
 # X-series firmware: KPP = P/128 and the output is in PWM units out of 2 * PWM Limit, which is
 # bam's error_gain = (ticks/rad) / (256 * pwm_limit) per unit of P (arXiv 2410.08650, bam).

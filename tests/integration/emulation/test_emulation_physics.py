@@ -9,12 +9,12 @@ import dynamixel_sdk as dxl
 import numpy as np
 import pytest
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
 from snakebot.emulation import EmulatedChain, registered
 from snakebot.emulation.physics import TwinMotion, make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.types import ServoGains
 
 BAUD = 1_000_000
 XL430_FACTORY = ServoGains(position_p=640, position_i=0, position_d=4000)

@@ -8,10 +8,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand, ServoGains
 from snakebot.backends.softbody import SoftBodyBackend, build_body_spec
 from snakebot.config.body_loader import body_names, load_body
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.types import JointCommand, ServoGains
 
 
 @pytest.mark.parametrize("name", ["worm", "snake", "caterpillar", "snake_yawpitch"])

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import pytest
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.dynamixel import DynamixelSettingsWarning
 from snakebot.backends.dynamixel.backend import DynamixelBackend
 from snakebot.backends.twin import TwinBackend
@@ -20,6 +19,7 @@ from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.emulation.registry import registered
 from snakebot.tuning.gain_search import search_gains
 from snakebot.tuning.gains import GainTest, evaluate_gains, held
+from snakebot.types import ServoGains
 from tests.pty_emulator import emulator
 
 QUICK = GainTest(joints=(0, 4), gait="serpenoid", gait_s=2.0, step_s=0.5)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from snakebot.backends.base import ServoGains
 from snakebot.config import RobotConfig, load_robot
+from snakebot.types import ServoGains
 
 
 def robot_with_joints(joint_count: int, base: str = "snake8", **twin: object) -> RobotConfig:

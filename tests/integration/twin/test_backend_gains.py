@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.model_builder import joint_name
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
+from snakebot.types import ServoGains
 
 SOFT = ServoGains(position_p=100, position_d=500)
 

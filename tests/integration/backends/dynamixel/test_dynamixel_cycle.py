@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand, ServoGains
 from snakebot.backends.dynamixel.faults import PoseOutsideLimitsError
 from snakebot.backends.dynamixel.ticks import rad_to_ticks
 from snakebot.config.loader import load_servo_model
 from snakebot.config.schema import RobotConfig
 from snakebot.emulation import ExternalMotion, make_chain_for_ids, registered
+from snakebot.types import JointCommand, ServoGains
 from tests.integration.backends.dynamixel.conftest import BAUD, Bench, robot_variant
 
 DT = 0.01
