@@ -49,15 +49,23 @@ class JointCommand:
 
 
 @dataclass(frozen=True)
-class ServoGains:
-    """Position-loop gains in the servo's own register units (Position P/I/D Gain).
+class PDGains:
+    """Position-loop gains in SI, the same for every joint: what crosses the Backend contract.
 
-    The same numbers drive the hardware registers and, through the servo model, the twin's PD.
+    ``kp_nm_per_rad`` is the stiffness (N·m per rad of position error), ``kd_nms_per_rad`` the
+    damping (N·m per rad/s of joint speed). The twin uses them as they are; the Dynamixel backend
+    turns them into its Position P/D Gain registers (snakebot.servo.GainMapping). Both must be
+    finite and >= 0 (ValueError otherwise).
     """
 
-    position_p: int
-    position_i: int = 0
-    position_d: int = 0
+    kp_nm_per_rad: float
+    kd_nms_per_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("kp_nm_per_rad", "kd_nms_per_rad"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0.0 <= value < float("inf")):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
 @dataclass

@@ -12,7 +12,14 @@ from types import TracebackType
 import numpy as np
 
 from snakebot.errors import BackendStateError
-from snakebot.types import BodyState, CycleStats, JointCommand, JointState, ServoGains, StopPolicy
+from snakebot.types import (
+    BodyState,
+    CycleStats,
+    JointCommand,
+    JointState,
+    PDGains,
+    StopPolicy,
+)
 
 log = logging.getLogger(__name__)
 
@@ -108,8 +115,11 @@ class Backend(abc.ABC):
             )
         self._send_command(position)
 
-    def set_gains(self, gains: ServoGains) -> None:
-        """Apply position-loop gains (servo register units) to every joint."""
+    def set_gains(self, gains: PDGains) -> None:
+        """Apply position-loop gains to every joint: stiffness (N·m/rad) and damping (N·m·s/rad).
+
+        Each backend realises them its own way (the twin as they are, a servo chain in its
+        registers, rounded and clipped to what they reach)."""
         self._require_connected()
         self._set_gains(gains)
 
@@ -150,7 +160,7 @@ class Backend(abc.ABC):
     def _send_command(self, position_rad: np.ndarray) -> None: ...
 
     @abc.abstractmethod
-    def _set_gains(self, gains: ServoGains) -> None: ...
+    def _set_gains(self, gains: PDGains) -> None: ...
 
     @abc.abstractmethod
     def _set_torque(self, enabled: bool) -> None: ...

@@ -24,7 +24,7 @@ from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
-from snakebot.types import BodyState, JointState, ServoGains
+from snakebot.types import BodyState, JointState, PDGains
 
 _BAD_WARNINGS = np.array(
     [
@@ -76,7 +76,7 @@ class SoftBodyBackend(Backend):
         self.directional = body.ground.directional if directional is None else directional
         self.friction = body.ground.friction if friction is None else friction
         self.terrain = terrain
-        self.gains: ServoGains | None = None
+        self.gains: PDGains | None = None
         self._realtime = realtime
         self._pacer: Pacer | None = None
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
@@ -170,7 +170,7 @@ class SoftBodyBackend(Backend):
         self._command = position_rad.copy()
         self._apply_muscles()
 
-    def _set_gains(self, gains: ServoGains) -> None:
+    def _set_gains(self, gains: PDGains) -> None:
         self.gains = gains
 
     def _set_torque(self, enabled: bool) -> None:
