@@ -20,6 +20,7 @@ from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.emulation.registry import registered
 from snakebot.tuning.gain_search import search_gains
 from snakebot.tuning.gains import GainTest, evaluate_gains, held
+from tests.conftest import edit_robot
 from tests.pty_emulator import emulator
 
 QUICK = GainTest(joints=(0, 4), gait="serpenoid", gait_s=2.0, step_s=0.5)
@@ -90,6 +91,24 @@ def test_cli_writes_the_new_gains_into_the_robot_file(
     assert all(line in path.read_text().splitlines() for line in lines)  # comments kept
     assert (config_dir / "report" / "steps.png").is_file()
     assert (config_dir / "report" / "chirp.png").is_file()
+
+
+def test_cli_keeps_a_robot_file_in_si_and_reports_both_forms(
+    config_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = edit_robot(
+        config_dir, "snake8", "position_p = 640\nposition_i = 0\nposition_d = 4000",
+        "kp_nm_per_rad = 2.578\nkd_nms_per_rad = 0.1289\nposition_i = 0",
+    )
+    argv = ["tune", "gains", "--robot", str(path), "--joints", "0", "--gait", "serpenoid"]
+    assert main([*argv, "--gait-duration", "1.5", "--budget", "6", "--no-chirp"]) == 0
+    out = capsys.readouterr().out
+    assert "at P/I/D 640/0/4000 ->" in out and "in SI: kp 2.578 ->" in out
+    assert f"written to {path}" in out
+    gains = tomllib.loads(path.read_text())["gains"]
+    assert set(gains) == {"kp_nm_per_rad", "kd_nms_per_rad", "position_i"}  # one form, still SI
+    robot = load_robot(path)
+    assert robot.gains.kp_nm_per_rad == gains["kp_nm_per_rad"] != 2.578
 
 
 def test_search_over_the_emulated_bus_lowers_tracking_error() -> None:
