@@ -109,13 +109,10 @@ _TABLE_FACTS = {
 
 
 def _refuse_table_facts(root: Table, table: ServoTable) -> None:
-    physics = root.data.get("physics", {})
     for key, what in _TABLE_FACTS.items():
         section, _, name = key.rpartition(".")
-        present = name in physics if section == "physics" and isinstance(physics, dict) else (
-            not section and key in root.data
-        )
-        if present:
+        holder = root.data.get(section) if section else root.data
+        if isinstance(holder, dict) and name in holder:
             raise ConfigError(
                 root.source, key, f"{what} of {table.model} is kept once, in snakebot's "
                 "control-table data (snakebot/servo_tables/data); remove this key"

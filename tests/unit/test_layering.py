@@ -63,7 +63,7 @@ def _hits(modules: list[Path], prefix: str) -> dict[str, list[str]]:
     return found
 
 
-def test_the_scan_sees_lazy_and_relative_imports(tmp_path: Path) -> None:
+def test_the_scan_sees_lazy_and_relative_imports() -> None:
     # A scan that missed function-level or relative imports would pass vacuously.
     module = PACKAGE / "config" / "loader.py"
     assert "snakebot.config.fields" in imported(module)

@@ -13,7 +13,7 @@ from snakebot.config import load_robot
 from snakebot.config.loader import load_servo_model
 from snakebot.config.schema import GainRegisters
 from snakebot.errors import ConfigError
-from snakebot.servo import FACTORY_BAUD, FACTORY_ID, GainMapping, centre_tick
+from snakebot.servo import FACTORY_BAUD, FACTORY_ID, GainMapping, centre_tick, rad_per_tick
 from snakebot.servo_tables import supported_models, table_for_model
 from snakebot.types import PDGains
 from tests.conftest import edit_robot
@@ -95,6 +95,10 @@ def test_the_datasheet_facts_come_from_the_control_table(model: str) -> None:
     assert physics.nominal_voltage_v == table.specs.nominal_voltage_v
     assert physics.ticks_per_rev == table.specs.resolution
     assert centre_tick(physics.ticks_per_rev) == 2048
+    # The position registers' SI scale (what the emulator and the bus tables use) is the same
+    # tick as the tick <-> radian formula's.
+    for key in ("goal_position", "present_position", "homing_offset"):
+        assert table[key].scale == pytest.approx(rad_per_tick(physics.ticks_per_rev), rel=1e-15)
     # What a servo answers as from the factory: the ID and Baud Rate registers' defaults.
     assert table["id"].default == FACTORY_ID
     assert table.baud_rates[table["baud_rate"].default] == FACTORY_BAUD
