@@ -38,6 +38,12 @@ def test_the_xl430_mapping_is_the_datasheet_arithmetic() -> None:
     assert mapping.kp_nm_per_rad(640) == pytest.approx(640 * per_p, rel=1e-12)
     assert mapping.kd_nms_per_rad(4000) == pytest.approx(4000 * per_p * 8 * 0.001, rel=1e-12)
     assert mapping.pd_gains(640, 4000) == load_robot("snake12").gains
+    # Bit for bit the arithmetic (and its order) the twin used before gains were SI, so recorded
+    # twin runs at the shipped gains replay identically.
+    stall = 1.4 * (11.1 / 11.1)
+    error_gain = (4096 / (2 * math.pi)) / (256.0 * 885)
+    assert mapping.kp_nm_per_rad(640) == stall * error_gain * 640
+    assert mapping.kd_nms_per_rad(4000) == stall * error_gain * (128.0 / 16.0) * 4000 * 0.001
 
 
 def test_si_gains_round_and_clip_into_the_registers() -> None:
