@@ -144,7 +144,10 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     link_t.done()
 
     joints = _parse_joints(root, control_table)
-    gains = parse_gains(root.table("gains")) if root.has("gains") else servo.default_gains
+    if root.has("gains"):
+        gains, position_i = parse_gains(root.table("gains"), servo)
+    else:
+        gains, position_i = servo.gains_of(servo.default_gains), servo.default_gains.position_i
     root.mark_read("gains")
 
     safety_t = root.table("safety", required=False)
@@ -169,7 +172,7 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     parse_settings(path, "settings", root.data.get("settings", {}), control_table)
     root.mark_read("settings")
     root.done()
-    return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin)
+    return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin, position_i)
 
 
 def _joint_fields(table: Table) -> dict[str, Any]:
