@@ -71,8 +71,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         _decided_exit_code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except ImportError as exc:
+        # Ctrl-C while a C extension (MuJoCo) initialises reaches us as "initialization failed".
+        if not _caused_by_interrupt(exc):
+            raise
+        _decided_exit_code = EXIT_INTERRUPTED
+        print("snakebot: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     _decided_exit_code = code
     return code
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
 
 
 def _main(argv: Sequence[str] | None) -> int:

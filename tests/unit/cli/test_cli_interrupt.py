@@ -23,6 +23,8 @@ def imported(line: str) -> str:
         "snakebot.cli",  # importing snakebot.cli.main (python -m snakebot's own import)
         "snakebot.cli.main",  # main() about to build the parser: every command module imports
         "snakebot.control.runner",  # half way through those imports (run_cmd's)
+        # inside MuJoCo's C extensions, whose init turns the interrupt into an ImportError
+        "mujoco._enums",
     ],
 )
 def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) -> None:
