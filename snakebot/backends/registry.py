@@ -228,13 +228,13 @@ def register_backend(spec: BackendSpec, *, replace: bool = False) -> None:
 
 
 def backend_names(*, aliases: bool = False) -> list[str]:
-    """Names of the registered backends, sorted (plugins included); with ``aliases``, every
-    name ``--backend`` accepts (``sim`` for the twin, say)."""
-    names = BACKENDS.names()
+    """Names of the registered backends, sorted, plugins included; with ``aliases``, every name
+    ``--backend`` accepts (``sim`` for the twin, say) without importing any plugin. Without it
+    each plugin's spec is imported to tell its aliases apart (one that fails to import is left
+    out with a PluginWarning)."""
     if aliases:
-        return names
-    builtin_aliases = {alias for spec in (TWIN, SOFTBODY, DYNAMIXEL) for alias in spec.aliases}
-    return [name for name in names if name not in builtin_aliases]
+        return BACKENDS.names()
+    return [name for name, spec in BACKENDS.load_all().items() if spec.name == name]
 
 
 def get_backend_spec(name: str) -> BackendSpec:

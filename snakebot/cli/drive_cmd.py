@@ -156,6 +156,7 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot(
         robot_name(args, hardware=spec.hardware, what=f"drive --backend {args.backend}")
     )
+    given = given_options(args, spec, BACKEND_OPTIONS)
     choices = gait_choices(robot, args)
     with flag_errors((), {"smoothing_s": "--smoothing", "transition_s": "--transition"}):
         live = live_gait(
@@ -166,7 +167,6 @@ def run(args: argparse.Namespace) -> int:
             gaits=choices,
         )
     source = make_source(args)
-    given = given_options(args, spec, BACKEND_OPTIONS)
     if args.script is None and "realtime" in spec.option_names:
         given["realtime"] = True  # a person drives: a simulation keeps to the wall clock
     with flag_errors(BACKEND_OPTIONS):
