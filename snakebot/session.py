@@ -17,7 +17,7 @@
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
@@ -37,7 +37,11 @@ from snakebot.run_summary import RunSummary
 
 if TYPE_CHECKING:
     from snakebot.backends.base import Backend
+    from snakebot.drive.controller import DriveController
+    from snakebot.drive.loop import DriveObserver, DriveResult
+    from snakebot.drive.sources import InputSource
     from snakebot.gaits import Gait
+    from snakebot.gaits.live import LiveGait
     from snakebot.telemetry import CsvTelemetryWriter
 
 __all__ = [
@@ -247,6 +251,39 @@ class Snake:
             extra=extra,
             log=None if writer is None else str(writer.path),
             log_rows=result.log_rows,
+        )
+
+    def drive(
+        self,
+        live: LiveGait,
+        controller: DriveController,
+        source: InputSource,
+        *,
+        rate_hz: float = DEFAULT_RATE_HZ,
+        observers: Sequence[DriveObserver] = (),
+        stop_check: Callable[[], str | None] | None = None,
+    ) -> DriveResult:
+        """Drive live until a stop: ``source``'s keys go through ``controller`` to the ``live``
+        gait (snakebot.drive.setup.live_gait makes one for this robot), then through the safety
+        layer to the joints at ``rate_hz``. Each ``observers`` entry sees every cycle;
+        ``stop_check()`` returning a reason stops the drive (a signal, say). Ends at the rest
+        pose; leaving the ``with`` block then applies the stop policy. See
+        snakebot.drive.loop.run_drive for what is raised.
+        """
+        from snakebot.drive.loop import run_drive
+
+        self._require_connected()
+        robot = self.robot
+        return run_drive(
+            self.backend,
+            live,
+            SafetyLayer.for_robot(robot),
+            controller,
+            source,
+            rate_hz=rate_hz,
+            metrics=RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
+            observers=list(observers),
+            stop_check=stop_check,
         )
 
     @contextlib.contextmanager

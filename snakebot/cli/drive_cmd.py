@@ -19,10 +19,8 @@ from snakebot.cli.backend_options import (
 )
 from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
 from snakebot.config import RobotConfig, load_robot
-from snakebot.control.metrics import RunMetrics
-from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController, GaitChoice
-from snakebot.drive.loop import DriveObserver, DriveResult, run_drive
+from snakebot.drive.loop import DriveObserver, DriveResult
 from snakebot.drive.observers import backend_readings, csv_log_observer
 from snakebot.drive.setup import MAX_GAITS, SPATIAL_GAITS, default_gaits, live_gait
 from snakebot.drive.signals import StopSignals
@@ -172,8 +170,6 @@ def run(args: argparse.Namespace) -> int:
     with flag_errors(BACKEND_OPTIONS):
         snake = Snake.prepare(robot, spec, **given)
     backend = snake.backend
-    safety = SafetyLayer.for_robot(robot)
-    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     with contextlib.ExitStack() as stack:
         recorder = _recorder(stack, args, robot)
         controller = DriveController(live, choices, on_event=recorder)
@@ -188,17 +184,10 @@ def run(args: argparse.Namespace) -> int:
         display = _display(stack, args, robot, backend, controller)
         if display is not None:
             observers.append(display)
-        result = run_drive(
-            backend,
-            live,
-            safety,
-            controller,
-            source,
-            rate_hz=args.rate,
-            metrics=metrics,
-            observers=observers,
-            stop_check=signals,
-        )
+        with flag_errors((), {"rate_hz": "--rate"}):
+            result = snake.drive(
+                live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
+            )
     summary = _summary(robot, args, choices, result)
     if args.json:
         print_json(summary)

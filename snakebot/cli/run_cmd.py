@@ -176,13 +176,14 @@ def run(args: argparse.Namespace) -> int:
         with flag_errors(BACKEND_OPTIONS):
             stack.enter_context(snake)
         hooks = _cycle_hooks(stack, snake.backend, args)
-        summary = snake.run(
-            gait,
-            duration_s=args.duration,
-            rate_hz=args.rate,
-            log=log,
-            on_cycle=_chain(hooks) if hooks else None,
-        )
+        with flag_errors(BACKEND_OPTIONS, {"rate_hz": "--rate"}):
+            summary = snake.run(
+                gait,
+                duration_s=args.duration,
+                rate_hz=args.rate,
+                log=log,
+                on_cycle=_chain(hooks) if hooks else None,
+            )
     summary = replace(summary, gait=gait_name, video=str(args.video) if args.video else None)
     if args.json:
         print_json(summary.to_dict())
