@@ -46,6 +46,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_BACKEND",
+    "DEFAULT_DURATION_S",
     "DEFAULT_GAIT",
     "DEFAULT_RATE_HZ",
     "Robot",
@@ -63,6 +64,8 @@ Robot = RobotConfig | BodyConfig
 DEFAULT_BACKEND = "twin"
 DEFAULT_GAIT = "serpenoid"
 DEFAULT_RATE_HZ = 100.0
+DEFAULT_DURATION_S = 10.0
+"""How long ``snakebot run`` plays a gait when not told (``Snake.run`` always asks)."""
 
 
 def load_robot(robot: str | Path | Robot) -> Robot:

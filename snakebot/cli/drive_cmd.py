@@ -22,12 +22,19 @@ from snakebot.config import RobotConfig, load_robot
 from snakebot.drive.controller import DriveController, GaitChoice
 from snakebot.drive.loop import DriveObserver, DriveResult
 from snakebot.drive.observers import backend_readings, csv_log_observer
-from snakebot.drive.setup import MAX_GAITS, SPATIAL_GAITS, default_gaits, live_gait
+from snakebot.drive.setup import (
+    DEFAULT_SMOOTHING_S,
+    DEFAULT_TRANSITION_S,
+    MAX_GAITS,
+    SPATIAL_GAITS,
+    default_gaits,
+    live_gait,
+)
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
 from snakebot.gaits import parse_set_options
-from snakebot.session import Snake
+from snakebot.session import DEFAULT_RATE_HZ, Snake
 from snakebot.telemetry import CsvTelemetryWriter
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
@@ -76,21 +83,25 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--record", type=Path, help="write the keys applied as a script")
     parser.add_argument(
-        "--rate", type=positive_float, default=100.0, help="control rate in Hz (default 100)"
+        "--rate",
+        type=positive_float,
+        default=DEFAULT_RATE_HZ,
+        help=f"control rate in Hz (default {DEFAULT_RATE_HZ:g})",
     )
     parser.add_argument(
         "--smoothing",
         type=float,
-        default=0.5,
+        default=DEFAULT_SMOOTHING_S,
         metavar="S",
-        help="seconds for a control to move one unit (default 0.5)",
+        help=f"seconds for a control to move one unit (default {DEFAULT_SMOOTHING_S:g})",
     )
     parser.add_argument(
         "--transition",
         type=float,
-        default=1.0,
+        default=DEFAULT_TRANSITION_S,
         metavar="S",
-        help="shortest blend between gaits in s (default 1; longer when the servos need it)",
+        help=f"shortest blend between gaits in s (default {DEFAULT_TRANSITION_S:g}; longer when "
+        "the servos need it)",
     )
     add_option_flags(
         parser,

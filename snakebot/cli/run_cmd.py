@@ -33,6 +33,7 @@ from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
 from snakebot.session import (
+    DEFAULT_DURATION_S,
     DEFAULT_GAIT,
     DEFAULT_RATE_HZ,
     Robot,
@@ -65,8 +66,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--duration",
         type=positive_float,
-        default=10.0,
-        help="gait time in seconds, before the ramp-out (default 10)",
+        default=DEFAULT_DURATION_S,
+        help=f"gait time in seconds, before the ramp-out (default {DEFAULT_DURATION_S:g})",
     )
     parser.add_argument(
         "--rate",

@@ -20,6 +20,10 @@ SPATIAL_GAITS = ("sidewinding", "rolling", "lateral_undulation", "turn_in_place"
                  "linear_progression")
 """The default keys 1-9 on a robot with pitch joints."""
 MAX_GAITS = 9
+DEFAULT_SMOOTHING_S = 0.5
+"""Seconds for a drive control (speed, turn, amplitude) to move one unit."""
+DEFAULT_TRANSITION_S = 1.0
+"""Shortest blend between two gaits, in s (longer when the servos need it)."""
 
 
 def default_gaits(robot: RobotConfig) -> tuple[str, ...]:
@@ -32,8 +36,8 @@ def live_gait(
     robot: RobotConfig,
     *,
     rate_hz: float,
-    smoothing_s: float = 0.5,
-    transition_s: float = 1.0,
+    smoothing_s: float = DEFAULT_SMOOTHING_S,
+    transition_s: float = DEFAULT_TRANSITION_S,
     gaits: Sequence[GaitChoice] = (),
 ) -> LiveGait:
     """The live gait for ``robot`` at ``rate_hz``: its limits and speed, steering on the yaw
