@@ -25,6 +25,7 @@ from snakebot.session import DEFAULT_BACKEND
 
 # argparse types where the command line checks a value before any backend is made
 _TYPES: dict[str, Callable[[str], Any]] = {"port": port_arg, "baud": int}
+_CHOICES: dict[str, tuple[str, ...]] = {"directional": ("on", "off")}
 
 
 def flag(option: str) -> str:
@@ -59,7 +60,11 @@ def add_option_flags(
             parser.add_argument(flag(name), action="store_true", default=None, help=text)
         else:
             parser.add_argument(
-                flag(name), type=_TYPES.get(name, str), metavar=option.metavar or None, help=text
+                flag(name),
+                type=_TYPES.get(name, str),
+                choices=_CHOICES.get(name),
+                metavar=None if name in _CHOICES else option.metavar or None,
+                help=text,
             )
 
 
