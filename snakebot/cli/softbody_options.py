@@ -29,7 +29,7 @@ def softbody_options(
     return (
         friction,
         None if directional is None else directional == "on",
-        parse_terrain(terrain_text) if terrain_text else None,
+        parse_terrain(terrain_text, "--terrain") if terrain_text else None,
     )
 
 

@@ -209,7 +209,7 @@ def _friction(robot: RobotConfig | BodyConfig, text: str | None) -> GroundFricti
 
         mu = parse_floor_friction(text)
         return GroundFriction(mu, mu)
-    return GroundFriction.parse(text)
+    return GroundFriction.parse(text, "--friction")
 
 
 GAIN_BACKEND_OPTIONS = ("port", "baud")

@@ -92,7 +92,7 @@ class Cliff:
 TERRAINS = ("flat", "cliff")
 
 
-def parse_terrain(text: str, option: str = "--terrain") -> Cliff | None:
+def parse_terrain(text: str, option: str = "terrain") -> Cliff | None:
     """``flat`` (None) or ``cliff[:key=value,...]`` with Cliff's fields, e.g.
     ``cliff:edge_m=0.1,height_m=0.05``; ConfigError naming what was expected otherwise."""
     name, _, rest = text.partition(":")
