@@ -56,6 +56,7 @@ __all__ = [
     "load_robot",
     "resolve_gait",
     "robot_names",
+    "watched",
 ]
 
 Robot = RobotConfig | BodyConfig
@@ -148,6 +149,16 @@ def _is_gait_file(gait: str | Path) -> bool:
     from snakebot.gaits import gait_names
 
     return gait not in gait_names() and (gait.endswith(".toml") or Path(gait).is_file())
+
+
+def watched(spec: BackendSpec, options: Mapping[str, object]) -> dict[str, object]:
+    """``options`` with ``realtime`` on where ``spec``'s backend takes it (a simulation): a
+    person watching a viewer or driving live needs the wall clock, not a twin racing ahead.
+    Unchanged for a backend without the option (hardware runs in real time anyway)."""
+    paced = dict(options)
+    if "realtime" in spec.option_names:
+        paced["realtime"] = True
+    return paced
 
 
 class Snake:

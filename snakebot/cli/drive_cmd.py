@@ -34,7 +34,7 @@ from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
 from snakebot.gaits import parse_set_options
-from snakebot.session import DEFAULT_RATE_HZ, Snake
+from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
 from snakebot.telemetry import CsvTelemetryWriter
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
@@ -176,8 +176,8 @@ def run(args: argparse.Namespace) -> int:
             gaits=choices,
         )
     source = make_source(args)
-    if args.script is None and "realtime" in spec.option_names:
-        given["realtime"] = True  # a person drives: a simulation keeps to the wall clock
+    if args.script is None:  # a person drives
+        given = watched(spec, given)
     with flag_errors(BACKEND_OPTIONS):
         snake = Snake.prepare(robot, spec, **given)
     backend = snake.backend

@@ -40,6 +40,7 @@ from snakebot.session import (
     Snake,
     load_robot,
     resolve_gait,
+    watched,
 )
 from snakebot.telemetry import CsvTelemetryWriter
 
@@ -107,6 +108,8 @@ def prepare(args: argparse.Namespace, options: tuple[str, ...]) -> tuple[Snake, 
         robot_name(args, hardware=spec.hardware, what=f"{args.command} --backend {args.backend}")
     )
     given = given_options(args, spec, options)
+    if getattr(args, "viewer", False):
+        given = watched(spec, given)
     with flag_errors(options):
         snake = Snake.prepare(robot, spec, **given)
     return snake, spec
@@ -150,8 +153,6 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
-    if args.viewer:
-        args.realtime = True  # a person watches: the simulation keeps to the wall clock
     snake, spec = prepare(args, BACKEND_OPTIONS)
     gait_name, gait = build_gait(snake.robot, args)
     if (args.video or args.viewer) and spec.hardware:
