@@ -96,3 +96,20 @@ class OutputError(SnakebotError):
         self.path = str(path)
         self.reason = reason
         super().__init__(f"{self.path}: {reason}")
+
+
+class BackendOptionError(UsageError, TypeError):
+    """A backend was given an option it does not take (``port`` with the twin, say).
+
+    ``backend`` is the backend's name, ``option`` the keyword refused and ``accepted`` the ones
+    it takes. A usage error: the option does nothing there, so refusing it beats ignoring it.
+    """
+
+    def __init__(self, backend: str, option: str, accepted: Sequence[str]) -> None:
+        self.backend = backend
+        self.option = option
+        self.accepted = tuple(accepted)
+        takes = ", ".join(self.accepted) if self.accepted else "none"
+        super().__init__(
+            f"the {backend} backend takes no option {option!r} (its options: {takes})"
+        )

@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
     robot = load_robot_or_body(robot_name(args, hardware=False, what="model"))
     check_writable(args.out, "model")
-    terrain = parse_terrain(args.terrain) if args.terrain else None
+    terrain = parse_terrain(args.terrain, "--terrain") if args.terrain else None
     if isinstance(robot, BodyConfig):
         from snakebot.cli.softbody_options import describe_body, softbody_spec
 
@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
         what = describe_body(robot)
         spec.compile()
     else:
-        friction = GroundFriction.parse(args.friction) if args.friction else None
+        friction = GroundFriction.parse(args.friction, "--friction") if args.friction else None
         spec = build_spec(robot, friction=friction, terrain=terrain)
         add_actuators(spec, robot)
         compile_spec(spec, robot)

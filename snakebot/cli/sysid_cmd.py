@@ -7,12 +7,18 @@ import contextlib
 from pathlib import Path
 from typing import Any
 
+from snakebot.cli.backend_options import (
+    add_backend_argument,
+    add_option_flags,
+    backend_spec,
+    flag_errors,
+    given_options,
+)
 from snakebot.cli.common import (
     add_robot_option,
     check_folder,
     check_writable,
     finite_float,
-    port_arg,
     positive_float,
     positive_int,
     print_json,
@@ -22,6 +28,8 @@ from snakebot.cli.common import (
 from snakebot.config import load_robot
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
 from snakebot.errors import ConfigError
+
+RECORD_BACKEND_OPTIONS = ("port", "baud")
 
 
 def add_parser(subparsers: Any) -> None:
@@ -50,9 +58,15 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     group = parser.add_argument_group("recording a log (--record)")
     group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
-    group.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    group.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
-    group.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_backend_argument(group)
+    add_option_flags(
+        group,
+        RECORD_BACKEND_OPTIONS,
+        helps={
+            "port": "serial port for --backend dynamixel",
+            "baud": "baud rate for --backend dynamixel",
+        },
+    )
     group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
     group.add_argument(
         "--hold",
@@ -69,9 +83,9 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Record a log, or fit the twin to logs and write the result."""
-    hardware = args.record is not None and args.backend == "dynamixel"
+    hardware = args.record is not None and backend_spec(args).hardware
     robot = load_robot(
-        robot_name(args, hardware=hardware, what="sysid --record --backend dynamixel")
+        robot_name(args, hardware=hardware, what=f"sysid --record --backend {args.backend}")
     )
     if args.record is not None:
         check_writable(args.record, "log")
@@ -131,14 +145,10 @@ def _record(robot: Any, args: argparse.Namespace) -> int:
     from snakebot.tuning.excitation import chirp_plan, record
 
     with contextlib.ExitStack() as stack:
-        if args.backend == "sim":
-            from snakebot.backends.twin import TwinBackend
-
-            backend: Any = stack.enter_context(TwinBackend(robot))
-        else:
-            from snakebot.backends.dynamixel import DynamixelBackend
-
-            backend = stack.enter_context(DynamixelBackend(robot, port=args.port, baud=args.baud))
+        spec = backend_spec(args)
+        with flag_errors(RECORD_BACKEND_OPTIONS):
+            options = given_options(args, spec, RECORD_BACKEND_OPTIONS)
+            backend: Any = stack.enter_context(spec.make(robot, **options))
         start = backend.read_state().position_rad
         commands = chirp_plan(
             robot,

@@ -9,6 +9,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from snakebot.cli.backend_options import (
+    add_backend_argument,
+    add_option_flags,
+    backend_spec,
+    flag_errors,
+    given_options,
+)
 from snakebot.cli.common import (
     RATE_HZ,
     add_robot_option,
@@ -16,7 +23,6 @@ from snakebot.cli.common import (
     check_folder,
     check_writable,
     finite_float,
-    port_arg,
     positive_float,
     positive_int,
     print_json,
@@ -203,7 +209,10 @@ def _friction(robot: RobotConfig | BodyConfig, text: str | None) -> GroundFricti
 
         mu = parse_floor_friction(text)
         return GroundFriction(mu, mu)
-    return GroundFriction.parse(text)
+    return GroundFriction.parse(text, "--friction")
+
+
+GAIN_BACKEND_OPTIONS = ("port", "baud")
 
 
 def _add_gains_parser(commands: Any) -> None:
@@ -216,9 +225,15 @@ def _add_gains_parser(commands: Any) -> None:
         "a joint at its torque limit for long; writes it to the robot file's [gains].",
     )
     add_robot_option(parser, hardware="with --backend dynamixel")
-    parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    parser.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_backend_argument(parser)
+    add_option_flags(
+        parser,
+        GAIN_BACKEND_OPTIONS,
+        helps={
+            "port": "serial port for --backend dynamixel",
+            "baud": "baud rate for --backend dynamixel",
+        },
+    )
     parser.add_argument("--joints", help="joint indices to step-test, e.g. 0,3 (default all)")
     parser.add_argument(
         "--gait", help="reference gait (default: sidewinding with pitch joints, else serpenoid)"
@@ -251,8 +266,12 @@ def run_gains(args: argparse.Namespace) -> int:
     from snakebot.tuning.gains import GainTest
     from snakebot.tuning.progress import gain_line, gains_summary_text
 
-    hardware = args.backend == "dynamixel"
-    robot = load_robot(robot_name(args, hardware=hardware, what="tune gains --backend dynamixel"))
+    spec = backend_spec(args)
+    hardware = spec.hardware
+    robot = load_robot(
+        robot_name(args, hardware=hardware, what=f"tune gains --backend {args.backend}")
+    )
+    given_options(args, spec, GAIN_BACKEND_OPTIONS)
     _check_outputs(args)
     joints = tuple(range(robot.joint_count))
     if args.joints:
@@ -304,14 +323,17 @@ def run_gains(args: argparse.Namespace) -> int:
 
 
 def _gain_session(robot: Any, args: argparse.Namespace, stack: contextlib.ExitStack) -> Any:
-    if args.backend == "sim":
-        from snakebot.backends.twin import TwinBackend
-
-        return lambda: TwinBackend(robot)
-    from snakebot.backends.dynamixel import DynamixelBackend
+    """Fresh simulated backends per candidate; one connection held throughout on hardware."""
+    spec = backend_spec(args)
+    options = given_options(args, spec, GAIN_BACKEND_OPTIONS)
+    if not spec.hardware:
+        with flag_errors(GAIN_BACKEND_OPTIONS):
+            spec.make(robot, **options)  # a bad option fails now, not in the first candidate
+        return lambda: spec.make(robot, **options)
     from snakebot.tuning.gains import held
 
-    backend = stack.enter_context(DynamixelBackend(robot, port=args.port, baud=args.baud))
+    with flag_errors(GAIN_BACKEND_OPTIONS):
+        backend = stack.enter_context(spec.make(robot, **options))
     return lambda: held(backend)
 
 

@@ -87,7 +87,7 @@ class SoftBodyBackend(Backend):
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
         if not (math.isfinite(self.friction) and self.friction >= 0):
-            raise ConfigError("--friction", "", f"expected a number >= 0, got {self.friction}")
+            raise ConfigError("friction", "", f"expected a number >= 0, got {self.friction}")
         built = build_body_model(self.body, friction=self.friction, terrain=self.terrain)
         self.model, self.lattice = built.model, built.lattice
         self.data = mujoco.MjData(self.model)
@@ -183,7 +183,7 @@ class SoftBodyBackend(Backend):
         steps = round(dt_s / timestep)
         if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
             raise ConfigError(
-                "--rate",
+                "rate_hz",
                 "",
                 f"control period {dt_s:g} s is not a whole number of {timestep:g} s physics "
                 f"steps; pick a rate that divides {1 / timestep:g} Hz (e.g. 50, 100, 250)",

@@ -183,7 +183,7 @@ class TwinBackend(Backend):
         steps = round(dt_s / timestep)
         if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
             raise ConfigError(
-                "--rate",
+                "rate_hz",
                 "",
                 f"control period {dt_s:g} s is not a whole number of {timestep:g} s physics "
                 f"steps; pick a rate that divides {1 / timestep:g} Hz (e.g. 50, 100, 250)",

@@ -55,7 +55,7 @@ class GroundFriction:
         return [self.axial, self.lateral, _SPIN_ROLL_FRICTION[0], roll, roll]
 
     @classmethod
-    def parse(cls, text: str, option: str = "--friction") -> GroundFriction:
+    def parse(cls, text: str, option: str = "friction") -> GroundFriction:
         """Parse ``AXIAL,LATERAL`` (two non-negative numbers)."""
         parts = text.split(",")
         try:
@@ -70,7 +70,7 @@ class GroundFriction:
 
 
 def ground_friction(robot: RobotConfig, override: GroundFriction | None = None) -> GroundFriction:
-    """The robot's own ground model, unless ``override`` (``--friction``) replaces it."""
+    """The robot's own ground model, unless ``override`` (the ``friction`` option) replaces it."""
     if override is not None:
         return override
     twin = robot.twin

@@ -136,7 +136,7 @@ def test_control_period_must_be_whole_steps() -> None:
 def test_friction_option_parsing() -> None:
     assert GroundFriction.parse("0.02,1.0") == GroundFriction(0.02, 1.0)
     for bad in ["0.1", "a,b", "-1,1", "1,2,3"]:
-        with pytest.raises(ConfigError, match="--friction"):
+        with pytest.raises(ConfigError, match=r"^friction: "):
             GroundFriction.parse(bad)
 
 

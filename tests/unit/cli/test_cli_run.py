@@ -105,7 +105,7 @@ def test_log_has_one_row_per_cycle(tmp_path: Path, capsys: pytest.CaptureFixture
 def test_human_summary(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", "--duration", "1"]) == 0
     out = capsys.readouterr().out
-    assert "snake8 / serpenoid on sim" in out and "body lengths" in out
+    assert "snake8 / serpenoid on twin" in out and "body lengths" in out
 
 
 def test_model_export_loads_in_mujoco(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
