@@ -14,18 +14,19 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
 from snakebot.cli.run_cmd import make_backend
+from snakebot.cli.telemetry_options import add_telemetry_options, drive_observer, open_telemetry
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController, GaitChoice
 from snakebot.drive.loop import DriveObserver, DriveResult, run_drive
-from snakebot.drive.observers import backend_readings, csv_log_observer
+from snakebot.drive.observers import backend_readings
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
 from snakebot.gaits import parse_set_options
 from snakebot.gaits.live import LiveGait
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.telemetry.sidecar import gait_facts
 
 PLANAR_GAITS = ("serpenoid",)
 SPATIAL_GAITS = ("sidewinding", "rolling", "lateral_undulation", "turn_in_place",
@@ -104,6 +105,7 @@ def add_parser(subparsers: Any) -> None:
         help="pace the twin to the wall clock (always on without --script)",
     )
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
+    add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     parser.set_defaults(handler=run, viewer=False, video=None, directional=None, terrain=None)
 
@@ -184,9 +186,11 @@ def run(args: argparse.Namespace) -> int:
         recorder = _recorder(stack, args, robot)
         controller = DriveController(live, choices, on_event=recorder)
         observers: list[DriveObserver] = []
-        if args.log:
-            log = stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
-            observers.append(csv_log_observer(log))
+        telemetry = open_telemetry(
+            stack, args, command="drive", robot=robot, backend=backend, rate_hz=args.rate,
+            gait={"gaits": [gait_facts(c.name, None, c.params) for c in choices]},
+        )
+        observers += [o for o in (drive_observer(telemetry),) if o is not None]
         signals = stack.enter_context(StopSignals())
         stack.enter_context(source)
         stack.enter_context(backend)
@@ -204,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
             observers=observers,
             stop_check=signals,
         )
-    summary = _summary(robot, args, choices, result)
+    summary = {**_summary(robot, args, choices, result), **telemetry.summary}
     if args.json:
         print_json(summary)
     else:

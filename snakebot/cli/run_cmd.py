@@ -22,6 +22,7 @@ from snakebot.cli.common import (
     print_json,
     robot_name,
 )
+from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
 from snakebot.config.body_loader import load_robot_or_body
@@ -30,7 +31,7 @@ from snakebot.control.runner import RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import Gait, load_gait_file, make_gait, parse_set_options
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.telemetry.sidecar import gait_facts
 
 
 def add_parser(subparsers: Any) -> None:
@@ -94,6 +95,7 @@ def add_parser(subparsers: Any) -> None:
         help="--backend dynamixel: servos on the bus that the robot file does not name are "
         "expected (left alone); without it connect refuses, naming them",
     )
+    add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     parser.set_defaults(handler=run)
 
@@ -182,11 +184,11 @@ def run(args: argparse.Namespace) -> int:
                               f"{', '.join(VIDEO_SUFFIXES)}")
         check_writable(args.video, "video")
     with contextlib.ExitStack() as stack:
-        log = (
-            stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
-            if args.log
-            else None
+        telemetry = open_telemetry(
+            stack, args, command="run", robot=robot, backend=backend, rate_hz=plan.rate_hz,
+            gait={"gait": gait_facts(gait_name, gait, {}), "duration_s": plan.duration_s},
         )
+        log = telemetry.log
         stack.enter_context(sigterm_as_interrupt())
         stack.enter_context(backend)
         hooks = _cycle_hooks(stack, backend, args, plan)
@@ -198,6 +200,7 @@ def run(args: argparse.Namespace) -> int:
         summary.update(backend.stats.extra)
     if args.log:
         summary["log"] = str(args.log)
+    summary.update(telemetry.summary)
     if args.video:
         summary["video"] = str(args.video)
     if args.json:
