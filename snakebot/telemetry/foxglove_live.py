@@ -16,6 +16,8 @@ rebuilds the MCAP from it.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -33,6 +35,7 @@ INSTALL = "pip install 'snakebot[foxglove]'"
 DEFAULT_PORT = 8765
 LOCALHOST = "127.0.0.1"
 SCENE_REFRESH_S = 1.0  # the capsules again, for clients that join late and for MCAP seeks
+MCAP_FLUSH_S = 1.0  # close the MCAP chunk: a killed run loses at most this much of the file
 
 
 @dataclass(frozen=True)
@@ -136,7 +139,8 @@ class FoxgloveTelemetry:
         try:
             self._open_sinks(foxglove)
         except BaseException:
-            self.close()
+            with contextlib.suppress(Exception):  # what failed to open is what to report
+                self.close()
             raise
         topics = [schemas.JOINTS_TOPIC, schemas.METRICS_TOPIC, schemas.ERRORS_TOPIC]
         topics += [schemas.HEALTH_TOPIC]
@@ -146,6 +150,7 @@ class FoxgloveTelemetry:
         self._poses: LinkPoses | None = None
         self._t0: float | None = None
         self._next_scene = self._next_status = self._next_refresh = -math.inf
+        self._next_flush = 0.0
         self._window = _Window()
         self._start_com: np.ndarray | None = None
         self._last_errors: tuple[str, ...] | None = None
@@ -154,12 +159,14 @@ class FoxgloveTelemetry:
         options = self.options
         if options.mcap_path is not None:
             path = options.mcap_path
+            _quiet_sink_errors()
             try:
                 self._writer = foxglove.open_mcap(
                     path, allow_overwrite=True, context=self._context
                 )
             except OSError as exc:
                 raise OutputError(path, f"cannot write the MCAP file: {exc.strerror}") from exc
+            self._flush()  # the header: a full disk or a device that refuses it fails here
         if options.port is not None:
             try:
                 self._server = foxglove.start_server(
@@ -220,6 +227,20 @@ class FoxgloveTelemetry:
         if time_s >= self._next_status:
             self._next_status = time_s + 1.0 / self.options.status_rate_hz
             self._send_status(now_ns, time_s, com)
+        if self._writer is not None and time_s - (self._t0 or 0.0) >= self._next_flush:
+            self._next_flush += MCAP_FLUSH_S
+            self._flush()
+
+    def _flush(self) -> None:
+        """Finish the MCAP chunk and write it out; OutputError naming the file if that fails
+        (the SDK only logs a failed write, a flush raises it)."""
+        try:
+            self._writer.flush()
+        except (OSError, RuntimeError) as exc:
+            reason = str(exc).removeprefix("FoxgloveError: ")
+            raise OutputError(
+                self.options.mcap_path or "", f"cannot write the MCAP file: {reason}"
+            ) from exc
 
     def drive(
         self, time_s: float, status: Mapping[str, Any], target: np.ndarray, keys: Sequence[str]
@@ -289,6 +310,28 @@ class FoxgloveTelemetry:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
+
+
+class _Once(logging.Filter):
+    """Lets each distinct message through once: a failed MCAP write is logged by the SDK for
+    every message after it; the flush that follows raises it as an OutputError."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.seen: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        if text in self.seen:
+            return False
+        self.seen.add(text)
+        return True
+
+
+def _quiet_sink_errors() -> None:
+    logger = logging.getLogger("foxglove.log_sink_set")
+    if not any(isinstance(f, _Once) for f in logger.filters):
+        logger.addFilter(_Once())
 
 
 def _short(values: np.ndarray) -> list[float]:
