@@ -4,6 +4,7 @@ kinematics of the measured joints, and the servos' temperatures and voltages are
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -18,7 +19,10 @@ from snakebot.telemetry.scene import KinematicLinkPoses
 from tests.integration.telemetry.test_mcap_record import read_mcap
 from tests.pty_emulator import emulator
 
-pytestmark = pytest.mark.pty
+pytestmark = [
+    pytest.mark.pty,
+    pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX"),
+]
 
 
 def test_a_drive_over_the_bus_records_fk_of_the_measured_joints_and_servo_health(
