@@ -135,9 +135,10 @@ def make_backend(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> B
 
         friction = GroundFriction.parse(args.friction) if args.friction else None
         terrain = parse_terrain(args.terrain) if args.terrain else None
-        return TwinBackend(
-            robot, friction=friction, realtime=args.realtime or args.viewer, terrain=terrain
-        )
+        # Someone watching (the viewer, Foxglove) sees the twin at the wall clock's pace.
+        watched = args.viewer or getattr(args, "foxglove", None) is not None
+        return TwinBackend(robot, friction=friction, realtime=args.realtime or watched,
+                           terrain=terrain)
     if args.viewer or args.video or args.friction or args.terrain:
         raise ConfigError(
             "--backend", "", "--viewer, --video, --friction and --terrain need --backend sim"

@@ -39,7 +39,8 @@ def add_telemetry_options(parser: argparse.ArgumentParser) -> None:
         type=_port,
         metavar="PORT",
         help=f"stream live to Foxglove: a WebSocket server on 127.0.0.1:PORT (default "
-        f"{DEFAULT_PORT}; extra: snakebot[foxglove]); docs/driving.md has the layout",
+        f"{DEFAULT_PORT}; 0: any free port; extra: snakebot[foxglove]); the twin then keeps to "
+        "the wall clock; docs/driving.md has the layout",
     )
     parser.add_argument(
         "--foxglove-host",
