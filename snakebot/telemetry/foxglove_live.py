@@ -32,7 +32,6 @@ from snakebot.telemetry import schemas
 from snakebot.telemetry.scene import LinkPoses, frame_transforms, scene_update
 
 INSTALL = "pip install 'snakebot[foxglove]'"
-DEFAULT_PORT = 8765
 LOCALHOST = "127.0.0.1"
 SCENE_REFRESH_S = 1.0  # the capsules again, for clients that join late and for MCAP seeks
 MCAP_FLUSH_S = 1.0  # close the MCAP chunk: a killed run loses at most this much of the file
@@ -48,11 +47,6 @@ class TelemetryOptions:
     mcap_path: Path | None = None
     scene_rate_hz: float = 30.0
     status_rate_hz: float = 4.0
-
-    @property
-    def enabled(self) -> bool:
-        """True when there is a server or a file to feed."""
-        return self.port is not None or self.mcap_path is not None
 
 
 @dataclass(frozen=True)
@@ -346,7 +340,6 @@ class _Window:
 
     def __init__(self) -> None:
         self.restart()
-        self._first_time: float | None = None
 
     def restart(self) -> None:
         self._cycles = 0

@@ -91,7 +91,8 @@ def gait_facts(name: str, gait: object | None, params: Mapping[str, object]) -> 
     dataclass, else the ones given)."""
     values: Mapping[str, object] = params
     if dataclasses.is_dataclass(gait) and not isinstance(gait, type):
-        values = {f.name: getattr(gait, f.name) for f in dataclasses.fields(gait)}
+        values = {f.name: getattr(gait, f.name) for f in dataclasses.fields(gait)
+                  if f.init and not f.name.startswith("_")}
     return {"name": name, "params": _jsonable(dict(values))}
 
 
