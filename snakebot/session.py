@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from snakebot.drive.sources import InputSource
     from snakebot.gaits import Gait
     from snakebot.gaits.live import LiveGait
-    from snakebot.telemetry import CsvTelemetryWriter
+    from snakebot.telemetry.sink import CycleLog
 
 __all__ = [
     "DEFAULT_BACKEND",
@@ -230,14 +230,15 @@ class Snake:
         duration_s: float,
         params: Mapping[str, object] | None = None,
         rate_hz: float = DEFAULT_RATE_HZ,
-        log: str | Path | CsvTelemetryWriter | None = None,
+        log: str | Path | CycleLog | None = None,
         on_cycle: CycleHook | None = None,
         ramp_out: bool = True,
     ) -> RunSummary:
         """Play ``gait`` for ``duration_s`` seconds at ``rate_hz``, then ramp out to rest.
 
         ``gait``: a gait name, a gait file path or a Gait; ``params`` override its parameters.
-        ``log``: a CSV path (or an open CsvTelemetryWriter) for per-cycle telemetry; rows
+        ``log``: a CSV path (or an open sink: CsvTelemetryWriter, snakebot.telemetry.sink's
+        CycleLog) for per-cycle telemetry; rows
         written stay on disk whatever ends the run. ``on_cycle(cycle, gait_time_s)`` runs after
         every cycle. Ctrl-C ends the gait early and ramps out (``summary.interrupted``).
         Raises GaitError/ConfigError for a bad gait (before anything moves), ValueError for a
@@ -263,7 +264,7 @@ class Snake:
             backend=self.backend_name,
             metrics=result.summary,
             extra=extra,
-            log=None if writer is None else str(writer.path),
+            log=_path_of(writer),
             log_rows=result.log_rows,
         )
 
@@ -302,11 +303,11 @@ class Snake:
 
     @contextlib.contextmanager
     def _open_log(
-        self, log: str | Path | CsvTelemetryWriter | None
-    ) -> Iterator[CsvTelemetryWriter | None]:
+        self, log: str | Path | CycleLog | None
+    ) -> Iterator[CycleLog | None]:
         from snakebot.telemetry import CsvTelemetryWriter
 
-        if log is None or isinstance(log, CsvTelemetryWriter):
+        if log is None or not isinstance(log, str | Path):
             yield log
             return
         with CsvTelemetryWriter(log, self.robot.joint_count) as writer:
@@ -363,3 +364,9 @@ def connect(
     robot file or option value, BackendError for an unknown backend or a failed connection.
     """
     return Snake.prepare(robot, backend, **options).connect()
+
+
+def _path_of(log: object) -> str | None:
+    """The file a log sink writes (a CSV writer's ``path``); None for other sinks or none."""
+    path = getattr(log, "path", None)
+    return None if path is None else str(path)

@@ -18,10 +18,11 @@ from snakebot.cli.backend_options import (
     given_options,
 )
 from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
+from snakebot.cli.telemetry_options import add_telemetry_options, drive_observer, open_telemetry
 from snakebot.config import RobotConfig, load_robot
 from snakebot.drive.controller import DriveController, GaitChoice
 from snakebot.drive.loop import DriveObserver, DriveResult
-from snakebot.drive.observers import backend_readings, csv_log_observer
+from snakebot.drive.observers import backend_readings
 from snakebot.drive.setup import (
     DEFAULT_SMOOTHING_S,
     DEFAULT_TRANSITION_S,
@@ -35,7 +36,7 @@ from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder,
 from snakebot.errors import ConfigError
 from snakebot.gaits import parse_set_options
 from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
 """The backend option flags ``drive`` offers."""
@@ -113,6 +114,7 @@ def add_parser(subparsers: Any) -> None:
         },
     )
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
+    add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     parser.set_defaults(handler=run)
 
@@ -176,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
             gaits=choices,
         )
     source = make_source(args)
-    if args.script is None:  # a person drives
+    if args.script is None or args.foxglove is not None:  # a person drives or watches
         given = watched(spec, given)
     with flag_errors(BACKEND_OPTIONS):
         snake = Snake.prepare(robot, spec, **given)
@@ -185,9 +187,11 @@ def run(args: argparse.Namespace) -> int:
         recorder = _recorder(stack, args, robot)
         controller = DriveController(live, choices, on_event=recorder)
         observers: list[DriveObserver] = []
-        if args.log:
-            log = stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
-            observers.append(csv_log_observer(log))
+        telemetry = open_telemetry(
+            stack, args, command="drive", robot=robot, backend=backend, rate_hz=args.rate,
+            gait={"gaits": [gait_facts(c.name, None, c.params) for c in choices]},
+        )
+        observers += [o for o in (drive_observer(telemetry),) if o is not None]
         signals = stack.enter_context(StopSignals())
         stack.enter_context(source)
         with flag_errors(BACKEND_OPTIONS):
@@ -199,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
             result = snake.drive(
                 live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
             )
-    summary = _summary(robot, args, choices, result)
+    summary = {**_summary(robot, args, choices, result), **telemetry.summary}
     if args.json:
         print_json(summary)
     else:

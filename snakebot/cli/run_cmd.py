@@ -29,6 +29,7 @@ from snakebot.cli.common import (
     print_json,
     robot_name,
 )
+from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
 from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
@@ -42,7 +43,7 @@ from snakebot.session import (
     resolve_gait,
     watched,
 )
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = (
     "friction", "directional", "terrain", "realtime", "port", "baud", "allow_extra_servos",
@@ -96,6 +97,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--video", type=Path, help="render the twin to an MP4 file (offscreen)")
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
+    add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     parser.set_defaults(handler=run)
 
@@ -108,7 +110,8 @@ def prepare(args: argparse.Namespace, options: tuple[str, ...]) -> tuple[Snake, 
         robot_name(args, hardware=spec.hardware, what=f"{args.command} --backend {args.backend}")
     )
     given = given_options(args, spec, options)
-    if getattr(args, "viewer", False):
+    # Someone watching (the viewer, Foxglove) sees the twin at the wall clock's pace.
+    if getattr(args, "viewer", False) or getattr(args, "foxglove", None) is not None:
         given = watched(spec, given)
     with flag_errors(options):
         snake = Snake.prepare(robot, spec, **given)
@@ -169,11 +172,12 @@ def run(args: argparse.Namespace) -> int:
                               f"{', '.join(VIDEO_SUFFIXES)}")
         check_writable(args.video, "video")
     with contextlib.ExitStack() as stack:
-        log = (
-            stack.enter_context(CsvTelemetryWriter(args.log, snake.robot.joint_count))
-            if args.log
-            else None
+        telemetry = open_telemetry(
+            stack, args, command="run", robot=snake.robot, backend=snake.backend,
+            rate_hz=args.rate,
+            gait={"gait": gait_facts(gait_name, gait, {}), "duration_s": args.duration},
         )
+        log = telemetry.log
         stack.enter_context(sigterm_as_interrupt())
         with flag_errors(BACKEND_OPTIONS):
             stack.enter_context(snake)
@@ -186,7 +190,13 @@ def run(args: argparse.Namespace) -> int:
                 log=log,
                 on_cycle=_chain(hooks) if hooks else None,
             )
-    summary = replace(summary, gait=gait_name, video=str(args.video) if args.video else None)
+    summary = replace(
+        summary,
+        gait=gait_name,
+        video=str(args.video) if args.video else None,
+        log=str(args.log) if args.log else None,
+        extra={**summary.extra, **telemetry.summary},
+    )
     if args.json:
         print_json(summary.to_dict())
     else:

@@ -26,7 +26,7 @@ from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer, smooth_ramp
 from snakebot.errors import BackendError
 from snakebot.gaits import Gait
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.telemetry.sink import CycleLog
 from snakebot.types import JointCommand, JointState
 
 CycleHook = Callable[[int, float], None]
@@ -64,7 +64,7 @@ class _Loop:
 
     def __init__(
         self, backend: Backend, gait: Gait, safety: SafetyLayer, metrics: RunMetrics, dt: float,
-        log: CsvTelemetryWriter | None, on_cycle: CycleHook | None,
+        log: CycleLog | None, on_cycle: CycleHook | None,
     ) -> None:
         self.backend, self.gait, self.safety, self.metrics = backend, gait, safety, metrics
         self.dt, self.log, self.on_cycle = dt, log, on_cycle
@@ -121,7 +121,7 @@ def run_gait(
     plan: RunPlan,
     metrics: RunMetrics,
     *,
-    log: CsvTelemetryWriter | None = None,
+    log: CycleLog | None = None,
     on_cycle: CycleHook | None = None,
 ) -> RunResult:
     """Run ``gait`` on a connected ``backend`` for ``plan.duration_s``, then ramp out.

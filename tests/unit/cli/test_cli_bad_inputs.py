@@ -66,6 +66,17 @@ CASES = [
         names=("--port", "socket://")),
     bad("run", "--backend", "dynamixel", *SNAKE12, "--video", "{tmp}/a.mp4", names=("--video",)),
     bad("run", "--backend", "dynamixel", *SNAKE12, "--port", "{blocker}", names=("{blocker}",)),
+    bad("run", "--mcap", "/dev/full", names=("/dev/full", "MCAP", "I/O error")),
+    bad("run", "--mcap", "{blocker}/run.mcap", names=("{blocker}/run.mcap", "Not a directory")),
+    bad("run", "--foxglove", "70000", code=2, names=("--foxglove",)),
+    bad("drive", "--script", "{script}", "--mcap", "/dev/full", names=("/dev/full", "MCAP")),
+    # log
+    bad("log", "info", "{csv}", names=("{csv}", "line 2, column command_rad_0", "'abc'")),
+    bad("log", "plot", "{binary}", names=("{binary}", "not UTF-8")),
+    bad("log", "export", "{tmp}/nope.csv", "--format", "mcap",
+        names=("{tmp}/nope.csv", "No such file")),
+    bad("log", "export", "{csv}", "--format", "xml", code=2, names=("--format",)),
+    bad("log", code=2, names=("ACTION",)),
     # model
     bad("model", "--out", "{blocker}/m.xml", names=("{blocker}/m.xml", "Not a directory")),
     bad("model", "--out", "/dev/full", names=("/dev/full", "No space left")),
