@@ -220,7 +220,7 @@ def _cycle_hooks(
         from snakebot.backends.twin.viewer import PassiveViewer
 
         hooks.append(stack.enter_context(PassiveViewer(backend)))
-    if not args.json and sys.stderr.isatty() and plan.duration_s >= 5:
+    if not args.json and sys.stderr.isatty() and (plan.duration_s or 0.0) >= 5:
         hooks.append(ProgressLine(plan))
     return hooks
 
@@ -287,7 +287,7 @@ class ProgressLine:
         if now < self._next:
             return
         self._next = now + 0.25
-        fraction = min(gait_time_s / self.plan.duration_s, 1.0)
+        fraction = min(gait_time_s / (self.plan.duration_s or gait_time_s or 1.0), 1.0)
         bar = "#" * int(fraction * 30)
         sys.stderr.write(f"\r  [{bar:<30}] {gait_time_s:6.1f}/{self.plan.duration_s:g} s")
         if fraction >= 1.0:

@@ -41,7 +41,7 @@ def test_batched_and_pooled_runs_match_the_runner_bit_for_bit() -> None:
     robot = load_robot("snake8")
     gaits = [make_gait("serpenoid", 8, p) for p in PARAMS]
     batch = TwinBatch(robot)
-    traces = batch.run(GaitCommands(gaits, robot, 0.01), 1.5, 100.0)
+    traces = batch.run(GaitCommands(gaits, robot), 1.5, 100.0)
     envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
     with ProcessPool(2) as pool:
         pooled = pool.run([PoolJob(robot, "serpenoid", p, 1.5, 100.0, envelope) for p in PARAMS])
@@ -58,12 +58,12 @@ def test_hopeless_runs_stop_early_and_say_why() -> None:
     envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
     flying = dataclasses.replace(envelope, lift_limit_m=-1.0)  # every sample counts as flight
     gaits = [make_gait("sidewinding", 12)]
-    trace = batch.run(GaitCommands(gaits, robot, 0.01), 2.0, 100.0, envelope=flying)[0]
+    trace = batch.run(GaitCommands(gaits, robot), 2.0, 100.0, envelope=flying)[0]
     assert trace.stop_reason == "airborne" and trace.cycles == 25
     upside_down = dataclasses.replace(envelope, rest_com_z_m=-1.0, lift_limit_m=10.0)
     upside_down = dataclasses.replace(upside_down, allow_roll=False)
     rolled = batch.run(
-        GaitCommands([make_gait("rolling", 12)], robot, 0.01), 2.0, 100.0, envelope=upside_down
+        GaitCommands([make_gait("rolling", 12)], robot), 2.0, 100.0, envelope=upside_down
     )[0]
     assert rolled.stop_reason in ("", "flipped")
 
