@@ -111,17 +111,19 @@ class CycleSchedule:
         fraction = max(0.0, 1.0 - (since_gait_end_s + self.period_s) / self.ramp_s)
         return 0.0 if fraction < self.slack_s / self.ramp_s else fraction
 
-    def slew_period_s(self, measured_s: float | None) -> float:
-        """The time the slew limit allows for the next command step.
+    def slew_period_s(self, cycle: int, last_period_s: float | None) -> float:
+        """The time the slew limit allows for the command of cycle ``cycle`` (0 the first).
 
-        ``measured_s`` is how long the last cycle took in robot time (None: no cycle yet). A
-        cycle within float noise of the period counts as the period; a late one (a loaded host,
-        a slow bus) gives the joints the time that really passed, up to ``MAX_SLEW_PERIODS``.
+        ``last_period_s`` is how long the cycle before took in robot time, from one state read to
+        the next. The first cycle's length also holds the time from connecting to the first
+        command, so it counts from the third cycle on. A cycle within float noise of the period
+        counts as the period; a late one (a loaded host, a slow bus) gives the joints the time
+        that really passed, up to ``MAX_SLEW_PERIODS``.
         """
         period = self.period_s
-        if measured_s is None or measured_s <= period * (1.0 + LATE_TOLERANCE):
+        if cycle < 2 or last_period_s is None or last_period_s <= period * (1 + LATE_TOLERANCE):
             return period
-        return min(measured_s, MAX_SLEW_PERIODS * period)
+        return min(last_period_s, MAX_SLEW_PERIODS * period)
 
     def cycle_times(self, max_cycles: float = math.inf) -> list[float]:
         """Robot time before each scored cycle and after the last, for a simulated backend.

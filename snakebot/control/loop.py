@@ -73,8 +73,8 @@ class CycleLoop:
         else:
             target = self.target
         self.stage = "safety"
-        command = self.gaits.commands(target, schedule.slew_period_s(self._last_period_s),
-                                      amplitude)
+        slew_s = schedule.slew_period_s(self.cycle, self._last_period_s)
+        command = self.gaits.commands(target, slew_s, amplitude)
         self.target, self.command = target, command
         self.stage = "backend"
         overruns = backend.stats.overruns

@@ -84,7 +84,7 @@ class GaitCommands:
         if schedule is None:
             raise RuntimeError("GaitCommands used before reset()")
         last, self._last_time_s = self._last_time_s, time_s
-        slew_s = schedule.slew_period_s(None if last is None else time_s - last)
+        slew_s = schedule.slew_period_s(cycle, None if last is None else time_s - last)
         targets = self.cycle.targets(time_s, measured_rad)
         commands = self.cycle.commands(targets, slew_s, schedule.ramp_in(time_s))
         return targets, commands
