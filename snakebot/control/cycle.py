@@ -16,6 +16,7 @@ commands with the same code, a tuned candidate replays in ``snakebot run`` bit f
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -76,12 +77,12 @@ class CycleSchedule:
                     f"{self.timestep_s:g} s physics steps"
                 )
 
-    @property
+    @functools.cached_property
     def period_s(self) -> float:
         """The control period, 1 / rate_hz."""
         return 1.0 / self.rate_hz
 
-    @property
+    @functools.cached_property
     def slack_s(self) -> float:
         """Half a period: absorbs float sums when deciding whether one more cycle fits."""
         return 0.5 * self.period_s
@@ -251,5 +252,7 @@ class GaitCycle:
     ) -> FloatArray:
         """What the safety layer sends for ``targets_rad`` (same shape), the slew limit allowing
         ``slew_period_s`` of joint motion and the amplitude ramped by ``amplitude``."""
+        if targets_rad.ndim == 1:
+            return self.safety.filter(targets_rad, slew_period_s, amplitude)
         sent = self.safety.filter(targets_rad.ravel(), slew_period_s, amplitude)
         return sent.reshape(targets_rad.shape)

@@ -25,6 +25,9 @@ from snakebot.telemetry import CsvTelemetryWriter
 class CycleLoop:
     """One run's cycles on a connected backend, and which parts still take part.
 
+    ``step`` returns each cycle's ``CycleRecord`` when ``records`` is set or ``observers`` are
+    given (else None: nobody reads it, and the twin's cycle stays as cheap as it was).
+
     ``stage`` names the part running when an exception leaves ``step`` ("gait", "safety",
     "backend", "metrics", "log", "hook"); ``leave_out`` drops a failed part from the cycles that
     follow (the runner's ramp-out).
@@ -40,9 +43,11 @@ class CycleLoop:
         log: CsvTelemetryWriter | None = None,
         on_cycle: CycleHook | None = None,
         observers: Sequence[CycleObserver] = (),
+        records: bool = False,
     ) -> None:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
         self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
+        self.records = records
         self.state: JointState = backend.read_state()
         self.start_s = self.state.time_s
         self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target
@@ -62,9 +67,9 @@ class CycleLoop:
         """Robot time since the run started."""
         return self.state.time_s - self.start_s
 
-    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord:
+    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord | None:
         """One cycle with the targets of ``gait_time_s`` at ``amplitude``; scored cycles count
-        in the metrics. Returns the cycle's record (observers have seen it)."""
+        in the metrics. Returns the cycle's record (observers have seen it), or None."""
         backend, schedule = self.backend, self.schedule
         self.stage = "gait"
         before = self.state
@@ -93,6 +98,11 @@ class CycleLoop:
         self.cycle += 1
         period = state.time_s - before.time_s
         self._last_period_s = period
+        self.stage = "hook"
+        if self.on_cycle is not None:
+            self.on_cycle(self.cycle, gait_time_s)
+        if not (self.observers or self.records):
+            return None
         elapsed = state.time_s - self.start_s
         record = CycleRecord(
             cycle=self.cycle,
@@ -107,9 +117,6 @@ class CycleLoop:
             overrun=backend.stats.overruns != overruns,
             achieved_rate_hz=self.cycle / elapsed if elapsed > 0 else schedule.rate_hz,
         )
-        self.stage = "hook"
-        if self.on_cycle is not None:
-            self.on_cycle(self.cycle, gait_time_s)
         for observer in self.observers:
             observer(record)
         return record

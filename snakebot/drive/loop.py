@@ -70,7 +70,7 @@ def run_drive(
     ``stop_check()`` returns a reason to stop (a signal) or None; it is asked every cycle.
     """
     schedule = CycleSchedule(rate_hz)  # open-ended; the live gait blends in and out itself
-    loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics)
+    loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics, records=True)
     loop.start()
     live.start(loop.state.position_rad)
     controller.begin()
@@ -80,6 +80,7 @@ def run_drive(
         keys = tuple(key for key in source.poll(now) if controller.apply(key, now))
         _check_stop(controller, source, stop_check)
         done = loop.step(now, 1.0, scored=True)
+        assert done is not None  # records=True
         status = live.status()
         record = DriveCycle(**vars(done), status=status, keys=keys)
         for observer in observers:
