@@ -1,8 +1,12 @@
 """The fixed-rate control loop: gait -> safety -> backend, telemetry every cycle.
 
 The runner never knows which backend it drives: the backend lets ``dt`` pass (the twin steps
-physics, hardware sleeps to the deadline). How a run ends:
+physics, hardware sleeps to the deadline). The cycle itself (schedule, commands, what each cycle
+records) is the one every loop shares: snakebot.control.cycle and snakebot.control.loop. How a
+run ends:
 
+- The gait window closes (``plan.duration_s``), or a ``stop()`` check gives a reason: ramp-out,
+  and the run is not counted as interrupted.
 - Ctrl-C or SIGTERM (as KeyboardInterrupt) during the gait starts the ramp-out; the scored window
   ends there. Another one during the ramp-out ends it at once and propagates: the backend's
   ``close`` then stops at the joint speed limit, still ending in the stop policy.
