@@ -32,6 +32,16 @@ DT = 0.01
 GAIT = {"snake8": "serpenoid", "snake12": "sidewinding"}
 
 
+def drive_cycle(
+    k: int, target: np.ndarray, command: np.ndarray, state: JointState, live: LiveGait
+) -> DriveCycle:
+    return DriveCycle(
+        cycle=k, gait_time_s=k * DT, target_rad=target, command_rad=command, state=state,
+        body=None, amplitude=1.0, scored=True, period_s=DT, overrun=False,
+        achieved_rate_hz=1.0 / DT, status=live.status(), keys=(),
+    )
+
+
 def live_gait(robot: RobotConfig) -> LiveGait:
     live = LiveGait(
         robot.joint_count,
@@ -67,7 +77,7 @@ def cases(robot: RobotConfig) -> tuple[dict[str, Callable[[int], object]], Drive
         notice=lambda: "", rate_hz=100.0, servo_ids=robot.servo_ids, health=dict,
         alerts=tuple, overruns=lambda: 0,
     )
-    record = DriveCycle(0, 0.0, np.zeros(n), np.zeros(n), state, None, live.status(), ())
+    record = drive_cycle(0, np.zeros(n), np.zeros(n), state, live)
     start = 3.0
 
     def plain(k: int) -> object:
@@ -79,7 +89,7 @@ def cases(robot: RobotConfig) -> tuple[dict[str, Callable[[int], object]], Drive
     def with_status(k: int) -> object:
         target = live.command(start + k * DT)
         command = safety.filter(target, DT)
-        return DriveCycle(k, k * DT, target, command, state, None, live.status(), ())
+        return drive_cycle(k, target, command, state, live)
 
     def shown(k: int) -> object:
         display(record)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import abc
 import logging
+from collections.abc import Mapping
 from types import TracebackType
 
 import numpy as np
@@ -140,6 +141,12 @@ class Backend(abc.ABC):
         """Whole-body state where the backend can measure it (the twin); None on hardware."""
         self._require_connected()
         return None
+
+    def health(self) -> Mapping[str, np.ndarray]:
+        """Slow readings about the hardware's condition, by name with units in the name (e.g.
+        ``temperature_c`` (N,)), as of the backend's last reading; cheap (no bus traffic), so a
+        display may ask every cycle. Empty where the backend measures none (the default)."""
+        return {}
 
     @property
     def time_s(self) -> float:

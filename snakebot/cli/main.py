@@ -94,6 +94,10 @@ def _caused_by_interrupt(exc: BaseException) -> bool:
 
 def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
+    if _interrupt_seen:
+        # A Ctrl-C during start-up that a C extension's init swallowed (MuJoCo's pybind11
+        # modules do): honour it before the command touches anything.
+        raise KeyboardInterrupt
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2)
@@ -144,8 +148,14 @@ def entry_point() -> None:
     sys.exit(code)
 
 
+_interrupt_seen = False
+"""A SIGINT/SIGTERM arrived while the command was still running (even if it was swallowed)."""
+
+
 def _on_signal(signum: int, frame: object) -> None:
+    global _interrupt_seen
     if _decided_exit_code is None:
+        _interrupt_seen = True
         raise KeyboardInterrupt
     # The command is over; the exit code it decided stands.
 

@@ -26,14 +26,11 @@ def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
 def backend_readings(
     backend: Backend,
 ) -> tuple[Callable[[], Mapping[str, np.ndarray]], Callable[[], tuple[str, ...]]]:
-    """(health, alerts) callables for the display: the backend's slow readings (the Dynamixel
-    backend's ``health``: ``temperature_c`` (N,), ...) and what went wrong so far (clipped
-    commands, Bus Watchdog re-arms, bus retries, servos raising the alert bit)."""
+    """(health, alerts) callables for the display: the backend's slow readings
+    (``Backend.health()``: the Dynamixel backend's ``temperature_c`` (N,), ...) and what went
+    wrong so far (clipped commands, Bus Watchdog re-arms, bus retries, servos raising the alert
+    bit)."""
     bus = getattr(backend, "bus", None)
-
-    def health() -> Mapping[str, np.ndarray]:
-        readings: Mapping[str, np.ndarray] = getattr(backend, "health", {})
-        return readings
 
     def alerts() -> tuple[str, ...]:
         extra = backend.stats.extra
@@ -48,4 +45,4 @@ def backend_readings(
             found += [f"alert bit: servo {i}" for i in sorted(bus.alerts)]
         return tuple(found)
 
-    return health, alerts
+    return backend.health, alerts

@@ -65,6 +65,19 @@ class Envelope:
             return np.zeros(np.shape(up_z), dtype=bool)
         return np.asarray(up_z < FLIPPED_UP_Z)
 
+    def hopeless(
+        self, com_m: FloatArray, clearance_m: FloatArray, head_quat: FloatArray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(airborne, flipped): whether every sample of a window was in flight / upside down.
+
+        ``com_m`` (..., W, 3), ``clearance_m`` (..., W) and ``head_quat`` (..., W, 4) hold W
+        cycles; both results have the leading shape (...).
+        """
+        airborne = self.airborne(com_m[..., 2], clearance_m).all(axis=-1)
+        up_z = 1.0 - 2.0 * (head_quat[..., 1] ** 2 + head_quat[..., 2] ** 2)
+        flipped = self.flipped(up_z).all(axis=-1)
+        return np.asarray(airborne), np.asarray(flipped)
+
 
 @dataclass(frozen=True)
 class Violations:

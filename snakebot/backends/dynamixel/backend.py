@@ -117,7 +117,7 @@ class DynamixelBackend(Backend):
         self.torque_may_be_on = False
         """Whether any servo may have torque on: from just before Torque Enable goes out until
         the stop policy has been applied. While it is set, every way out applies the policy."""
-        self.health: dict[str, np.ndarray] = {}
+        self._health: dict[str, np.ndarray] = {}
         """Latest slow-rate readings, shape (N,): ``input_voltage_v``, ``temperature_c``."""
         self.clock, self.sleep = clock, sleep
         self.max_ticks_per_s = robot.max_speed_rad_s / self.converter.rad_per_tick
@@ -303,10 +303,16 @@ class DynamixelBackend(Backend):
         table = self.bus.table
         volts = np.array([values[i]["present_input_voltage"] for i in self.ids], dtype=float)
         temps = np.array([values[i]["present_temperature"] for i in self.ids], dtype=float)
-        self.health["input_voltage_v"] = volts * table["present_input_voltage"].scale
-        self.health["temperature_c"] = temps * table["present_temperature"].scale
-        self.stats.extra["max_temperature_c"] = float(self.health["temperature_c"].max())
-        self.stats.extra["min_input_voltage_v"] = float(self.health["input_voltage_v"].min())
+        self._health["input_voltage_v"] = volts * table["present_input_voltage"].scale
+        self._health["temperature_c"] = temps * table["present_temperature"].scale
+        self.stats.extra["max_temperature_c"] = float(self._health["temperature_c"].max())
+        self.stats.extra["min_input_voltage_v"] = float(self._health["input_voltage_v"].min())
+
+    def health(self) -> dict[str, np.ndarray]:
+        """The servos' slow readings, head to tail, as of the last slow read (every
+        ``slow_every`` cycles): ``input_voltage_v`` (N,) and ``temperature_c`` (N,); empty
+        before the first."""
+        return dict(self._health)
 
     def _send_command(self, position_rad: np.ndarray) -> None:
         ticks, clipped = self.converter.goal_ticks(position_rad, self.goal_terms)

@@ -6,10 +6,10 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
 from snakebot.telemetry.scene import KinematicLinkPoses, frame_transforms, scene_update
+from snakebot.types import JointCommand
 
 
 def test_straight_joints_lay_the_links_head_to_tail_along_minus_x() -> None:

@@ -170,9 +170,9 @@ def test_slow_rate_reads_report_voltage_and_temperature(bench: Bench) -> None:
     with bench.backend() as backend:
         for _ in range(10):
             backend.read_state()
-        assert backend.health["temperature_c"][2] == 55.0
+        assert backend.health()["temperature_c"][2] == 55.0
         assert backend.stats.extra["max_temperature_c"] == 55.0
-        assert backend.health["input_voltage_v"] == pytest.approx(np.full(12, 11.1))
+        assert backend.health()["input_voltage_v"] == pytest.approx(np.full(12, 11.1))
 
 
 def test_xm430_effort_is_current_times_the_torque_constant() -> None:
