@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from snakebot.config import bounds
+from snakebot.config import bounds, paths
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.ports import check_port
 from snakebot.config.schema import (
@@ -38,13 +37,10 @@ BAUD_RATES = (9600, 57600, 115200, 1_000_000, 2_000_000, 3_000_000, 4_000_000, 4
 def config_search_path() -> list[Path]:
     """Folders searched for ``robots/<name>.toml``, first match wins.
 
-    ``$SNAKEBOT_CONFIG_PATH`` (os.pathsep-separated), then ``./firmware_configs``, then the
-    ``firmware_configs/`` of the source tree snakebot was installed from.
+    ``$SNAKEBOT_CONFIG_PATH`` (os.pathsep-separated), ``./firmware_configs``, the user's config
+    directory, then the robots shipped with snakebot (snakebot.config.paths says where).
     """
-    paths = [Path(p) for p in os.environ.get("SNAKEBOT_CONFIG_PATH", "").split(os.pathsep) if p]
-    paths.append(Path.cwd() / "firmware_configs")
-    paths.append(Path(__file__).resolve().parents[2] / "firmware_configs")
-    return paths
+    return [folder.path for folder in paths.config_search_path()]
 
 
 def robot_names() -> list[str]:
