@@ -173,3 +173,71 @@ def os_reason(exc: OSError) -> str:
     """What the operating system said, with the file it said it about."""
     reason = exc.strerror or str(exc)
     return f"{reason} ({exc.filename})" if exc.filename else reason
+
+
+def named_by_path(robot: str | None) -> bool:
+    """True when ``--robot`` named a file (``.toml`` or an existing path), not a robot name."""
+    return robot is not None and (robot.endswith(".toml") or Path(robot).is_file())
+
+
+def robot_write_target(args: argparse.Namespace, source: Path, what: str) -> Path | None:
+    """The robot file a command may write ``what`` into, or None when it must write nothing.
+
+    ``--out FILE`` (a copy of the robot file with the new values; the original is untouched),
+    else the robot file itself when ``--robot`` named it by path. A robot named by name (or the
+    default) is never written: it may be a file shipped inside the installed package.
+    ``--dry-run`` writes nothing. UsageError if ``--out`` is the shipped file itself.
+    """
+    from snakebot.config.paths import shipped_configs
+
+    if getattr(args, "dry_run", False):
+        return None
+    out: Path | None = getattr(args, "out", None)
+    target = out if out is not None else (source if named_by_path(args.robot) else None)
+    if target is None:
+        return None
+    shipped = shipped_configs().resolve()
+    if target.resolve().is_relative_to(shipped) and "_data" in shipped.parts:
+        raise UsageError(
+            f"{target} is a robot file installed with snakebot; write {what} elsewhere with "
+            "--out FILE (a copy) and use --robot FILE from then on"
+        )
+    return target
+
+
+def copy_for_write(source: Path, target: Path) -> None:
+    """Start ``target`` as a copy of robot file ``source`` (nothing to do when they are one);
+    OutputError naming ``target`` if it cannot be written."""
+    if target.resolve() == source.resolve():
+        return
+    try:
+        _make_folder(target.parent)
+        target.write_bytes(source.read_bytes())
+    except OSError as exc:
+        raise OutputError(target, f"cannot write the robot file: {os_reason(exc)}") from exc
+
+
+def not_written_note(args: argparse.Namespace, what: str) -> str:
+    """Why a command left every robot file as it was."""
+    if getattr(args, "dry_run", False):
+        return f"dry run: {what} not written"
+    return (f"{what} not written: --robot named a robot, not a file; pass --robot FILE.toml to "
+            "update that file, or --out FILE for a copy with the new values")
+
+
+def add_write_back_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--out FILE`` and ``--dry-run`` (``--no-write`` kept as its old name) for a command
+    that writes its result (``what``) into a robot file."""
+    parser.add_argument(
+        "--out",
+        type=Path,
+        metavar="FILE",
+        help=f"write a copy of the robot file with the new {what} here (the original stays)",
+    )
+    parser.add_argument(
+        "--dry-run",
+        "--no-write",
+        dest="dry_run",
+        action="store_true",
+        help=f"write no {what} anywhere (without it, they go into --robot FILE or --out)",
+    )

@@ -19,10 +19,11 @@ from snakebot import __version__
 from snakebot.errors import SnakebotError, UsageError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
-COMMANDS = (
+COMMANDS: tuple[str, ...] = (
     "run", "drive", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune",
     "sysid",
 )
+COMMANDS += ("robots", "ports")  # issue 9: where robots come from, which serial ports exist
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 

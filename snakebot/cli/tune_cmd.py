@@ -12,15 +12,19 @@ from typing import TYPE_CHECKING, Any
 from snakebot.cli.common import (
     RATE_HZ,
     add_robot_option,
+    add_write_back_options,
     bounded_float,
     check_folder,
     check_writable,
+    copy_for_write,
     finite_float,
+    not_written_note,
     port_arg,
     positive_float,
     positive_int,
     print_json,
     robot_name,
+    robot_write_target,
     write_report,
 )
 from snakebot.config import RobotConfig, load_robot
@@ -213,7 +217,8 @@ def _add_gains_parser(commands: Any) -> None:
         description="Each candidate: one small step per tested joint while the others hold, "
         "then the reference gait. Keeps the candidate with the lowest gait tracking error "
         "whose steps overshoot at most --max-overshoot and settle, and whose gait never holds "
-        "a joint at its torque limit for long; writes it to the robot file's [gains].",
+        "a joint at its torque limit for long; writes it to the robot file's [gains] when "
+        "--robot names a file (or to a copy with --out).",
     )
     add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
@@ -240,7 +245,7 @@ def _add_gains_parser(commands: Any) -> None:
         "the current one; the twin has no I term)",
     )
     parser.add_argument("--no-chirp", action="store_true", help="skip the chirp measurements")
-    parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
+    add_write_back_options(parser, "gains")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -254,6 +259,7 @@ def run_gains(args: argparse.Namespace) -> int:
     hardware = args.backend == "dynamixel"
     robot = load_robot(robot_name(args, hardware=hardware, what="tune gains --backend dynamixel"))
     _check_outputs(args)
+    target = robot_write_target(args, robot.source, "the gains")
     joints = tuple(range(robot.joint_count))
     if args.joints:
         joints = tuple(_indices("--joints", args.joints, robot.joint_count))
@@ -290,8 +296,11 @@ def run_gains(args: argparse.Namespace) -> int:
             listener=progress,
         )
     summary = result.summary(robot, test)
-    if result.improved and not args.no_write:
-        summary["written_to"] = str(write_gains(robot, result.best.gains))
+    if result.improved and target is not None:
+        copy_for_write(robot.source, target)
+        summary["written_to"] = str(write_gains(robot, result.best.gains, path=target))
+    elif result.improved:
+        summary["not_written"] = not_written_note(args, "the gains")
     if args.report is not None:
         from snakebot.tuning.plots import gain_plots
 
@@ -329,6 +338,6 @@ def _indices(option: str, text: str, count: int) -> list[int]:
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse an unwritable --out or --report before any tuning (which takes minutes)."""
     if getattr(args, "out", None) is not None:
-        check_writable(args.out, "gait file")
+        check_writable(args.out, "gait file" if args.tune_command == "gait" else "robot file")
     if args.report is not None:
         check_folder(args.report, "report")

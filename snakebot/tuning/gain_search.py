@@ -103,10 +103,13 @@ def search_gains(
     return GainSearch(scores[0], best, tuple(scores), before, after)
 
 
-def write_gains(robot: RobotConfig, gains: ServoGains) -> Path:
-    """Set ``[gains]`` of the robot file in place (comments and layout kept)."""
+def write_gains(robot: RobotConfig, gains: ServoGains, path: Path | None = None) -> Path:
+    """Set ``[gains]`` of robot file ``path`` (default the robot's own file) in place, comments
+    and layout kept; returns the path written. ConfigError naming the file if it cannot be read,
+    or if the edit would not parse back."""
+    target = robot.source if path is None else path
     set_table_values(
-        robot.source,
+        target,
         "gains",
         {
             "position_p": gains.position_p,
@@ -114,7 +117,7 @@ def write_gains(robot: RobotConfig, gains: ServoGains) -> Path:
             "position_d": gains.position_d,
         },
     )
-    return robot.source
+    return target
 
 
 def _key(score: GainScore) -> tuple[float, float]:

@@ -105,7 +105,8 @@ def gains_summary_text(summary: dict[str, Any]) -> str:
         f"{best['position_p']}/{best['position_i']}/{best['position_d']}",
         f"  written to {summary['written_to']}"
         if "written_to" in summary
-        else "  robot file unchanged",
+        else "  robot file unchanged"
+        + (f": {summary['not_written']}" if "not_written" in summary else ""),
     ]
     return "\n".join(lines)
 
