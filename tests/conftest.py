@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-import os
 import shutil
 from pathlib import Path
 
 import pytest
 
+# MUJOCO_GL is not preset here: importing snakebot's backends picks the offscreen platform the way
+# any program using snakebot gets it, before a test module's own `import mujoco` could fix GLFW.
+import snakebot.backends  # noqa: F401
+
 REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "firmware_configs"
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 
 @pytest.fixture

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import os
 import sys
 import traceback
 import warnings
@@ -16,6 +15,7 @@ from collections.abc import Sequence
 from typing import TextIO
 
 from snakebot import __version__
+from snakebot.backends.offscreen_gl import choose_offscreen_gl
 from snakebot.errors import SnakebotError, UsageError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
@@ -60,6 +60,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     Ctrl-C at any point, building the parser (which imports every command) included, ends with
     ``snakebot: interrupted`` and 130, never a traceback.
     """
+    # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
+    # without a display only EGL or OSMesa render --video offscreen.
+    choose_offscreen_gl()
     try:
         return _main(argv)
     except KeyboardInterrupt:
@@ -97,10 +100,6 @@ def _main(argv: Sequence[str] | None) -> int:
 def entry_point() -> None:
     """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
     try:
-        # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
-        # on Linux without a display only EGL renders --video offscreen (twin/video.py).
-        if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-            os.environ.setdefault("MUJOCO_GL", "egl")
         warnings.showwarning = _show_warning
         code = main()
     except KeyboardInterrupt:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 import time
@@ -220,7 +221,7 @@ def _cycle_hooks(
         from snakebot.backends.twin.viewer import PassiveViewer
 
         hooks.append(stack.enter_context(PassiveViewer(backend)))
-    if not args.json and sys.stderr.isatty() and plan.duration_s >= 5:
+    if not args.json and sys.stderr.isatty() and (plan.duration_s >= 5 or args.video):
         hooks.append(ProgressLine(plan))
     return hooks
 
@@ -236,6 +237,8 @@ class VideoOutput:
         from snakebot.backends.twin.video import VideoRecorder
 
         self.path = path
+        platform = os.environ.get("MUJOCO_GL") or "the default OpenGL platform"
+        print(f"snakebot: rendering {path} offscreen ({platform})", file=sys.stderr, flush=True)
         with self._failures("cannot record the video"):
             self._recorder = VideoRecorder(backend, path, rate_hz)
 
@@ -250,7 +253,8 @@ class VideoOutput:
         except mujoco.FatalError as exc:
             raise OutputError(
                 self.path, f"{what}: no offscreen rendering ({exc}); on a machine without a "
-                "display set MUJOCO_GL=egl (or osmesa)"
+                "display install Mesa's EGL (libegl1) or OSMesa (libosmesa6), or set "
+                "MUJOCO_GL=egl (or osmesa) before anything imports mujoco"
             ) from exc
 
     def __call__(self, cycle: int, gait_time_s: float) -> None:
@@ -264,6 +268,7 @@ class VideoOutput:
     def __exit__(self, *exc_info: object) -> None:
         with self._failures("cannot finish the video"):
             self._recorder.__exit__(None, None, None)
+        print(f"snakebot: wrote {self._recorder.frames} frames to {self.path}", file=sys.stderr)
 
 
 def _chain(hooks: list[Any]) -> Any:

@@ -1,8 +1,12 @@
-"""Offscreen video of the twin with ``mujoco.Renderer`` (works headless with MUJOCO_GL=egl)."""
+"""Offscreen video of the twin with ``mujoco.Renderer``.
+
+Headless Linux needs ``MUJOCO_GL=egl`` or ``osmesa`` before ``mujoco`` is imported;
+snakebot.backends.offscreen_gl sets it when nothing else did (the twin package and the CLI call it
+first).
+"""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -11,12 +15,6 @@ import mujoco
 
 from snakebot.backends.twin.backend import Simulated
 from snakebot.errors import MissingDependencyError
-
-
-def _default_gl() -> None:
-    # On a headless Linux box GLFW has no display to open; EGL (Mesa) renders offscreen.
-    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY") and os.name == "posix":
-        os.environ["MUJOCO_GL"] = "egl"
 
 
 class VideoRecorder:
@@ -38,7 +36,6 @@ class VideoRecorder:
             raise MissingDependencyError(
                 "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
             ) from exc
-        _default_gl()
         self.backend = backend
         self.path = path
         self.every = max(1, round(rate_hz / fps))

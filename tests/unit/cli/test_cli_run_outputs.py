@@ -62,13 +62,37 @@ def test_an_unwritable_video_stops_the_run_before_it_starts(
 
 def test_video_renders_offscreen_without_a_display_or_mujoco_gl(tmp_path: Path) -> None:
     video = tmp_path / "run.mp4"
-    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY")}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
     done = subprocess.run(
         [sys.executable, "-m", "snakebot", "run", "--duration", "0.3", "--video", str(video)],
-        capture_output=True, text=True, timeout=120, env=env,
+        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
     )
     if sys.platform.startswith("linux"):
         assert done.returncode == 0, done.stderr
         assert video.stat().st_size > 1000
     else:  # elsewhere MuJoCo's default platform renders, or it is a clear error
         assert done.returncode in (0, 1), done.stderr
+
+
+HEADLESS_VIDEO_IN_PROCESS = """
+import sys
+from snakebot.cli.main import main
+sys.exit(main(["run", "--duration", "0.3", "--video", sys.argv[1]]))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="headless Linux rendering")
+def test_video_renders_headless_when_main_is_called_in_process(tmp_path: Path) -> None:
+    """main() from a script (not the console script) with nothing set: this was exit 1 ("no
+    offscreen rendering") because mujoco was imported before MUJOCO_GL was chosen."""
+    video = tmp_path / "run.mp4"
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
+    done = subprocess.run(
+        [sys.executable, "-c", HEADLESS_VIDEO_IN_PROCESS, str(video)],
+        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
+    )
+    assert done.returncode == 0, done.stderr
+    assert video.stat().st_size > 1000
+    assert f"rendering {video} offscreen" in done.stderr
