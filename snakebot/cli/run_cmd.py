@@ -182,6 +182,10 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("--video", str(args.video), "expected a video file name ending in "
                               f"{', '.join(VIDEO_SUFFIXES)}")
         check_writable(args.video, "video")
+    if args.viewer:
+        from snakebot.backends.twin.viewer import check_display
+
+        check_display()  # before --log opens: a refused run leaves an existing log as it was
     with contextlib.ExitStack() as stack:
         log = (
             stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))

@@ -96,3 +96,17 @@ def test_video_renders_headless_when_main_is_called_in_process(tmp_path: Path) -
     assert done.returncode == 0, done.stderr
     assert video.stat().st_size > 1000
     assert f"rendering {video} offscreen" in done.stderr
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a display-less Linux session")
+def test_viewer_without_a_display_leaves_an_existing_log_untouched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    log = tmp_path / "yesterday.csv"
+    log.write_text("time_s,joint\n0.0,0.1\n")
+    code, out, err = run(capsys, "--viewer", "--log", str(log))
+    assert code == 1 and out == ""
+    assert "--viewer needs a display" in err
+    assert log.read_text() == "time_s,joint\n0.0,0.1\n"
