@@ -7,8 +7,8 @@ import math
 from typing import Any
 
 from snakebot.cli.common import (
+    add_bus_options,
     add_robot_option,
-    port_arg,
     positive_float,
     print_json,
     robot_name,
@@ -28,8 +28,7 @@ def add_parser(subparsers: Any) -> None:
         "(joints[].zero_offset_rad; comments and layout kept). Homing Offset stays 0.",
     )
     add_robot_option(parser, hardware="always")
-    parser.add_argument("--port", type=port_arg,
-                        help="serial port (default: the robot's bus.port)")
+    add_bus_options(parser, baud=False)  # the rate comes from the robot's settings
     parser.add_argument("--max-offset-deg", type=positive_float, default=MAX_OFFSET_DEG,
                         help=f"refuse offsets beyond this (default {MAX_OFFSET_DEG:g})")
     parser.add_argument("--dry-run", action="store_true", help="show the offsets, write nothing")

@@ -11,6 +11,7 @@ import sys
 import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from snakebot.config.ports import check_port
 from snakebot.errors import ConfigError, OutputError, UsageError
@@ -241,3 +242,74 @@ def add_write_back_options(parser: argparse.ArgumentParser, what: str) -> None:
         action="store_true",
         help=f"write no {what} anywhere (without it, they go into --robot FILE or --out)",
     )
+
+
+def gait_arg(text: str) -> str:
+    """argparse type: a known gait name (built-in, plugin or registered), else a usage error
+    listing the gaits."""
+    from snakebot.errors import GaitError
+    from snakebot.gaits import get_spec
+
+    try:
+        get_spec(text)
+    except GaitError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def gait_list_arg(text: str) -> str:
+    """argparse type: comma-separated known gait names (kept as the text)."""
+    for name in (n.strip() for n in text.split(",")):
+        if name:
+            gait_arg(name)
+    return text
+
+
+def baud_arg(text: str) -> int:
+    """argparse type: a Dynamixel baud rate (one of snakebot.config.loader.BAUD_RATES)."""
+    from snakebot.config.loader import BAUD_RATES
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value not in BAUD_RATES:
+        rates = ", ".join(map(str, BAUD_RATES))
+        raise argparse.ArgumentTypeError(f"expected one of {rates}, got {text!r}")
+    return value
+
+
+def add_bus_options(parser: Any, *, backend: str = "", baud: bool = True) -> None:
+    """``--port`` and ``--baud``, the same on every command: no default of their own, the robot
+    file's ``bus.port`` / ``bus.baud`` fill them in. ``backend`` names the option that makes them
+    apply (``--backend dynamixel``), for the help text."""
+    when = f"with {backend}; " if backend else ""
+    parser.add_argument(
+        "--port", type=port_arg,
+        help=f"serial port {when}(default: the robot's bus.port)",
+    )
+    if baud:
+        parser.add_argument(
+            "--baud", type=baud_arg,
+            help=f"baud rate {when}(default: the robot's bus.baud)",
+        )
+
+
+def add_dry_run(parser: Any, what: str) -> None:
+    """``--dry-run``: check every option and input, say what would happen, write nothing
+    (``what``: what the command would otherwise write)."""
+    parser.add_argument(
+        "--dry-run", action="store_true",
+        help=f"check everything and show the plan; write nothing ({what})",
+    )
+
+
+def report_dry_run(args: argparse.Namespace, plan: dict[str, object]) -> int:
+    """Print what a ``--dry-run`` would have done (``plan``; JSON with ``--json``); exit 0."""
+    if getattr(args, "json", False):
+        print_json({"dry_run": True, **plan})
+    else:
+        print("dry run: nothing was written or moved; the plan:")
+        for key, value in plan.items():
+            print(f"  {key:<14} {value}")
+    return 0

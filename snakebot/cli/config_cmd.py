@@ -6,7 +6,13 @@ import argparse
 import sys
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_name
+from snakebot.cli.common import (
+    add_bus_options,
+    add_robot_option,
+    baud_arg,
+    print_json,
+    robot_name,
+)
 from snakebot.config import load_robot
 from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
 from snakebot.setup.console import confirm
@@ -45,14 +51,14 @@ def add_parser(subparsers: Any) -> None:
     assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
     assign.add_argument("--from", dest="from_id", type=servo_id_arg,
                         help="only the servo answering as this ID (default: the only servo)")
-    assign.add_argument("--baud", type=int,
+    assign.add_argument("--new-baud", type=baud_arg,
                         help="baud rate to set (default: the robot's bus.baud)")
     assign.set_defaults(handler=run_assign)
 
 
 def _robot_and_port(parser: argparse.ArgumentParser) -> None:
     add_robot_option(parser, hardware="always")
-    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
+    add_bus_options(parser, baud=False)  # servos are found at any rate
 
 
 def servo_id_arg(text: str) -> int:
@@ -139,7 +145,7 @@ def run_apply(args: argparse.Namespace) -> int:
 def run_assign(args: argparse.Namespace) -> int:
     """Find the lone servo, set its ID and baud rate, verify."""
     robot = load_robot(robot_name(args, hardware=True, what="config assign-id"))
-    baud = args.baud or robot.bus.baud
+    baud = args.new_baud or robot.bus.baud
     port = args.port or robot.bus.port
     where = f"ID {args.from_id}" if args.from_id is not None else "the servo"
     print(f"searching for {where} at {', '.join(map(str, SEARCH_BAUDS))} baud ...",

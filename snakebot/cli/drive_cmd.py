@@ -12,7 +12,17 @@ from typing import Any
 import numpy as np
 
 from snakebot.backends.base import Backend
-from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
+from snakebot.cli.common import (
+    add_bus_options,
+    add_dry_run,
+    add_robot_option,
+    check_writable,
+    gait_list_arg,
+    positive_float,
+    print_json,
+    report_dry_run,
+    robot_name,
+)
 from snakebot.cli.run_cmd import make_backend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
@@ -49,8 +59,7 @@ def add_parser(subparsers: Any) -> None:
         default="sim",
         help="sim: the MuJoCo twin (default); dynamixel: the servo chain",
     )
-    parser.add_argument("--port", help="serial port for --backend dynamixel (default: robot)")
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_bus_options(parser, backend="--backend dynamixel")
     parser.add_argument(
         "--allow-extra-servos",
         action="store_true",
@@ -59,6 +68,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--gaits",
+        type=gait_list_arg,
         help="comma-separated gaits for keys 1-9 (default: serpenoid on all-yaw robots; "
         f"{','.join(SPATIAL_GAITS)} on yaw/pitch ones)",
     )
@@ -105,7 +115,10 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run, viewer=False, video=None, directional=None, terrain=None)
+    add_dry_run(parser, "no servo moves, no log or script")
+    parser.set_defaults(
+        handler=run, writes=True, viewer=False, video=None, directional=None, terrain=None
+    )
 
 
 def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoice]:
@@ -178,6 +191,14 @@ def run(args: argparse.Namespace) -> int:
     if args.backend == "sim" and args.script is None:
         args.realtime = True  # a person drives: the twin keeps to the wall clock
     backend = make_backend(robot, args)
+    if args.dry_run:
+        for path, what in ((args.log, "log"), (args.record, "script")):
+            if path is not None:
+                check_writable(path, what)
+        return report_dry_run(args, {
+            "robot": robot.name, "gaits": ",".join(c.name for c in choices),
+            "backend": args.backend, "log": args.log, "record": args.record,
+        })
     safety = SafetyLayer.for_robot(robot)
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     with contextlib.ExitStack() as stack:

@@ -20,7 +20,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-from snakebot.cli.common import add_robot_option, print_json
+from snakebot.cli.common import add_robot_option, baud_arg, print_json
 from snakebot.config import RobotConfig, load_robot
 from snakebot.errors import ConfigError
 
@@ -41,7 +41,7 @@ def add_parser(subparsers: Any) -> None:
         "power-cycles every servo.",
     )
     add_robot_option(parser)
-    parser.add_argument("--baud", type=int, help="line rate (default: the robot's bus.baud)")
+    parser.add_argument("--baud", type=baud_arg, help="line rate (default: the robot's bus.baud)")
     parser.add_argument(
         "--physics",
         action="store_true",

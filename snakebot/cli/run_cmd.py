@@ -16,11 +16,14 @@ from typing import Any
 from snakebot.backends.base import Backend
 from snakebot.cli.common import (
     RATE_HZ,
+    add_bus_options,
+    add_dry_run,
     add_robot_option,
     check_writable,
-    port_arg,
+    gait_arg,
     positive_float,
     print_json,
+    report_dry_run,
     robot_name,
 )
 from snakebot.config import RobotConfig
@@ -38,7 +41,9 @@ def add_parser(subparsers: Any) -> None:
     """Register the ``run`` command."""
     parser = subparsers.add_parser("run", help="run a gait on the twin (default) or the robot")
     add_robot_option(parser, hardware="with --backend dynamixel")
-    parser.add_argument("--gait", help="gait name (see `snakebot gaits`; default serpenoid)")
+    parser.add_argument(
+        "--gait", type=gait_arg, help="gait name (see `snakebot gaits`; default serpenoid)"
+    )
     parser.add_argument(
         "--set",
         action="append",
@@ -85,10 +90,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--video", type=Path, help="render the twin to an MP4 file (offscreen)")
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
-    parser.add_argument(
-        "--port", type=port_arg, help="serial port for --backend dynamixel (default: robot config)"
-    )
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_bus_options(parser, backend="--backend dynamixel")
     parser.add_argument(
         "--allow-extra-servos",
         action="store_true",
@@ -96,7 +98,8 @@ def add_parser(subparsers: Any) -> None:
         "expected (left alone); without it connect refuses, naming them",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run)
+    add_dry_run(parser, "no servo moves, no log or video")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def build_gait(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> tuple[str, Gait]:
@@ -186,6 +189,14 @@ def run(args: argparse.Namespace) -> int:
         from snakebot.backends.twin.viewer import check_display
 
         check_display()  # before --log opens: a refused run leaves an existing log as it was
+    if args.dry_run:
+        if args.log:
+            check_writable(args.log, "log")
+        return report_dry_run(args, {
+            "robot": robot.name, "gait": gait_name, "backend": args.backend,
+            "duration_s": args.duration, "rate_hz": args.rate, "log": args.log,
+            "video": args.video,
+        })
     with contextlib.ExitStack() as stack:
         log = (
             stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))

@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from snakebot.backends.dynamixel.faults import decode_hardware_error
-from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_name
+from snakebot.cli.common import add_bus_options, add_robot_option, print_json, robot_name
 from snakebot.cli.config_cmd import servo_id_arg
 from snakebot.config import load_robot
 from snakebot.errors import BusError
@@ -47,9 +47,7 @@ def add_parser(subparsers: Any) -> None:
 
 def _port(parser: argparse.ArgumentParser) -> None:
     add_robot_option(parser, hardware="always")
-    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
-    parser.add_argument("--baud", type=int,
-                        help="the rate the servo listens at (default: the robot's bus.baud)")
+    add_bus_options(parser)
 
 
 def _link(args: argparse.Namespace, what: str) -> Link:

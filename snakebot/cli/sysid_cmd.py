@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot.cli.common import (
+    add_bus_options,
     add_robot_option,
     add_write_back_options,
     check_folder,
@@ -15,7 +16,6 @@ from snakebot.cli.common import (
     copy_for_write,
     finite_float,
     not_written_note,
-    port_arg,
     positive_float,
     positive_int,
     print_json,
@@ -55,8 +55,7 @@ def add_parser(subparsers: Any) -> None:
     group = parser.add_argument_group("recording a log (--record)")
     group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
     group.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    group.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
-    group.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_bus_options(group, backend="--backend dynamixel")
     group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
     group.add_argument(
         "--hold",

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from snakebot.cli.common import (
     RATE_HZ,
+    add_bus_options,
     add_robot_option,
     add_write_back_options,
     bounded_float,
@@ -18,8 +19,8 @@ from snakebot.cli.common import (
     check_writable,
     copy_for_write,
     finite_float,
+    gait_arg,
     not_written_note,
-    port_arg,
     positive_float,
     positive_int,
     print_json,
@@ -59,7 +60,9 @@ def _add_gait_parser(commands: Any) -> None:
         "ground are penalised so the best gait is playable on the robot.",
     )
     add_robot_option(parser)
-    parser.add_argument("--gait", default="serpenoid", help="gait to tune (default serpenoid)")
+    parser.add_argument(
+        "--gait", type=gait_arg, default="serpenoid", help="gait to tune (default serpenoid)"
+    )
     parser.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE", help="fix a gait parameter"
     )
@@ -222,11 +225,12 @@ def _add_gains_parser(commands: Any) -> None:
     )
     add_robot_option(parser, hardware="with --backend dynamixel")
     parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    parser.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_bus_options(parser, backend="--backend dynamixel")
     parser.add_argument("--joints", help="joint indices to step-test, e.g. 0,3 (default all)")
     parser.add_argument(
-        "--gait", help="reference gait (default: sidewinding with pitch joints, else serpenoid)"
+        "--gait",
+        type=gait_arg,
+        help="reference gait (default: sidewinding with pitch joints, else serpenoid)",
     )
     parser.add_argument("--gait-duration", type=positive_float, default=6.0, metavar="S")
     parser.add_argument(

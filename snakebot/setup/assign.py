@@ -116,7 +116,7 @@ def assign_id(
     try:
         index = table.baud_index(baud)
     except ValueError as exc:
-        raise SetupError(f"--baud {baud}: {exc}") from None
+        raise SetupError(f"baud rate {baud}: {exc}") from None
     _check_free(link, servo, to_id, {servo.baud, baud})
     link.bus.table = table
     bus = link.at(servo.baud)
