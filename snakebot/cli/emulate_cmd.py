@@ -60,7 +60,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--scramble", type=int, metavar="SEED",
                         help="start the robot's servos with wrong settings (ignored when the "
                         "state file exists)")
-    parser.set_defaults(handler=run)
+    # writes=False: the state file is the emulated servos' own EEPROM, not an output
+    parser.set_defaults(handler=run, writes=False)
 
 
 def _bench(

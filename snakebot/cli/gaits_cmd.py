@@ -19,7 +19,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("name", nargs="?", type=gait_arg, help="show only this gait")
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=False)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -154,7 +154,8 @@ def _main(argv: Sequence[str] | None) -> int:
     except SystemExit as exc:  # argparse: --help or --version (0)
         return int(exc.code or 0)
     except ParseError as exc:
-        exc.parser.print_usage(sys.stderr)
+        if "--json" not in words:
+            exc.parser.print_usage(sys.stderr)
         return _fail(f"{exc.parser.prog}: error: {exc.message}", EXIT_USAGE, "--json" in words)
     as_json = bool(getattr(args, "json", False))
     try:
@@ -186,10 +187,12 @@ def names_an_option(exc: SnakebotError) -> bool:
 
 
 def _fail(message: str, code: int, as_json: bool) -> int:
-    """Print ``message`` on stderr, and with ``--json`` also ``{"error", "code"}`` on stdout."""
-    print(message, file=sys.stderr)
+    """Print ``message`` on stderr; with ``--json`` as one ``{"error", "code"}`` object there
+    instead, so stdout holds only what the command itself printed (a scan's findings, say)."""
     if as_json:
-        print(json.dumps({"error": message, "code": code}), flush=True)
+        print(json.dumps({"error": message, "code": code}, ensure_ascii=False), file=sys.stderr)
+    else:
+        print(message, file=sys.stderr)
     return code
 
 

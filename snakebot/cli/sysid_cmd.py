@@ -19,13 +19,14 @@ from snakebot.cli.common import (
     positive_float,
     positive_int,
     print_json,
+    report_dry_run,
     robot_name,
     robot_write_target,
     write_report,
 )
 from snakebot.config import load_robot
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
-from snakebot.errors import ConfigError
+from snakebot.errors import UsageError
 
 
 def add_parser(subparsers: Any) -> None:
@@ -67,7 +68,7 @@ def add_parser(subparsers: Any) -> None:
     group.add_argument("--amplitude", type=positive_float, default=0.12, metavar="RAD")
     group.add_argument("--duration", type=positive_float, default=4.0, metavar="S")
     group.add_argument("--stop-hz", type=positive_float, default=6.0, metavar="HZ")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -78,6 +79,12 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.record is not None:
         check_writable(args.record, "log")
+        if args.dry_run:
+            return report_dry_run(args, {
+                "robot": robot.name, "backend": args.backend, "record": args.record,
+                "joint": args.joint, "hold_rad": args.hold, "amplitude_rad": args.amplitude,
+                "duration_s": args.duration,
+            })
         return _record(robot, args)
     if args.report is not None:
         check_folder(args.report, "report")
@@ -85,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         check_writable(args.out, "robot file")
     target = robot_write_target(args, robot.source, "the servo parameters")
     if not args.logs:
-        raise ConfigError("LOG", "", "give one or more telemetry logs, or --record LOG")
+        raise UsageError("give one or more telemetry logs (LOG ...), or --record LOG")
     from snakebot.tuning.config_edit import set_table_values
     from snakebot.tuning.sysid import FIELDS, fit_servo, load_log
 
@@ -116,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
             summary["written_to"] = f"{target} [twin.servo]"
         else:
             summary["not_written"] = not_written_note(args, "the servo parameters")
-    if args.report is not None:
+    if args.report is not None and not args.dry_run:
         from snakebot.tuning.plots import sysid_plots
 
         write_report(args.report, summary, lambda directory: sysid_plots(result, logs, directory))

@@ -124,6 +124,10 @@ def _add_gait_parser(commands: Any) -> None:
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    parser.add_argument(
+        "--dry-run", action="store_true", help="tune and report, but write no --out or --report"
+    )
+    parser.set_defaults(writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -180,10 +184,12 @@ def run_gait(args: argparse.Namespace) -> int:
     if bar is not None:
         bar.finish()
     summary = result.summary()
-    if args.out is not None and result.best.feasible:
+    if args.dry_run:
+        summary["not_written"] = "dry run: no gait file or report written"
+    elif args.out is not None and result.best.feasible:
         save_best_gait(result, args.out)
         summary["gait_file"] = str(args.out)
-    if args.report is not None:
+    if args.report is not None and not args.dry_run:
         from snakebot.tuning.plots import gait_plots
 
         write_report(args.report, summary, lambda directory: gait_plots(result, directory))
@@ -252,6 +258,7 @@ def _add_gains_parser(commands: Any) -> None:
     add_write_back_options(parser, "gains")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.set_defaults(writes=True)
 
 
 def run_gains(args: argparse.Namespace) -> int:
@@ -305,7 +312,7 @@ def run_gains(args: argparse.Namespace) -> int:
         summary["written_to"] = str(write_gains(robot, result.best.gains, path=target))
     elif result.improved:
         summary["not_written"] = not_written_note(args, "the gains")
-    if args.report is not None:
+    if args.report is not None and not args.dry_run:
         from snakebot.tuning.plots import gain_plots
 
         write_report(args.report, summary, lambda directory: gain_plots(result, test, directory))
