@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK  (argcomplete's marker: this program answers completion requests)
 """``snakebot`` command line: ``main(argv) -> int``; exit codes are decided here and only here.
 
 Exit codes: 0 success, 1 a user-fixable error (bad config, unwritable output, bus failure, servo
@@ -10,6 +11,7 @@ import argparse
 import difflib
 import importlib
 import json
+import os
 import sys
 import traceback
 import warnings
@@ -149,6 +151,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
+    if "_ARGCOMPLETE" in os.environ:
+        _complete(parser)
     try:
         args = parser.parse_args(words)
     except SystemExit as exc:  # argparse: --help or --version (0)
@@ -176,6 +180,17 @@ def _main(argv: Sequence[str] | None) -> int:
             EXIT_BUG,
             as_json,
         )
+
+
+def _complete(parser: argparse.ArgumentParser) -> None:
+    """Answer a shell's completion request (argcomplete's protocol: the optional
+    ``snakebot[completion]`` extra, docs/cli.md); argcomplete prints the candidates and exits.
+    Without argcomplete installed, nothing happens."""
+    try:
+        import argcomplete
+    except ImportError:
+        return
+    argcomplete.autocomplete(parser)
 
 
 def names_an_option(exc: SnakebotError) -> bool:
