@@ -44,7 +44,8 @@ def config_search_path() -> list[Path]:
 
 
 def robot_names() -> list[str]:
-    """Names of the robots found on the search path."""
+    """Names (file stems, sorted, each once) of the robots in ``robots/`` of every folder on the
+    search path; a name in two folders resolves to the first (``snakebot robots`` shows both)."""
     names: set[str] = set()
     for folder in config_search_path():
         names.update(p.stem for p in (folder / "robots").glob("*.toml"))
@@ -52,7 +53,9 @@ def robot_names() -> list[str]:
 
 
 def resolve_robot_path(name_or_path: str | Path) -> Path:
-    """A robot file from a path, or a name looked up on the search path."""
+    """A robot file from a path (``.toml`` or an existing path), or a name looked up on the
+    search path, first match wins. ConfigError naming the path ("robot file not found") or the
+    name (listing the known robots) when there is none."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
         if not candidate.is_file():
@@ -69,7 +72,9 @@ def resolve_robot_path(name_or_path: str | Path) -> Path:
 
 
 def load_servo_model(model: str, robot_path: Path) -> ServoModel:
-    """Read ``servos/<model>.toml`` beside the robot's folder (or on the search path)."""
+    """Read ``servos/<model>.toml`` beside the robot's folder, else the first on the search
+    path; ConfigError naming ``robot_path`` and its ``servo`` key if there is none, or naming the
+    servo file and key of its first invalid value."""
     folders = [robot_path.resolve().parent.parent, *config_search_path()]
     return parse_servo_file(find_servo_file(model, folders, robot_path))
 

@@ -18,7 +18,14 @@ from snakebot.errors import MissingDependencyError
 
 
 class VideoRecorder:
-    """Renders every k-th control cycle from the tracking camera and encodes an MP4."""
+    """Renders every k-th control cycle from the tracking camera and encodes a video.
+
+    ``rate_hz`` is the control rate; frames (``height`` x ``width`` RGB, uint8) are taken every
+    ``round(rate_hz / fps)`` cycles, so the file plays in real time. The file's folder is created.
+    Raises MissingDependencyError without imageio; imageio/ffmpeg's OSError or ValueError for a
+    file it cannot write; ``mujoco.FatalError`` when no OpenGL context can be made (no offscreen
+    platform: see snakebot.backends.offscreen_gl). ``frames`` counts the frames written.
+    """
 
     def __init__(
         self,
