@@ -23,6 +23,7 @@ class BuildPyWithData(build_py):
     """``build_py`` that also copies the data folders into ``snakebot/_data``."""
 
     def run(self) -> None:
+        """Build the package as usual, then copy the data folders (not for editable installs)."""
         super().run()
         if getattr(self, "editable_mode", False):
             return  # the editable package finds the checkout's own folders

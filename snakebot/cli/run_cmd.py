@@ -185,6 +185,9 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("--video", str(args.video), "expected a video file name ending in "
                               f"{', '.join(VIDEO_SUFFIXES)}")
         check_writable(args.video, "video")
+        from snakebot.backends.twin.video import require_video_writer
+
+        require_video_writer()  # before --log opens, like every other check
     if args.viewer:
         from snakebot.backends.twin.viewer import check_display
 

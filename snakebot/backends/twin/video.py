@@ -17,6 +17,18 @@ from snakebot.backends.twin.backend import Simulated
 from snakebot.errors import MissingDependencyError
 
 
+def require_video_writer() -> Any:
+    """The ``imageio.v2`` module; MissingDependencyError with the install command without it.
+    Cheap to call before any output opens."""
+    try:
+        import imageio.v2 as imageio
+    except ImportError as exc:
+        raise MissingDependencyError(
+            "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
+        ) from exc
+    return imageio
+
+
 class VideoRecorder:
     """Renders every k-th control cycle from the tracking camera and encodes a video.
 
@@ -37,12 +49,7 @@ class VideoRecorder:
         width: int = 640,
         height: int = 480,
     ) -> None:
-        try:
-            import imageio.v2 as imageio
-        except ImportError as exc:
-            raise MissingDependencyError(
-                "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
-            ) from exc
+        imageio = require_video_writer()
         self.backend = backend
         self.path = path
         self.every = max(1, round(rate_hz / fps))
