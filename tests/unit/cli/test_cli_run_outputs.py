@@ -110,3 +110,18 @@ def test_viewer_without_a_display_leaves_an_existing_log_untouched(
     assert code == 1 and out == ""
     assert "--viewer needs a display" in err
     assert log.read_text() == "time_s,joint\n0.0,0.1\n"
+
+
+def test_video_without_imageio_leaves_an_existing_log_untouched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The `video` extra not installed: importing imageio fails as it would without it.
+    monkeypatch.setitem(sys.modules, "imageio", None)
+    monkeypatch.setitem(sys.modules, "imageio.v2", None)
+    log = tmp_path / "yesterday.csv"
+    log.write_text("time_s,joint\n0.0,0.1\n")
+    code, out, err = run(capsys, "--video", str(tmp_path / "run.mp4"), "--log", str(log))
+    assert code == 1 and out == ""
+    assert "pip install 'snakebot[video]'" in err
+    assert log.read_text() == "time_s,joint\n0.0,0.1\n"
+    assert not (tmp_path / "run.mp4").exists()
