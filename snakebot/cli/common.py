@@ -246,12 +246,13 @@ def add_write_back_options(parser: argparse.ArgumentParser, what: str) -> None:
 
 def gait_arg(text: str) -> str:
     """argparse type: a known gait name (built-in, plugin or registered), else a usage error
-    listing the gaits."""
+    listing the gaits. Nothing is imported: a plugin gait that fails to load, or that two
+    plugins offer, is reported when used (exit 1, naming the plugin), not as bad usage."""
     from snakebot.errors import GaitError
-    from snakebot.gaits import get_spec
+    from snakebot.gaits import GAITS
 
     try:
-        get_spec(text)
+        GAITS.origin(text)
     except GaitError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
     return text
