@@ -19,12 +19,12 @@ from snakebot.backends.registry import (
     backend_names,
     get_backend_spec,
 )
-from snakebot.cli.common import port_arg
+from snakebot.cli.common import baud_arg, port_arg
 from snakebot.errors import BackendOptionError, ConfigError, UsageError
 from snakebot.session import DEFAULT_BACKEND
 
 # argparse types where the command line checks a value before any backend is made
-_TYPES: dict[str, Callable[[str], Any]] = {"port": port_arg, "baud": int}
+_TYPES: dict[str, Callable[[str], Any]] = {"port": port_arg, "baud": baud_arg}
 _CHOICES: dict[str, tuple[str, ...]] = {"directional": ("on", "off")}
 
 

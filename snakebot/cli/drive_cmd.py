@@ -17,7 +17,16 @@ from snakebot.cli.backend_options import (
     flag_errors,
     given_options,
 )
-from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
+from snakebot.cli.common import (
+    add_dry_run,
+    add_robot_option,
+    check_writable,
+    gait_list_arg,
+    positive_float,
+    print_json,
+    report_dry_run,
+    robot_name,
+)
 from snakebot.cli.telemetry_options import add_telemetry_options, drive_observer, open_telemetry
 from snakebot.config import RobotConfig, load_robot
 from snakebot.drive.controller import DriveController, GaitChoice
@@ -66,6 +75,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--gaits",
+        type=gait_list_arg,
         help="comma-separated gaits for keys 1-9 (default: serpenoid on all-yaw robots; "
         f"{','.join(SPATIAL_GAITS)} on yaw/pitch ones)",
     )
@@ -116,7 +126,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
     add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run)
+    add_dry_run(parser, "no servo moves, no log or script")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoice]:
@@ -180,6 +191,14 @@ def run(args: argparse.Namespace) -> int:
     source = make_source(args)
     if args.script is None or args.foxglove is not None:  # a person drives or watches
         given = watched(spec, given)
+    if args.dry_run:
+        for path, what in ((args.log, "log"), (args.record, "script")):
+            if path is not None:
+                check_writable(path, what)
+        return report_dry_run(args, {
+            "robot": robot.name, "gaits": ",".join(c.name for c in choices),
+            "backend": spec.name, "log": args.log, "record": args.record,
+        })
     with flag_errors(BACKEND_OPTIONS):
         snake = Snake.prepare(robot, spec, **given)
     backend = snake.backend

@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from snakebot.cli.common import print_json
+from snakebot.cli.common import gait_arg, print_json
 from snakebot.gaits import GAITS, GaitSpec, ParamSpec, get_spec
 from snakebot.plugins import Origin
 
@@ -17,9 +17,9 @@ def add_parser(subparsers: Any) -> None:
         "gaits",
         help="list gaits (built-in, plugins, ...) with their parameters, defaults and bounds",
     )
-    parser.add_argument("name", nargs="?", help="show only this gait")
+    parser.add_argument("name", nargs="?", type=gait_arg, help="show only this gait")
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=False)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -8,7 +8,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import check_folder, check_writable, print_json
+from snakebot.cli.common import (
+    add_dry_run,
+    check_folder,
+    check_writable,
+    print_json,
+    report_dry_run,
+)
 from snakebot.errors import ConfigError
 from snakebot.telemetry import TelemetryLog, read_log
 
@@ -28,19 +34,23 @@ def add_parser(subparsers: Any) -> None:
     plot.add_argument("log", type=Path, help="telemetry CSV")
     plot.add_argument("--out", type=Path, help="folder for the PNGs (default: LOG without "
                       ".csv, plus _plots)")
-    plot.set_defaults(handler=run_plot)
+    plot.add_argument("--json", action="store_true", help="list the PNGs as JSON")
+    add_dry_run(plot, "no PNGs")
+    plot.set_defaults(handler=run_plot, writes=True)
 
     info = actions.add_parser("info", help="a summary of the run, from the file")
     info.add_argument("log", type=Path, help="telemetry CSV")
     info.add_argument("--json", action="store_true", help="print one JSON object")
-    info.set_defaults(handler=run_info)
+    info.set_defaults(handler=run_info, writes=False)
 
     export = actions.add_parser("export", help="write the log as MCAP (Foxglove) or Parquet")
     export.add_argument("log", type=Path, help="telemetry CSV")
     export.add_argument("--format", choices=("mcap", "parquet"), required=True)
     export.add_argument("--out", type=Path, help="output file (default: LOG with the "
                         "format's suffix)")
-    export.set_defaults(handler=run_export)
+    export.add_argument("--json", action="store_true", help="print what was written as JSON")
+    add_dry_run(export, "no output file")
+    export.set_defaults(handler=run_export, writes=True)
 
 
 def _load(path: Path) -> tuple[TelemetryLog, dict[str, Any] | None]:
@@ -59,9 +69,14 @@ def run_plot(args: argparse.Namespace) -> int:
     pyplot()  # a missing matplotlib is said before the log is read
     log, sidecar = _load(args.log)
     folder = args.out or args.log.with_name(args.log.stem + "_plots")
+    if args.dry_run:
+        return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": folder})
     check_folder(folder, "plots")
     start = time.perf_counter()
     paths = plot_log(log, sidecar, folder)
+    if args.json:
+        print_json({"log": str(args.log), "rows": len(log.values), "plots": list(map(str, paths))})
+        return 0
     print(f"{len(paths)} plots of {len(log.values)} rows in {folder} "
           f"({time.perf_counter() - start:.1f} s):")
     for path in paths:
@@ -117,8 +132,14 @@ def run_export(args: argparse.Namespace) -> int:
     if out.resolve() == args.log.resolve():
         raise ConfigError("--out", "", f"{out} is the log itself; name another file")
     log, sidecar = _load(args.log)
+    if args.dry_run:
+        return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": out,
+                                     "format": args.format})
     check_writable(out, f"{args.format} file")
     export = export_mcap if args.format == "mcap" else export_parquet
     rows = export(log, sidecar, out)
-    print(f"{out}: {rows} cycles as {args.format}")
+    if args.json:
+        print_json({"log": str(args.log), "out": str(out), "format": args.format, "rows": rows})
+    else:
+        print(f"{out}: {rows} cycles as {args.format}")
     return 0

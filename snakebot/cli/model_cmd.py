@@ -13,7 +13,15 @@ from snakebot.backends.twin.model_builder import (
     build_spec,
     compile_spec,
 )
-from snakebot.cli.common import add_robot_option, check_writable, os_reason, robot_name
+from snakebot.cli.common import (
+    add_dry_run,
+    add_robot_option,
+    check_writable,
+    os_reason,
+    print_json,
+    report_dry_run,
+    robot_name,
+)
 from snakebot.config.body import BodyConfig
 from snakebot.config.body_loader import load_robot_or_body
 from snakebot.errors import OutputError
@@ -31,7 +39,9 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--terrain", metavar="NAME[:KEY=VALUE,...]", help="flat (default) or cliff[:key=value,...]"
     )
-    parser.set_defaults(handler=run)
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    add_dry_run(parser, "no MJCF file")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -51,9 +61,16 @@ def run(args: argparse.Namespace) -> int:
         add_actuators(spec, robot)
         compile_spec(spec, robot)
         what = f"{robot.joint_count} joints"
+    xml = spec.to_xml()
+    if args.dry_run:
+        return report_dry_run(args, {"robot": robot.name, "model": what, "out": args.out,
+                                     "bytes": len(xml.encode())})
     try:
-        args.out.write_text(spec.to_xml())
+        args.out.write_text(xml)
     except OSError as exc:
         raise OutputError(args.out, f"cannot write the model: {os_reason(exc)}") from exc
-    print(f"wrote {args.out} ({robot.name}: {what})")
+    if args.json:
+        print_json({"robot": robot.name, "model": what, "out": str(args.out)})
+    else:
+        print(f"wrote {args.out} ({robot.name}: {what})")
     return 0

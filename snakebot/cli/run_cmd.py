@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 import time
@@ -23,10 +24,13 @@ from snakebot.cli.backend_options import (
 )
 from snakebot.cli.common import (
     RATE_HZ,
+    add_dry_run,
     add_robot_option,
     check_writable,
+    gait_arg,
     positive_float,
     print_json,
+    report_dry_run,
     robot_name,
 )
 from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
@@ -55,7 +59,9 @@ def add_parser(subparsers: Any) -> None:
     """Register the ``run`` command."""
     parser = subparsers.add_parser("run", help="run a gait on the twin (default) or the robot")
     add_robot_option(parser, hardware="with --backend dynamixel")
-    parser.add_argument("--gait", help=f"gait name (see `snakebot gaits`; default {DEFAULT_GAIT})")
+    parser.add_argument(
+        "--gait", type=gait_arg, help=f"gait name (see `snakebot gaits`; default {DEFAULT_GAIT})"
+    )
     parser.add_argument(
         "--set",
         action="append",
@@ -99,7 +105,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
     add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run)
+    add_dry_run(parser, "no servo moves, no log or video")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def prepare(args: argparse.Namespace, options: tuple[str, ...]) -> tuple[Snake, Any]:
@@ -171,6 +178,21 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("--video", str(args.video), "expected a video file name ending in "
                               f"{', '.join(VIDEO_SUFFIXES)}")
         check_writable(args.video, "video")
+        from snakebot.backends.twin.video import require_video_writer
+
+        require_video_writer()  # before --log opens, like every other check
+    if args.viewer:
+        from snakebot.backends.twin.viewer import check_display
+
+        check_display()  # before --log opens: a refused run leaves an existing log as it was
+    if args.dry_run:
+        if args.log:
+            check_writable(args.log, "log")
+        return report_dry_run(args, {
+            "robot": snake.robot.name, "gait": gait_name, "backend": spec.name,
+            "duration_s": args.duration, "rate_hz": args.rate, "log": args.log,
+            "video": args.video,
+        })
     with contextlib.ExitStack() as stack:
         telemetry = open_telemetry(
             stack, args, command="run", robot=snake.robot, backend=snake.backend,
@@ -220,7 +242,7 @@ def _cycle_hooks(
         from snakebot.backends.twin.viewer import PassiveViewer
 
         hooks.append(stack.enter_context(PassiveViewer(cast(Any, backend))))
-    if not args.json and sys.stderr.isatty() and args.duration >= 5:
+    if not args.json and sys.stderr.isatty() and (args.duration >= 5 or args.video):
         hooks.append(ProgressLine(args.duration))
     return hooks
 
@@ -244,6 +266,8 @@ class VideoOutput:
         from snakebot.backends.twin.video import VideoRecorder
 
         self.path = path
+        platform = os.environ.get("MUJOCO_GL") or "the default OpenGL platform"
+        print(f"snakebot: rendering {path} offscreen ({platform})", file=sys.stderr, flush=True)
         with self._failures("cannot record the video"):
             self._recorder = VideoRecorder(backend, path, rate_hz)
 
@@ -258,7 +282,8 @@ class VideoOutput:
         except mujoco.FatalError as exc:
             raise OutputError(
                 self.path, f"{what}: no offscreen rendering ({exc}); on a machine without a "
-                "display set MUJOCO_GL=egl (or osmesa)"
+                "display install Mesa's EGL (libegl1) or OSMesa (libosmesa6), or set "
+                "MUJOCO_GL=egl (or osmesa) before anything imports mujoco"
             ) from exc
 
     def __call__(self, cycle: int, gait_time_s: float) -> None:
@@ -272,6 +297,7 @@ class VideoOutput:
     def __exit__(self, *exc_info: object) -> None:
         with self._failures("cannot finish the video"):
             self._recorder.__exit__(None, None, None)
+        print(f"snakebot: wrote {self._recorder.frames} frames to {self.path}", file=sys.stderr)
 
 
 def _chain(hooks: list[Any]) -> Any:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from snakebot.config import bounds
+from snakebot.config import bounds, paths
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.ports import check_port
 from snakebot.config.schema import (
@@ -38,17 +37,15 @@ BAUD_RATES = (9600, 57600, 115200, 1_000_000, 2_000_000, 3_000_000, 4_000_000, 4
 def config_search_path() -> list[Path]:
     """Folders searched for ``robots/<name>.toml``, first match wins.
 
-    ``$SNAKEBOT_CONFIG_PATH`` (os.pathsep-separated), then ``./firmware_configs``, then the
-    ``firmware_configs/`` of the source tree snakebot was installed from.
+    ``$SNAKEBOT_CONFIG_PATH`` (os.pathsep-separated), ``./firmware_configs``, the user's config
+    directory, then the robots shipped with snakebot (snakebot.config.paths says where).
     """
-    paths = [Path(p) for p in os.environ.get("SNAKEBOT_CONFIG_PATH", "").split(os.pathsep) if p]
-    paths.append(Path.cwd() / "firmware_configs")
-    paths.append(Path(__file__).resolve().parents[2] / "firmware_configs")
-    return paths
+    return [folder.path for folder in paths.config_search_path()]
 
 
 def robot_names() -> list[str]:
-    """Names of the robots found on the search path."""
+    """Names (file stems, sorted, each once) of the robots in ``robots/`` of every folder on the
+    search path; a name in two folders resolves to the first (``snakebot robots`` shows both)."""
     names: set[str] = set()
     for folder in config_search_path():
         names.update(p.stem for p in (folder / "robots").glob("*.toml"))
@@ -56,7 +53,9 @@ def robot_names() -> list[str]:
 
 
 def resolve_robot_path(name_or_path: str | Path) -> Path:
-    """A robot file from a path, or a name looked up on the search path."""
+    """A robot file from a path (``.toml`` or an existing path), or a name looked up on the
+    search path, first match wins. ConfigError naming the path ("robot file not found") or the
+    name (listing the known robots) when there is none."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
         if not candidate.is_file():
@@ -73,7 +72,9 @@ def resolve_robot_path(name_or_path: str | Path) -> Path:
 
 
 def load_servo_model(model: str, robot_path: Path) -> ServoModel:
-    """Read ``servos/<model>.toml`` beside the robot's folder (or on the search path)."""
+    """Read ``servos/<model>.toml`` beside the robot's folder, else the first on the search
+    path; ConfigError naming ``robot_path`` and its ``servo`` key if there is none, or naming the
+    servo file and key of its first invalid value."""
     folders = [robot_path.resolve().parent.parent, *config_search_path()]
     return parse_servo_file(find_servo_file(model, folders, robot_path))
 

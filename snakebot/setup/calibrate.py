@@ -13,6 +13,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 from snakebot.backends.dynamixel.checks import check_settings
 from snakebot.backends.dynamixel.ticks import TickConverter
@@ -103,9 +104,13 @@ def refusals(
     return [f"{e}: widen the Position Limits in the settings" for e in errors]
 
 
-def write_offsets(robot: RobotConfig, zeros: Sequence[JointZero]) -> None:
-    """Write the new offsets into the robot file in place, then reload it to check."""
-    path = robot.source
+def write_offsets(
+    robot: RobotConfig, zeros: Sequence[JointZero], path: Path | None = None
+) -> None:
+    """Write the new offsets (rad) into robot file ``path`` (default the robot's own) in place,
+    then reload it to check. ConfigError if the joints table cannot be edited, OutputError if
+    the file cannot be written, SetupError (file restored) if the edit does not load back."""
+    path = robot.source if path is None else path
     original = path.read_text(encoding="utf-8")
     try:
         text = set_in_joints(original, "zero_offset_rad",

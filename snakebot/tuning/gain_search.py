@@ -109,24 +109,26 @@ def search_gains(
     return GainSearch(scores[0], best, tuple(scores), before, after)
 
 
-def write_gains(robot: RobotConfig, gains: GainRegisters) -> Path:
-    """Set ``[gains]`` of the robot file in place (comments and layout kept): the Position
-    P/I/D Gain registers, or, where the file gives its gains in SI, kp/kd in SI and the I
-    register (a file holds one form, never both)."""
+def write_gains(robot: RobotConfig, gains: GainRegisters, path: Path | None = None) -> Path:
+    """Set ``[gains]`` of robot file ``path`` (default the robot's own file) in place, comments
+    and layout kept; returns the path written: the Position P/I/D Gain registers, or, where the
+    file gives its gains in SI, kp/kd in SI and the I register (a file holds one form, never
+    both). ConfigError naming the file if it cannot be read, or if the edit would not parse back."""
+    target = robot.source if path is None else path
     values: dict[str, object] = {
         "position_p": gains.position_p,
         "position_i": gains.position_i,
         "position_d": gains.position_d,
     }
-    if "kp_nm_per_rad" in read_toml(robot.source).get("gains", {}):
+    if "kp_nm_per_rad" in read_toml(target).get("gains", {}):
         pd = robot.servo.gains_of(gains)
         values = {
             "kp_nm_per_rad": pd.kp_nm_per_rad,
             "kd_nms_per_rad": pd.kd_nms_per_rad,
             "position_i": gains.position_i,
         }
-    set_table_values(robot.source, "gains", values)
-    return robot.source
+    set_table_values(target, "gains", values)
+    return target
 
 
 def _key(score: GainScore) -> tuple[float, float]:

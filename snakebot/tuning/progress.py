@@ -108,7 +108,8 @@ def gains_summary_text(summary: dict[str, Any]) -> str:
         f"kd {now['kd_nms_per_rad']:.4g} -> {best['kd_nms_per_rad']:.4g} N·m·s/rad",
         f"  written to {summary['written_to']}"
         if "written_to" in summary
-        else "  robot file unchanged",
+        else "  robot file unchanged"
+        + (f": {summary['not_written']}" if "not_written" in summary else ""),
     ]
     return "\n".join(lines)
 

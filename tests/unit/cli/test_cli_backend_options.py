@@ -40,16 +40,16 @@ def test_an_unknown_backend_is_a_usage_error_listing_the_choices(
 
 
 def test_bad_option_values_name_the_flag(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["run", "--friction", "slippery", "--duration", "0.1"]) == 1
+    assert main(["run", "--friction", "slippery", "--duration", "0.1"]) == 2  # usage
     assert "--friction: expected AXIAL,LATERAL" in capsys.readouterr().err
-    assert main(["run", "--terrain", "moon", "--duration", "0.1"]) == 1
+    assert main(["run", "--terrain", "moon", "--duration", "0.1"]) == 2
     assert "--terrain: expected one of flat, cliff" in capsys.readouterr().err
 
 
 def test_a_viewer_on_hardware_is_refused_for_what_it_is(capsys: pytest.CaptureFixture[str]) -> None:
     # --viewer paces a simulation to the wall clock; on hardware it must not turn into a
     # complaint about --realtime, a flag the user never gave
-    assert main(["run", "--backend", "dynamixel", "--robot", "snake12", "--viewer"]) == 1
+    assert main(["run", "--backend", "dynamixel", "--robot", "snake12", "--viewer"]) == 2
     err = capsys.readouterr().err
     assert "--viewer: renders the simulation: it needs a simulated backend" in err
     assert "--realtime" not in err
