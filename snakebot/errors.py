@@ -96,3 +96,18 @@ class OutputError(SnakebotError):
         self.path = str(path)
         self.reason = reason
         super().__init__(f"{self.path}: {reason}")
+
+
+class PhysicsHealthError(BackendError):
+    """The twin computed something no real snake could do: a hard physics-health limit was
+    passed (docs/physics.md). ``time_s`` is when, ``check`` which limit, ``detail`` by how much."""
+
+    def __init__(self, time_s: float, check: str, detail: str) -> None:
+        self.time_s = time_s
+        self.check = check
+        self.detail = detail
+        super().__init__(
+            f"physics health: {check} at t={time_s:.4f} s: {detail}. The twin is not credible "
+            "here: lower the gains or the timestep (twin.timestep_s), raise the armature, or "
+            "see docs/physics.md"
+        )

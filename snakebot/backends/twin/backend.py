@@ -12,6 +12,12 @@ import numpy as np
 from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.health import (
+    DEFAULT_LIMITS,
+    HealthLimits,
+    HealthMonitor,
+    divergence_time_s,
+)
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
     build_model,
@@ -61,8 +67,11 @@ class TwinBackend(Backend):
         timestep_s: float | None = None,
         realtime: bool = False,
         terrain: Cliff | None = None,
+        health: HealthLimits | None = DEFAULT_LIMITS,
     ) -> None:
         super().__init__()
+        self._health_limits = health
+        self.health: HealthMonitor | None = None
         self.robot = robot
         self.terrain = terrain
         self.joint_count = robot.joint_count
@@ -98,15 +107,31 @@ class TwinBackend(Backend):
         mujoco.mj_forward(self.model, self.data)
         self.torque_enabled = True
         self._pacer = Pacer(self.stats) if self._realtime else None
+        if self._health_limits is not None:
+            servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
+            links = np.array([self.model.geom(f"{link_name(i)}_geom").id
+                              for i in range(self.robot.link_count)])
+            self.health = HealthMonitor(
+                self.model, links, self.robot.link.radius_m, self._dof_index, self._head_id,
+                no_load_speed_rad_s=servo.no_load_speed_rad_s,
+                torque_limit_nm=servo.torque_limit_nm, limits=self._health_limits,
+            )
 
     def _close(self) -> None:
         self.set_torque(self.stop_policy == "hold")
 
     # -- the cycle ---------------------------------------------------------------------------
+    def _servo_torque(self) -> np.ndarray:
+        """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
+        velocity = self.data.qvel[self._dof_index]
+        damping = self.model.dof_damping[self._dof_index]
+        torque: np.ndarray = self.data.actuator_force - damping * velocity
+        return torque
+
     def _read_state(self) -> JointState:
         data = self.data
         velocity = data.qvel[self._dof_index].copy()
-        effort = data.actuator_force.copy() - self.model.dof_damping[self._dof_index] * velocity
+        effort = self._servo_torque()
         return JointState(
             time_s=float(data.time),
             position_rad=data.qpos[self._qpos_index].copy(),
@@ -168,11 +193,16 @@ class TwinBackend(Backend):
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
         warnings = self.data.warning.number
         before = int(warnings[_BAD_WARNINGS].sum())
+        time_before = float(self.data.time)
         mujoco.mj_step(self.model, self.data, steps)
         if int(warnings[_BAD_WARNINGS].sum()) != before:
+            timestep = float(self.model.opt.timestep)
             raise SimulationDivergedError(
-                float(self.data.time), "MuJoCo reported bad accelerations (state was reset)"
+                divergence_time_s(time_before, steps, timestep, float(self.data.time)),
+                "MuJoCo reported bad accelerations (state was reset)",
             )
+        if self.health is not None:
+            self.health.sample(self.data, dt_s, self._servo_torque())
         if self._pacer is not None:
             self._pacer.wait(dt_s)
 
@@ -189,6 +219,10 @@ class TwinBackend(Backend):
             )
         self._steps_per_period[dt_s] = steps
         return steps
+
+    def physics_health(self) -> dict[str, object] | None:
+        """The run's physics health so far (docs/physics.md); None with the checks off."""
+        return None if self.health is None else self.health.summary()
 
     def body_state(self) -> BodyState:
         """Centre of mass of the whole snake and the head's orientation."""
