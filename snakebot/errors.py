@@ -28,6 +28,10 @@ class GaitError(SnakebotError, ValueError):
     """A gait was asked for with an unknown name or invalid parameters."""
 
 
+class GaitAxesWarning(UserWarning):
+    """A gait runs on a robot whose joint axes are not the ones it was made for."""
+
+
 class SafetyLimitError(SnakebotError):
     """A command or state left the envelope the safety layer guarantees."""
 

@@ -23,7 +23,7 @@ from snakebot.drive.observers import backend_readings, csv_log_observer
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
-from snakebot.gaits import parse_set_options
+from snakebot.gaits import check_joint_axes, parse_set_options
 from snakebot.gaits.live import LiveGait
 from snakebot.telemetry import CsvTelemetryWriter
 
@@ -133,6 +133,8 @@ def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoic
                 f"{item}: expected GAIT.KEY=VALUE with GAIT one of {', '.join(names)} "
                 "(KEY=VALUE alone only when one gait is listed)",
             )
+    for name in names:
+        check_joint_axes(name, [joint.axis for joint in robot.joints], robot.name)
     return [GaitChoice(name, parse_set_options(name, overrides[name])) for name in names]
 
 

@@ -29,7 +29,13 @@ from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.errors import ConfigError, OutputError
-from snakebot.gaits import Gait, load_gait_file, make_gait, parse_set_options
+from snakebot.gaits import (
+    Gait,
+    check_joint_axes,
+    load_gait_file,
+    make_gait,
+    parse_set_options,
+)
 from snakebot.telemetry import CsvTelemetryWriter
 
 
@@ -113,6 +119,8 @@ def build_gait(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> tup
             )
         name = file_name
     params.update(parse_set_options(name, args.set))
+    if isinstance(robot, RobotConfig):
+        check_joint_axes(name, [joint.axis for joint in robot.joints], robot.name)
     gait = make_gait(
         name, robot.joint_count, params, lower_rad=robot.lower_rad, upper_rad=robot.upper_rad
     )
