@@ -27,6 +27,7 @@ from snakebot.config.servo_file import (
     servo_table,
 )
 from snakebot.config.servo_settings import parse_settings
+from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable
 
@@ -95,6 +96,8 @@ def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
             number("actuator_delay_s", None) if table.has("actuator_delay_s") else None
         ),
     )
+    divisor, extras = read_servo_extras(table, physics.p_gain_divisor, physics.extras)
+    fitted = replace(fitted, p_gain_divisor=divisor, extras=extras)
     table.done()
     return replace(servo, physics=fitted)
 

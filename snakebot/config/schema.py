@@ -9,6 +9,7 @@ from typing import Literal
 import numpy as np
 
 from snakebot.backends.base import ServoGains, StopPolicy
+from snakebot.config.servo_extras import NO_EXTRAS, P_GAIN_DIVISOR, ServoExtras
 
 Axis = Literal["yaw", "pitch"]
 GroundModel = Literal["anisotropic", "isotropic"]
@@ -26,7 +27,9 @@ class ServoPhysics:
     them to ``supply_voltage_v``. ``stiffness_scale``, ``damping_nms`` (joint damping with
     torque on, replacing back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command
     leaving the controller to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no
-    delay model) come from a robot's ``[twin.servo]`` (sysid).
+    delay model) come from a robot's ``[twin.servo]`` (sysid). ``p_gain_divisor`` (P register
+    units per unit of error gain) and ``extras`` (electrics, overload, encoder and IMU noise)
+    come from the servo file's ``[twin]``, overridden by the robot's ``[twin.servo]``.
     """
 
     stall_torque_nm: float
@@ -42,6 +45,8 @@ class ServoPhysics:
     stiffness_scale: float = 1.0
     damping_nms: float | None = None
     actuator_delay_s: float | None = None
+    p_gain_divisor: float = P_GAIN_DIVISOR
+    extras: ServoExtras = NO_EXTRAS
 
 
 @dataclass(frozen=True)

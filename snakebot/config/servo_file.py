@@ -8,6 +8,7 @@ Every key is checked: ranges from snakebot.config.bounds, the model against its 
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
 from snakebot.backends.base import ServoGains
@@ -15,6 +16,7 @@ from snakebot.config import bounds
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.schema import ServoModel, ServoPhysics
 from snakebot.config.servo_settings import parse_settings
+from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable, UnknownModelError, supported_models, table_for_model
 
@@ -106,6 +108,10 @@ def parse_servo_file(path: Path) -> ServoModel:
     if physics.pwm_limit > pwm_max:
         raise phys.error("pwm_limit", f"{table.model}'s PWM Limit is at most {pwm_max}")
     phys.done()
+    twin = root.table("twin", required=False)
+    divisor, extras = read_servo_extras(twin, physics.p_gain_divisor, physics.extras)
+    twin.done()
+    physics = replace(physics, p_gain_divisor=divisor, extras=extras)
     gains = parse_gains(root.table("default_gains"))
     parse_settings(path, "settings", root.data.get("settings", {}), table)
     root.mark_read("settings")

@@ -96,8 +96,9 @@ class _Loop:
         self.stage = "log"
         if self.log is not None:
             com = None if body is None else body.com_m
+            imu = None if body is None else (body.head_quat, body.head_gyro_rad_s)
             self.log.write(state.time_s, self.cycle, command, state.position_rad,
-                           state.velocity_rad_s, state.effort_nm, com)
+                           state.velocity_rad_s, state.effort_nm, com, imu)
         self.cycle += 1
         self.stage = "hook"
         if self.on_cycle is not None:

@@ -18,7 +18,8 @@ from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, ServoPhysics
 
 # X-series firmware: KPP = P/128 and the output is in PWM units out of 2 * PWM Limit, which is
 # bam's error_gain = (ticks/rad) / (256 * pwm_limit) per unit of P (arXiv 2410.08650, bam).
-_P_DIVISOR = 256.0
+# The 256 is one measured servo (bam's XL330); it is the servo file's [twin] p_gain_divisor
+# (default 256), which `snakebot sysid --params p_divisor` fits (docs/physics.md).
 # KPD = D/16 against KPP = P/128: the D register weighs 8x a P unit, per tick per loop period.
 _D_TO_P_WEIGHT = 128.0 / 16.0
 
@@ -60,7 +61,8 @@ def servo_dynamics(physics: ServoPhysics, gains: ServoGains) -> ServoDynamics:
     voltage_ratio = physics.supply_voltage_v / physics.nominal_voltage_v
     stall_torque = physics.stall_torque_nm * voltage_ratio
     no_load_speed = physics.no_load_speed_rad_s * voltage_ratio
-    error_gain = (physics.ticks_per_rev / (2 * math.pi)) / (_P_DIVISOR * physics.pwm_limit)
+    ticks_per_rad = physics.ticks_per_rev / (2 * math.pi)
+    error_gain = ticks_per_rad / (physics.p_gain_divisor * physics.pwm_limit)
     stiffness = stall_torque * error_gain * gains.position_p * physics.stiffness_scale
     gain_damping = (
         stall_torque * error_gain * _D_TO_P_WEIGHT * gains.position_d * physics.d_gain_loop_period_s
