@@ -28,13 +28,14 @@ from scipy.optimize import least_squares
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, RobotConfig
+from snakebot.config.servo_extras import P_GAIN_DIVISOR
 from snakebot.errors import ConfigError
 from snakebot.telemetry import read_log
 from snakebot.tuning.commands import ArrayCommands
 from snakebot.tuning.engine import TwinBatch
 from snakebot.tuning.trace import FloatArray
 
-PARAMS = ("stiffness", "damping", "armature", "friction_loss", "delay")
+PARAMS = ("stiffness", "damping", "armature", "friction_loss", "delay", "p_divisor")
 DEFAULT_PARAMS = ("stiffness", "damping", "armature")
 # Where each parameter lives in ServoFit and in the robot file's [twin.servo].
 FIELDS = {
@@ -43,6 +44,7 @@ FIELDS = {
     "armature": "armature_kgm2",
     "friction_loss": "friction_loss_nm",
     "delay": "actuator_delay_s",
+    "p_divisor": "p_gain_divisor",
 }
 VELOCITY_WEIGHT_S = 0.05
 SEARCH_FACTOR = 5.0  # each parameter is searched within [current / 5, current * 5]
@@ -58,6 +60,9 @@ class ServoFit:
     """The fitted servo parameters as the robot file's ``[twin.servo]`` holds them.
 
     ``actuator_delay_s`` None: the twin has no delay model (and no command history).
+    ``p_gain_divisor``: P register units per unit of error gain (256 bam's XL330, 128 the
+    e-Manual); fitting it alone says which holds for your servo, fitting it with ``stiffness``
+    is degenerate (both scale the same stiffness).
     """
 
     stiffness_scale: float
@@ -65,6 +70,7 @@ class ServoFit:
     armature_kgm2: float
     friction_loss_nm: float
     actuator_delay_s: float | None = None
+    p_gain_divisor: float = P_GAIN_DIVISOR
 
     @classmethod
     def of(cls, robot: RobotConfig) -> ServoFit:
@@ -77,6 +83,7 @@ class ServoFit:
             servo.armature_kgm2,
             servo.friction_loss_nm,
             physics.actuator_delay_s,
+            physics.p_gain_divisor,
         )
 
     def apply(self, robot: RobotConfig) -> RobotConfig:
@@ -88,6 +95,7 @@ class ServoFit:
             armature_kgm2=self.armature_kgm2,
             friction_loss_nm=self.friction_loss_nm,
             actuator_delay_s=self.actuator_delay_s,
+            p_gain_divisor=self.p_gain_divisor,
         )
         return dataclasses.replace(robot, servo=dataclasses.replace(robot.servo, physics=physics))
 
@@ -101,6 +109,7 @@ class ServoFit:
             self.armature_kgm2 * fields.get("armature", 1.0),
             self.friction_loss_nm * fields.get("friction_loss", 1.0),
             fields.get("delay", self.actuator_delay_s),
+            self.p_gain_divisor * fields.get("p_divisor", 1.0),
         )
 
     def at(self, names: Sequence[str], x: Sequence[float]) -> ServoFit:
@@ -118,6 +127,7 @@ class ServoFit:
             "armature_kgm2": self.armature_kgm2,
             "friction_loss_nm": self.friction_loss_nm,
             "actuator_delay_s": self.actuator_delay_s or 0.0,
+            "p_gain_divisor": self.p_gain_divisor,
         }
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -95,3 +96,19 @@ def test_cli_recovers_an_actuator_delay_and_writes_it(
     assert summary["tracking_rms_after_rad"] < 0.01 * summary["tracking_rms_before_rad"]
     physics = load_robot(target).servo.physics
     assert physics.actuator_delay_s == pytest.approx(0.015, abs=2e-4)
+
+
+def test_fit_tells_which_p_gain_divisor_the_servo_has(tmp_path: Path) -> None:
+    # bam measured 256 on an XL330; the e-Manual's KPP = P/128 suggests 128. A log made by a
+    # servo with 128 is fitted from the shipped 256.
+    robot = load_robot("snake12")
+    nominal = ServoFit.of(robot)
+    assert nominal.p_gain_divisor == 256.0
+    truth = dataclasses.replace(nominal, p_gain_divisor=128.0)
+    log_path = tmp_path / "lift.csv"
+    with TwinBackend(truth.apply(robot)) as twin:
+        plan = chirp_plan(robot, twin.read_state().position_rad, 1, 0.5, duration_s=2.0)
+        record(twin, plan, log_path)
+    result = fit_servo(robot, [load_log(log_path, robot)], ("p_divisor",))
+    assert result.after.p_gain_divisor == pytest.approx(128.0, rel=0.02)
+    assert result.after.report(robot)["p_gain_divisor"] == result.after.p_gain_divisor
