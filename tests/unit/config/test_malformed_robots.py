@@ -289,3 +289,12 @@ def test_docs_list_every_range_as_the_code_has_it() -> None:
     docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
     for key, limits in {**ROBOT, **SERVO}.items():
         assert f"| `{key}` | {limits.describe()} | {limits.why} |" in docs, key
+
+
+def test_docs_list_the_twin_servo_model_ranges() -> None:
+    from snakebot.config.servo_twin import BOUNDS
+
+    docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
+    for key, limits in BOUNDS.items():
+        for where in (f"twin.servo.{key}", f"twin.{key}"):
+            assert f"| `{where}` | {limits.describe()} | {limits.why} |" in docs, where
