@@ -15,6 +15,7 @@ import numpy as np
 
 from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.backend import TwinBackend
+from snakebot.backends.twin.health import HealthLimits
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
@@ -152,12 +153,17 @@ class TwinMotion:
         out["achieved_rate_hz"] = self.steps / elapsed if elapsed > 0 else 0.0
         out["overruns"] = 0
         out["interrupted"] = False
+        physics = self.twin.physics_health()
+        if physics is not None:
+            out["physics"] = physics
         return out
 
 
 def make_twin_chain(robot: RobotConfig, baud: int) -> tuple[EmulatedChain, TwinMotion]:
     """The robot's servo chain at ``baud``, every servo backed by one connected twin."""
-    twin = TwinBackend(robot, raise_on_overload=False)  # the servo latches it instead
+    # The servo latches an overload instead; a bus keeps answering whatever the physics does,
+    # so physics health is reported in the summary, never raised.
+    twin = TwinBackend(robot, raise_on_overload=False, health=HealthLimits(hard=False))
     twin.connect()
     motion = TwinMotion(robot, twin)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud, motion=motion)

@@ -80,7 +80,7 @@ class TwinBackend(Backend):
     ) -> None:
         super().__init__()
         self._health_limits = health
-        self.health: HealthMonitor | None = None
+        self.physics_monitor: HealthMonitor | None = None
         self.electrics: ServoElectrics | None = None
         self._seed = seed
         self.raise_on_overload = raise_on_overload
@@ -134,7 +134,7 @@ class TwinBackend(Backend):
         if self._health_limits is not None:
             links = np.array([self.model.geom(f"{link_name(i)}_geom").id
                               for i in range(self.robot.link_count)])
-            self.health = HealthMonitor(
+            self.physics_monitor = HealthMonitor(
                 self.model, links, self.robot.link.radius_m, self._dof_index, self._head_id,
                 no_load_speed_rad_s=servo.no_load_speed_rad_s,
                 torque_limit_nm=servo.torque_limit_nm, limits=self._health_limits,
@@ -235,8 +235,8 @@ class TwinBackend(Backend):
                 divergence_time_s(time_before, steps, timestep, float(self.data.time)),
                 "MuJoCo reported bad accelerations (state was reset)",
             )
-        if self.health is not None:
-            self.health.sample(self.data, dt_s, self._servo_torque())
+        if self.physics_monitor is not None:
+            self.physics_monitor.sample(self.data, dt_s, self._servo_torque())
         if self.electrics is not None:
             self._update_electrics(dt_s)
         if self._pacer is not None:
@@ -290,7 +290,7 @@ class TwinBackend(Backend):
     def physics_health(self) -> dict[str, object] | None:
         """The run's physics health so far (docs/physics.md), with the servos' electrical
         figures when the servo model has them; None with the checks off."""
-        out = None if self.health is None else self.health.summary()
+        out = None if self.physics_monitor is None else self.physics_monitor.summary()
         if self.electrics is not None:
             com = self.data.subtree_com[self._head_id]
             distance = float(np.hypot(*(com[:2] - self._start_com[:2])))
