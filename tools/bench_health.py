@@ -10,18 +10,27 @@ Each round runs, back to back in shuffled order, the path of `snakebot run --bac
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import random
 import statistics
 import time
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.health import DEFAULT_LIMITS, HealthLimits
-from snakebot.config import RobotConfig
+from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.gaits import make_gait
-from tools.bench_twin import RATE_HZ, robot_with
+
+RATE_HZ = 100.0
+
+
+def robot_with(joints: int) -> RobotConfig:
+    """snake8 with ``joints`` servos (as tools/bench_twin.py builds them)."""
+    base = load_robot("snake8")
+    chain = tuple(dataclasses.replace(base.joints[0], servo_id=i + 1) for i in range(joints))
+    return dataclasses.replace(base, joints=chain)
 
 
 def steps_per_s(robot: RobotConfig, seconds: float, health: HealthLimits | None) -> float:

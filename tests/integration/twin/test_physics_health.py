@@ -140,3 +140,33 @@ def test_a_snake_folded_into_itself_ends_in_the_typed_error() -> None:
     with pytest.raises(PhysicsHealthError, match="penetration at t=") as caught:
         run(load_robot("snake8"), Pose(np.full(8, 1.5)), 6.0)
     assert 0.5 < caught.value.time_s < 6.0
+
+
+def test_joint_speed_beyond_the_torque_speed_line_is_a_typed_error_with_its_time() -> None:
+    # The audit: joint speeds above the servo's no-load speed, exit 0.
+    with TwinBackend(load_robot("snake8")) as twin:
+        monitor = twin.physics_monitor
+        assert monitor is not None
+        twin.advance(0.01)
+        twin.data.qvel[twin._dof_index[3]] = 1.2 * 5.969  # a warning, not yet an error
+        monitor.sample(twin.data, 0.01, np.zeros(8))
+        assert any("beyond the servo's no-load speed" in w for w in monitor.summary()["warnings"])
+        twin.data.qvel[twin._dof_index[3]] = 1.6 * 5.969
+        with pytest.raises(PhysicsHealthError, match=r"joint speed at t=0\.0100 s: 9\.55 rad/s"):
+            monitor.sample(twin.data, 0.01, np.zeros(8))
+
+
+def test_more_power_than_a_servo_has_for_a_second_is_a_typed_error() -> None:
+    with TwinBackend(load_robot("snake8")) as twin:
+        monitor = twin.physics_monitor
+        assert monitor is not None
+        twin.data.qvel[twin._dof_index] = 1.0
+        torque = np.zeros(8)
+        torque[0] = 1.4  # 1.4 W against a 2.09 W peak: a warning
+        for _ in range(100):
+            monitor.sample(twin.data, 0.01, torque)
+        assert any("W on average" in w for w in monitor.summary()["warnings"])
+        torque[0] = 3.0  # 3 W: no servo on its torque-speed line gives that
+        with pytest.raises(PhysicsHealthError, match="energy injected.*3.00 W over 1 s"):
+            for _ in range(100):
+                monitor.sample(twin.data, 0.01, torque)
