@@ -167,6 +167,6 @@ def test_more_power_than_a_servo_has_for_a_second_is_a_typed_error() -> None:
             monitor.sample(twin.data, 0.01, torque)
         assert any("W on average" in w for w in monitor.summary()["warnings"])
         torque[0] = 3.0  # 3 W: no servo on its torque-speed line gives that
-        with pytest.raises(PhysicsHealthError, match="energy injected.*3.00 W over 1 s"):
+        with pytest.raises(PhysicsHealthError, match=r"energy injected.*3\.00 W over 1 s"):
             for _ in range(100):
                 monitor.sample(twin.data, 0.01, torque)
