@@ -48,6 +48,7 @@ class HealthLimits:
 
 
 DEFAULT_LIMITS = HealthLimits()
+_ROWS = 512  # cycles judged per vectorised pass at most
 
 
 def divergence_time_s(
@@ -106,14 +107,20 @@ class HealthMonitor:
         self._window_s = 0.0
         self.max_power_w = 0.0
         self.max_speed_rad_s = 0.0
-        self._stall_s = np.zeros(joints)
+        self._stall_carry_s = np.zeros(joints)
         self.longest_stall_s = 0.0
         self.total_stall_s = 0.0
+        # Per-cycle velocities, torques and periods wait here and are judged in one vectorised
+        # pass per power window: the per-cycle cost stays a few numpy calls.
+        self._velocity = np.zeros((_ROWS, joints))
+        self._torque = np.zeros((_ROWS, joints))
+        self._dt = np.zeros(_ROWS)
+        self._rows = 0
 
     def sample(self, data: mujoco.MjData, dt_s: float, force_nm: np.ndarray) -> None:
         """Account one control period ending now; raise PhysicsHealthError past a hard limit.
 
-        ``force_nm`` (N,) is each servo's torque (the actuator force).
+        ``force_nm`` (N,) is each servo's output torque.
         """
         limits = self.limits
         self.cycles += 1
@@ -121,17 +128,19 @@ class HealthMonitor:
         ncon = data.ncon
         grounded = False
         if ncon:
-            pairs = self._is_link[data.contact.geom[:ncon]]
-            depth = -data.contact.dist[:ncon]
-            self_contact = pairs.all(axis=1)
-            ground = ~self_contact & pairs.any(axis=1)
-            grounded = bool(ground.any())
-            if grounded:
-                floor = float(depth[ground].max())
-                self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
+            contact = data.contact
+            links = self._is_link[contact.geom[:ncon]]
+            self_contact = links.all(axis=1)
+            depth = -contact.dist[:ncon]
             if self_contact.any():
+                grounded = not self_contact.all()
                 other = float(depth[self_contact].max())
                 self.max_self_penetration_m = max(self.max_self_penetration_m, other)
+                floor = float(depth[~self_contact].max(initial=0.0))
+            else:
+                grounded = True
+                floor = float(depth.max())
+            self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
         if not grounded and self._clearance_m(data) > limits.contact_tolerance_m:
             self._airborne_cycles += 1
         _, x, y, _ = data.xquat[self._head]
@@ -139,20 +148,13 @@ class HealthMonitor:
             self._upside_down_cycles += 1
 
         velocity = data.qvel[self._dof]
-        speed = np.abs(velocity)
-        self.max_speed_rad_s = max(self.max_speed_rad_s, float(speed.max(initial=0.0)))
-        moving = speed > limits.moving_fraction * self._no_load
-        sign = np.where(moving, np.sign(velocity), 0.0)
-        self._reversals += (sign * self._last_sign) < 0
-        self._last_sign = np.where(moving, sign, self._last_sign)
-        power = np.maximum(force_nm * velocity, 0.0) * dt_s
-        self._work_j += power
-        self._window_work_j += power
+        row = self._rows
+        self._velocity[row] = velocity
+        self._torque[row] = force_nm
+        self._dt[row] = dt_s
+        self._rows = row + 1
+        self.max_speed_rad_s = max(self.max_speed_rad_s, float(np.abs(velocity).max()))
         self._window_s += dt_s
-        stalled = (np.abs(force_nm) >= limits.stall_torque_fraction * self._torque_limit) & ~moving
-        self._stall_s = np.where(stalled, self._stall_s + dt_s, 0.0)
-        self.total_stall_s += float(stalled.sum()) * dt_s
-        self.longest_stall_s = max(self.longest_stall_s, float(self._stall_s.max(initial=0.0)))
 
         time_s = float(data.time)
         depth_limit = limits.penetration_error * self._radius
@@ -168,7 +170,10 @@ class HealthMonitor:
                 time_s, "joint speed", f"{self.max_speed_rad_s:.2f} rad/s, above "
                 f"{limits.speed_error:g} x the servo's no-load speed {self._no_load:.2f} rad/s",
             )
-        if self._window_s >= limits.power_window_s - 1e-9:
+        window_done = self._window_s >= limits.power_window_s - 1e-9
+        if window_done or self._rows == _ROWS:
+            self._judge_rows()
+        if window_done:
             power_w = float(self._window_work_j.max(initial=0.0)) / self._window_s
             self.max_power_w = max(self.max_power_w, power_w)
             self._window_work_j[:] = 0.0
@@ -179,6 +184,36 @@ class HealthMonitor:
                     f"{limits.power_window_s:g} s; the servo's peak is {self._peak_power_w:.2f} W",
                 )
 
+    def _judge_rows(self) -> None:
+        """Work, chatter and stall of the cycles waiting since the last pass."""
+        rows = self._rows
+        if rows == 0:
+            return
+        self._rows = 0
+        limits = self.limits
+        velocity, torque, dt = self._velocity[:rows], self._torque[:rows], self._dt[:rows]
+        work = (np.maximum(torque * velocity, 0.0) * dt[:, None]).sum(axis=0)
+        self._work_j += work
+        self._window_work_j += work
+        moving = np.abs(velocity) > limits.moving_fraction * self._no_load
+        # Chatter: a reversal is a moving sign opposite to the last moving sign before it.
+        signs = np.vstack([self._last_sign, np.where(moving, np.sign(velocity), 0.0)])
+        index = np.arange(rows + 1)[:, None]
+        last = np.maximum.accumulate(np.where(signs != 0, index, 0), axis=0)
+        held = np.take_along_axis(signs, last, axis=0)
+        self._reversals += ((signs[1:] * held[:-1]) < 0).sum(axis=0)
+        self._last_sign = held[-1].copy()
+        # Stall: time since the last cycle that was not stalled (or before this pass, carried).
+        stalled = (np.abs(torque) >= limits.stall_torque_fraction * self._torque_limit) & ~moving
+        self.total_stall_s += float((stalled * dt[:, None]).sum())
+        ends = np.concatenate([[0.0], np.cumsum(dt)])
+        free = np.vstack([np.ones((1, stalled.shape[1]), dtype=bool), ~stalled])
+        since = np.maximum.accumulate(np.where(free, index, 0), axis=0)
+        streak = ends[:, None] - ends[since] + np.where(since == 0, self._stall_carry_s, 0.0)
+        streak = np.where(stalled, streak[1:], 0.0)
+        self.longest_stall_s = max(self.longest_stall_s, float(streak.max(initial=0.0)))
+        self._stall_carry_s = streak[-1].copy()
+
     def _clearance_m(self, data: mujoco.MjData) -> float:
         """Height of the lowest point of any module capsule above z = 0."""
         axis_z = np.abs(data.geom_xmat[self._links, 8])
@@ -188,10 +223,12 @@ class HealthMonitor:
     @property
     def chatter(self) -> float:
         """Worst joint's share of control cycles with a velocity reversal (1 = Nyquist)."""
+        self._judge_rows()
         return float(self._reversals.max(initial=0.0)) / max(self.cycles, 1)
 
     def summary(self) -> dict[str, object]:
         """JSON-ready health figures and the warnings past ``limits`` (docs/physics.md)."""
+        self._judge_rows()
         limits = self.limits
         cycles = max(self.cycles, 1)
         airborne = self._airborne_cycles / cycles
