@@ -187,3 +187,11 @@ def test_the_head_imu_sees_a_roll_and_is_logged(tmp_path: Path) -> None:
         hold(twin, np.zeros(8), 0.5)
         body = twin.body_state()
     assert body.head_gyro_rad_s is not None and np.abs(body.head_gyro_rad_s).max() < 0.05
+
+
+def test_batched_tuning_says_it_leaves_out_sag_and_overload(config_dir: Path) -> None:
+    from snakebot.tuning.engine import TwinBatch
+
+    robot = robot_with(config_dir, robot="overload_trip_s = 1.0")
+    with pytest.warns(UserWarning, match="batched tuning and sysid replays leave them out"):
+        TwinBatch(robot)
