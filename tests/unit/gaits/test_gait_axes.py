@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import warnings
@@ -55,3 +56,14 @@ def test_the_cli_refuses_rolling_on_snake8_before_anything_moves() -> None:
     assert done.returncode == 1
     assert "gait 'rolling' needs" in done.stderr and "snake8" in done.stderr
     assert done.stdout == ""
+
+
+def test_the_gait_listing_says_what_axes_a_gait_needs(capsys: pytest.CaptureFixture[str]) -> None:
+    from snakebot.cli.main import main
+
+    assert main(["gaits", "rolling"]) == 0
+    assert "joint axes: needs yaw on even joints" in capsys.readouterr().out
+    assert main(["gaits", "--json"]) == 0
+    listing = {g["name"]: g for g in json.loads(capsys.readouterr().out)}
+    assert listing["serpenoid"]["axes"] == {"even": "yaw", "odd": "yaw", "required": False}
+    assert listing["rolling"]["axes"]["required"] is True
