@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,12 @@ REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "firmware_configs"
 
 os.environ.setdefault("MUJOCO_GL", "egl")
+
+# A suite started in the background by a non-interactive shell inherits SIGINT ignored, and so would
+# every `snakebot` it spawns: the Ctrl-C tests would then send a signal nobody hears. Restore
+# Python's handler, so the children start with the default disposition (and KeyboardInterrupt).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture

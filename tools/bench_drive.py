@@ -21,12 +21,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from snakebot.backends.base import JointState
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.display import DriveDisplay
 from snakebot.drive.loop import DriveCycle
 from snakebot.gaits import LiveControls, LiveGait, make_gait
+from snakebot.types import JointState
 
 DT = 0.01
 GAIT = {"snake8": "serpenoid", "snake12": "sidewinding"}

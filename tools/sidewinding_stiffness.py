@@ -12,7 +12,6 @@ import dataclasses
 import json
 import sys
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
@@ -26,9 +25,8 @@ DEFAULT_GAINS = (320, 640, 960, 1280, 1920, 2560, 5120)
 def sidewind(p_gain: int, duration_s: float = 20.0) -> dict[str, object]:
     """One run of snake12's sidewinding with Position P Gain ``p_gain``; its summary."""
     base = load_robot("snake12")
-    robot: RobotConfig = dataclasses.replace(
-        base, gains=ServoGains(p_gain, base.gains.position_i, base.gains.position_d)
-    )
+    registers = dataclasses.replace(base.gain_registers, position_p=p_gain)
+    robot: RobotConfig = dataclasses.replace(base, gains=base.servo.gains_of(registers))
     gait = make_gait("sidewinding", robot.joint_count)
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     with TwinBackend(robot) as twin:

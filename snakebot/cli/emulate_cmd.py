@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from snakebot.cli.common import add_robot_option, print_json
 from snakebot.config import RobotConfig, load_robot
 from snakebot.errors import ConfigError
+from snakebot.servo import FACTORY_BAUD
 
 if TYPE_CHECKING:
     from snakebot.emulation.bench import ServoBench
@@ -76,7 +77,7 @@ def _bench(
                           "and --scramble")
     motion = None
     if args.fresh:
-        chain = EmulatedChain(baud=57600)
+        chain = EmulatedChain(baud=FACTORY_BAUD)
     elif args.physics:
         from snakebot.emulation.physics import make_twin_chain
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 import traceback
 import warnings
@@ -53,17 +54,25 @@ def _show_warning(
     print(f"snakebot: warning: {message}", file=file or sys.stderr)
 
 
+_decided_exit_code: int | None = None
+"""Set once the command is over: a signal from then on ends the process with this code."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit code.
 
     Ctrl-C at any point, building the parser (which imports every command) included, ends with
     ``snakebot: interrupted`` and 130, never a traceback.
     """
+    global _decided_exit_code
     try:
-        return _main(argv)
+        code = _main(argv)
     except KeyboardInterrupt:
+        _decided_exit_code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    _decided_exit_code = code
+    return code
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -94,7 +103,16 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 def entry_point() -> None:
-    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
+    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice.
+
+    SIGTERM is treated like Ctrl-C (a killed run still ramps out and applies the stop policy).
+    Once the command is over, SIGINT and SIGTERM are ignored: the servos are as the stop policy
+    left them, and an impatient user's third Ctrl-C must not turn the command's exit code into
+    a death by signal while the interpreter shuts down (which takes a second on a loaded machine,
+    after Python has put the default handlers back).
+    """
+    global _decided_exit_code
+    _install_signal_handlers()
     try:
         # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
         # on Linux without a display only EGL renders --video offscreen (twin/video.py).
@@ -103,6 +121,28 @@ def entry_point() -> None:
         warnings.showwarning = _show_warning
         code = main()
     except KeyboardInterrupt:
+        _decided_exit_code = code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
-        code = EXIT_INTERRUPTED
+    _ignore_signals_from_now_on()
     sys.exit(code)
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    if _decided_exit_code is None:
+        raise KeyboardInterrupt
+    # The command is over; the exit code it decided stands.
+
+
+def _install_signal_handlers() -> None:
+    # SIGINT only where Python's own handler is in place (a background job keeps ignoring it).
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _on_signal)
+    if hasattr(signal, "SIGTERM") and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _on_signal)
+
+
+def _ignore_signals_from_now_on() -> None:
+    # SIG_IGN, unlike a Python handler, survives the interpreter's shutdown.
+    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if signum is not None and signal.getsignal(signum) is _on_signal:
+            signal.signal(signum, signal.SIG_IGN)

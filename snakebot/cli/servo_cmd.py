@@ -11,6 +11,7 @@ from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_na
 from snakebot.cli.config_cmd import servo_id_arg
 from snakebot.config import load_robot
 from snakebot.errors import BusError
+from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
 from snakebot.setup.console import confirm
@@ -99,8 +100,8 @@ def run_reset(args: argparse.Namespace) -> int:
         if link.ping_clean(args.id, args.baud) is None:
             raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
                            f"scan --port {args.port} --all-bauds` shows where the servos are")
-        if not args.keep_id and (args.id, args.baud) != (1, 57600):
-            other = link.probe(1, 57600, tries=1)
+        if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, FACTORY_BAUD):
+            other = link.probe(FACTORY_ID, FACTORY_BAUD, tries=1)
             if other.models or other.corrupt:
                 raise SetupError(
                     "after a reset without --keep-id the servo answers as ID 1 at 57600 baud, "

@@ -4,10 +4,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-P_GAIN_DIVISOR = 256.0
-"""P register units per unit of bam's error gain: 256 is bam's fit of an XL330 (arXiv
-2410.08650); the e-Manual's KPP = P/128 suggests 128. One measured servo; see docs/physics.md."""
-
 
 @dataclass(frozen=True)
 class ServoExtras:

@@ -1,9 +1,11 @@
-"""Reading the optional parts of the twin's servo model: the P-gain divisor, electrics,
-overload, encoder and IMU noise (docs/physics.md, "A fuller servo model").
+"""Reading the optional parts of the twin's servo model: electrics, overload, encoder and IMU
+noise (docs/physics.md, "A fuller servo model").
 
 They live in the servo file's ``[twin]`` table (datasheet facts of the model) and may be
 overridden per robot in the robot file's ``[twin.servo]`` (values ``snakebot sysid`` fitted).
-Every part is off (None) unless set, and then the twin is exactly as before.
+Every part is off (None) unless set, and then the twin is exactly as before. The P-gain divisor
+is not one of them: it is the servo file's ``physics.p_gain_divisor`` (snakebot.servo.GainMapping),
+which a robot's ``[twin.servo]`` may override (config/loader.py).
 """
 
 from __future__ import annotations
@@ -15,10 +17,6 @@ from snakebot.config.fields import Table
 from snakebot.config.servo_extras import ServoExtras
 
 BOUNDS: dict[str, Bounds] = {
-    "p_gain_divisor": Bounds(
-        16, 4096, "", "P register units per unit of error gain: 256 (bam's XL330 fit) or 128 "
-        "(e-Manual KPP = P/128)"
-    ),
     "stall_current_a": Bounds(0.01, 50, "A", "datasheet stall current; an XL430's is 1.3 A"),
     "battery_resistance_ohm": Bounds(0, 10, "Ω", "supply internal resistance; a LiPo's ~0.05"),
     "overload_trip_s": Bounds(0.05, 60, "s", "stall time before the overload protection trips"),
@@ -29,15 +27,11 @@ BOUNDS: dict[str, Bounds] = {
 """Keys of the servo file's ``[twin]`` and the robot file's ``[twin.servo]`` (same meaning)."""
 
 
-def read_servo_extras(
-    table: Table, divisor: float, extras: ServoExtras
-) -> tuple[float, ServoExtras]:
-    """The P divisor and extras in ``table``, each defaulting to the value passed in.
+def read_servo_extras(table: Table, extras: ServoExtras) -> ServoExtras:
+    """The extras in ``table``, each defaulting to the value in ``extras``.
 
     Marks the keys read; ConfigError naming the file and key for a value out of BOUNDS.
     """
-    if table.has("p_gain_divisor"):
-        divisor = table.number("p_gain_divisor", within=BOUNDS["p_gain_divisor"])
     changes: dict[str, object] = {}
     for item in fields(ServoExtras):
         if not table.has(item.name):
@@ -52,4 +46,4 @@ def read_servo_extras(
             "battery_resistance_ohm", "battery sag needs the current draw: set stall_current_a "
             "(the datasheet's stall current) in the servo file's [twin] too"
         )
-    return divisor, extras
+    return extras

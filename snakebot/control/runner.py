@@ -21,12 +21,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snakebot.backends.base import Backend, JointCommand, JointState
+from snakebot.backends.base import Backend
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer, smooth_ramp
 from snakebot.errors import BackendError
 from snakebot.gaits import Gait
 from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.types import JointCommand, JointState
 
 CycleHook = Callable[[int, float], None]
 

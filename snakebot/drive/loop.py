@@ -14,12 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointCommand, JointState
+from snakebot.backends.base import Backend
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController
 from snakebot.drive.sources import InputSource
 from snakebot.gaits.live import LiveGait, LiveStatus
+from snakebot.types import BodyState, JointCommand, JointState
 
 STOP_GRACE_S = 5.0
 """Longest wait for the live gait to reach the rest pose after its blend should have ended."""

@@ -2,7 +2,8 @@
 
 Goal Position, Torque Enable and the Position P/D Gain registers, read from each virtual servo's
 control table, drive the MuJoCo twin of the same robot (its joint stiffness and damping follow
-the gains as `servo_dynamics` maps them; the twin has no I term, so Position I Gain is ignored);
+the registers through the servo's `GainMapping`, as on the real chain; the twin has no I term,
+so Position I Gain is ignored);
 Present Position/Velocity/Load come back from the twin. Time is the chain's: a pty server advances
 the chain by wall-clock time, so the twin runs in real time.
 """
@@ -13,7 +14,6 @@ import math
 
 import numpy as np
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.backend import TwinBackend
 from snakebot.backends.twin.health import HealthLimits
 from snakebot.config.schema import RobotConfig
@@ -121,8 +121,9 @@ class TwinMotion:
             if command.position_gains != self._gains.get(index):
                 self._gains[index] = command.position_gains
                 new_gains.setdefault(command.position_gains, []).append(index)
-        for (p, i, d), joints in new_gains.items():
-            self.twin.set_joint_gains(joints, ServoGains(p, i, d))
+        mapping = self.robot.servo.gain_mapping
+        for (p, _i, d), joints in new_gains.items():
+            self.twin.set_joint_gains(joints, mapping.pd_gains(p, d))
         if torque_changed:
             self.twin.set_joint_torque(self._torque)
         if goals_changed:

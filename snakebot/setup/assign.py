@@ -11,13 +11,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from snakebot.servo import FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
 from snakebot.setup.duplicates import collision_reason
 from snakebot.setup.errors import DuplicateIdError, SetupError, VerifyError
 from snakebot.setup.link import SEARCH_BAUDS, Link, unanswered_ok
 from snakebot.setup.maintenance import wait_for_boot
-
-FACTORY_ID = 1
 
 
 @dataclass(frozen=True)

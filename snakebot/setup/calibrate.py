@@ -1,9 +1,10 @@
 """Zero offsets from a straight snake, written into the robot file (``joints[].zero_offset_rad``).
 
-The one calibration convention (the Dynamixel backend's, see backends/dynamixel/ticks.py): the
+The one calibration convention (snakebot.servo.ticks, the Dynamixel backend's): the
 offset lives in the robot config; the servo's Homing Offset stays 0 and its Drive Mode reverse bit
 clear (the settings say so and ``config diff`` checks it). With every joint straight (0 rad), a
-servo reading ``ticks`` gets ``zero_offset_rad = direction * (ticks - 2048) * 2 pi / 4096``.
+servo reading ``ticks`` gets ``zero_offset_rad = direction * (ticks - centre) * 2 pi /
+ticks_per_rev`` (centre 2048 of 4096 on the X series).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, OutputError
+from snakebot.servo.ticks import ticks_to_rad
 from snakebot.setup.errors import SetupError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings
@@ -38,9 +40,10 @@ class JointZero:
     new_offset_rad: float
 
 
-def zero_offset_rad(ticks: int, direction: int, ticks_per_rev: int = 4096) -> float:
-    """The zero offset that makes a servo reading ``ticks`` report 0 rad (ticks.py convention)."""
-    return direction * (ticks - ticks_per_rev // 2) * 2.0 * math.pi / ticks_per_rev
+def zero_offset_rad(ticks: int, direction: int, ticks_per_rev: int) -> float:
+    """The zero offset that makes a servo reading ``ticks`` report 0 rad: the angle the tick
+    means with no offset (snakebot.servo.ticks)."""
+    return ticks_to_rad(ticks, ticks_per_rev=ticks_per_rev, direction=direction)
 
 
 def measure(link: Link, chain: ChainSettings) -> list[JointZero]:

@@ -28,7 +28,6 @@ from scipy.optimize import least_squares
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, RobotConfig
-from snakebot.config.servo_extras import P_GAIN_DIVISOR
 from snakebot.errors import ConfigError
 from snakebot.telemetry import read_log
 from snakebot.tuning.commands import ArrayCommands
@@ -60,17 +59,17 @@ class ServoFit:
     """The fitted servo parameters as the robot file's ``[twin.servo]`` holds them.
 
     ``actuator_delay_s`` None: the twin has no delay model (and no command history).
-    ``p_gain_divisor``: P register units per unit of error gain (256 bam's XL330, 128 the
-    e-Manual); fitting it alone says which holds for your servo, fitting it with ``stiffness``
-    is degenerate (both scale the same stiffness).
+    ``p_gain_divisor``: the servo's gain mapping's P divisor (snakebot.servo.GainMapping; 256
+    bam's XL330, 128 the e-Manual); fitting it alone says which holds for your servo, fitting it
+    with ``stiffness`` is degenerate (both scale the same stiffness).
     """
 
     stiffness_scale: float
     damping_nms: float
     armature_kgm2: float
     friction_loss_nm: float
+    p_gain_divisor: float
     actuator_delay_s: float | None = None
-    p_gain_divisor: float = P_GAIN_DIVISOR
 
     @classmethod
     def of(cls, robot: RobotConfig) -> ServoFit:
@@ -82,12 +81,16 @@ class ServoFit:
             servo.joint_damping_nms,
             servo.armature_kgm2,
             servo.friction_loss_nm,
-            physics.actuator_delay_s,
             physics.p_gain_divisor,
+            physics.actuator_delay_s,
         )
 
     def apply(self, robot: RobotConfig) -> RobotConfig:
-        """``robot`` with these servo parameters, as if written to its ``[twin.servo]``."""
+        """``robot`` with these servo parameters, as if written to its ``[twin.servo]``.
+
+        Another ``p_gain_divisor`` keeps the gain registers the robot's servos hold (those the
+        log was recorded with) and gives the SI gains they mean under the new mapping.
+        """
         physics = dataclasses.replace(
             robot.servo.physics,
             stiffness_scale=self.stiffness_scale,
@@ -97,7 +100,11 @@ class ServoFit:
             actuator_delay_s=self.actuator_delay_s,
             p_gain_divisor=self.p_gain_divisor,
         )
-        return dataclasses.replace(robot, servo=dataclasses.replace(robot.servo, physics=physics))
+        servo = dataclasses.replace(robot.servo, physics=physics)
+        gains = robot.gains
+        if physics.p_gain_divisor != robot.servo.physics.p_gain_divisor:
+            gains = servo.gains_of(robot.gain_registers)
+        return dataclasses.replace(robot, servo=servo, gains=gains)
 
     def scaled(self, names: Sequence[str], factors: Sequence[float]) -> ServoFit:
         """These values with parameter ``names[i]`` multiplied by ``factors[i]``; ``delay`` is
@@ -108,8 +115,8 @@ class ServoFit:
             self.damping_nms * fields.get("damping", 1.0),
             self.armature_kgm2 * fields.get("armature", 1.0),
             self.friction_loss_nm * fields.get("friction_loss", 1.0),
-            fields.get("delay", self.actuator_delay_s),
             self.p_gain_divisor * fields.get("p_divisor", 1.0),
+            fields.get("delay", self.actuator_delay_s),
         )
 
     def at(self, names: Sequence[str], x: Sequence[float]) -> ServoFit:
@@ -119,7 +126,8 @@ class ServoFit:
 
     def report(self, robot: RobotConfig) -> dict[str, float]:
         """JSON-ready values, with the stiffness also in N·m/rad at the robot's gains."""
-        servo = servo_dynamics(self.apply(robot).servo.physics, robot.gains)
+        fitted = self.apply(robot)
+        servo = servo_dynamics(fitted.servo.physics, fitted.gains)
         return {
             "stiffness_scale": self.stiffness_scale,
             "stiffness_nm_per_rad": servo.stiffness_nm_per_rad,

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.backends.base import BodyState, JointState
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
+from snakebot.types import BodyState, JointState
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand, ServoGains
 from snakebot.errors import BackendStateError
+from snakebot.types import JointCommand, PDGains
 from tests.contract.conftest import BackendFactory
 
 
@@ -79,7 +79,7 @@ def test_torque_off_then_gains_on_again(make_backend: BackendFactory) -> None:
     with make_backend("snake8") as backend:
         backend.set_torque(False)
         assert not backend.torque_enabled
-        backend.set_gains(ServoGains(position_p=800, position_d=0))
+        backend.set_gains(PDGains(kp_nm_per_rad=3.0, kd_nms_per_rad=0.0))  # XL430 P = 800
         backend.set_torque(True)
         backend.send_command(JointCommand(np.full(8, 0.2)))
         for _ in range(150):

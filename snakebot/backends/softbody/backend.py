@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
@@ -25,6 +25,7 @@ from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.health import divergence_time_s
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.types import BodyState, JointState, PDGains
 
 _BAD_WARNINGS = np.array(
     [
@@ -76,7 +77,7 @@ class SoftBodyBackend(Backend):
         self.directional = body.ground.directional if directional is None else directional
         self.friction = body.ground.friction if friction is None else friction
         self.terrain = terrain
-        self.gains: ServoGains | None = None
+        self.gains: PDGains | None = None
         self._realtime = realtime
         self._pacer: Pacer | None = None
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
@@ -170,7 +171,7 @@ class SoftBodyBackend(Backend):
         self._command = position_rad.copy()
         self._apply_muscles()
 
-    def _set_gains(self, gains: ServoGains) -> None:
+    def _set_gains(self, gains: PDGains) -> None:
         self.gains = gains
 
     def _set_torque(self, enabled: bool) -> None:

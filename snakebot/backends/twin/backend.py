@@ -9,7 +9,7 @@ from typing import Protocol
 import mujoco
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.health import (
@@ -30,6 +30,7 @@ from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, ServoFaultError, SimulationDivergedError
+from snakebot.types import BodyState, JointState, PDGains
 
 JointSelection = int | slice | Sequence[int] | np.ndarray
 """Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""
@@ -168,7 +169,7 @@ class TwinBackend(Backend):
     def _send_command(self, position_rad: np.ndarray) -> None:
         self.data.ctrl[:] = position_rad
 
-    def _set_gains(self, gains: ServoGains) -> None:
+    def _set_gains(self, gains: PDGains) -> None:
         self._store_gains(slice(None), gains)
         self._apply_gains()
 
@@ -176,12 +177,12 @@ class TwinBackend(Backend):
         self._torque_mask[:] = enabled
         self._apply_gains()
 
-    def set_joint_gains(self, joints: JointSelection, gains: ServoGains) -> None:
-        """Apply position-loop gains (servo register units) to some joints only.
+    def set_joint_gains(self, joints: JointSelection, gains: PDGains) -> None:
+        """Apply SI position-loop gains to some joints only.
 
         ``joints`` is a joint index, a slice, indices, or a (N,) bool mask (numpy indexing; an
         index out of range raises IndexError). Joints with torque off stay limp and take the
-        gains when torque comes on. The I gain is ignored: the twin's loop is PD.
+        gains when torque comes on.
         """
         self._require_connected()
         self._store_gains(joints, gains)
@@ -194,7 +195,7 @@ class TwinBackend(Backend):
         self._apply_gains()
         self.torque_enabled = bool(np.all(enabled))
 
-    def _store_gains(self, joints: JointSelection, gains: ServoGains) -> None:
+    def _store_gains(self, joints: JointSelection, gains: PDGains) -> None:
         servo = servo_dynamics(self.robot.servo.physics, gains)
         self._kp[joints] = servo.stiffness_nm_per_rad
         self._kv[joints] = servo.actuator_kv(float(self.model.opt.timestep))

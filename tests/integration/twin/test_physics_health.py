@@ -13,7 +13,6 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
@@ -21,6 +20,7 @@ from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.errors import PhysicsHealthError, SimulationDivergedError
 from snakebot.gaits import Gait, make_gait
+from snakebot.types import JointCommand
 from tests.conftest import edit_robot
 from tests.integration.twin.robots import with_gains
 

@@ -10,7 +10,6 @@ import dynamixel_sdk as dxl
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
@@ -19,6 +18,7 @@ from snakebot.emulation.physics import make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.errors import ConfigError, ServoFaultError
 from snakebot.telemetry import read_log
+from snakebot.types import JointCommand
 
 FOLD = np.array([0, 1.5, 1.5, 1.5, 1.5, 1.5, 0, 0])  # presses modules 2..5 into each other
 
@@ -52,23 +52,69 @@ def test_without_the_new_parts_the_twin_reports_no_electrics_and_reads_exact_pos
     assert physics is not None and "electrical_energy_j" not in physics
 
 
-def test_the_p_gain_divisor_is_a_servo_file_field(config_dir: Path) -> None:
-    robot = robot_with(config_dir, servo="p_gain_divisor = 128")
+def stiffness(robot: RobotConfig) -> float:
+    """The twin's joint stiffness (N·m/rad) at the robot's [gains]."""
+    return servo_dynamics(robot.servo.physics, robot.gains).stiffness_nm_per_rad
+
+
+def test_the_p_gain_divisor_has_one_home_the_servo_files_physics(config_dir: Path) -> None:
     shipped = load_robot("snake8")
+    path = config_dir / "servos" / "xl430-w250.toml"
+    path.write_text(path.read_text().replace("p_gain_divisor = 256", "p_gain_divisor = 128"))
+    robot = load_robot(config_dir / "robots" / "snake8.toml")
     assert robot.servo.physics.p_gain_divisor == 128.0
-    stiff = servo_dynamics(robot.servo.physics, robot.gains).stiffness_nm_per_rad
-    assert stiff == pytest.approx(
-        2 * servo_dynamics(shipped.servo.physics, shipped.gains).stiffness_nm_per_rad
-    )
-    robot = robot_with(config_dir, robot="p_gain_divisor = 200")  # the robot file overrides
-    assert robot.servo.physics.p_gain_divisor == 200.0
+    # The same registers (P = 640) mean twice the stiffness, for the twin and the bus alike.
+    assert robot.gains.kp_nm_per_rad == pytest.approx(2 * shipped.gains.kp_nm_per_rad)
+    assert stiffness(robot) == pytest.approx(2 * stiffness(shipped))
+    assert robot.gain_registers == shipped.gain_registers
+    # A second key in the servo file's [twin] would be a second home: refused, pointing at it.
+    path.write_text(path.read_text() + "\n[twin]\np_gain_divisor = 200\n")
+    with pytest.raises(ConfigError, match=r"xl430-w250.toml: twin.p_gain_divisor: the P-gain "
+                       r"divisor is physics.p_gain_divisor"):
+        load_robot(config_dir / "robots" / "snake8.toml")
+
+
+def test_a_robots_fitted_p_gain_divisor_changes_what_its_registers_mean(config_dir: Path) -> None:
+    # What `snakebot sysid --params p_divisor` writes: [twin.servo] p_gain_divisor.
+    shipped = load_robot("snake8")
+    robot = robot_with(config_dir, robot="p_gain_divisor = 128")
+    assert robot.servo.physics.p_gain_divisor == 128.0
+    assert robot.servo.gain_mapping.p_gain_divisor == 128.0
+    assert robot.gains.kp_nm_per_rad == pytest.approx(2 * shipped.gains.kp_nm_per_rad)
+    assert robot.gains.kd_nms_per_rad == pytest.approx(shipped.gains.kd_nms_per_rad)
+    with TwinBackend(robot) as twin:
+        twin_kp = float(twin.model.actuator_gainprm[0, 0])
+    assert twin_kp == pytest.approx(2 * stiffness(shipped))
+    # The Dynamixel backend turns the SI gains back with the same mapping: the servos get the
+    # robot file's registers, and the emulated twin behind them the same stiffness as the twin.
+    from snakebot.backends.dynamixel.backend import DynamixelBackend
+
+    chain, motion = make_twin_chain(robot, 1_000_000)
+    for servo in chain.servos:
+        servo.poke("return_delay_time", 0)
+    with registered(chain) as url, DynamixelBackend(
+        robot, port=url, baud=1_000_000, port_handler_factory=EmulatedPortHandler,
+        clock=lambda: chain.now_s, sleep=chain.advance,
+    ) as backend:
+        assert backend.gain_registers == shipped.gain_registers
+        backend.advance(0.02)
+        chained_kp = motion.twin.model.actuator_gainprm[:, 0].copy()
+    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+           for s in chain.servos}
+    assert got == {(640, 0, 4000)}
+    assert np.allclose(chained_kp, twin_kp)
 
 
 def test_out_of_range_or_incomplete_parts_name_the_file_and_key(config_dir: Path) -> None:
-    with pytest.raises(ConfigError, match=r"xl430-w250.toml: twin.p_gain_divisor: expected"):
-        robot_with(config_dir, servo="p_gain_divisor = 0")
-    path = config_dir / "servos" / "xl430-w250.toml"
-    path.write_text(path.read_text().replace("\n[twin]\np_gain_divisor = 0\n", ""))
+    path = config_dir / "robots" / "snake8.toml"
+    original = path.read_text()
+    with pytest.raises(ConfigError, match=r"snake8.toml: twin.servo.p_gain_divisor: expected"):
+        robot_with(config_dir, robot="p_gain_divisor = 0")
+    path.write_text(original)
+    with pytest.raises(ConfigError, match=r"xl430-w250.toml: twin.encoder_noise_rad: expected"):
+        robot_with(config_dir, servo="encoder_noise_rad = 1")
+    servo = config_dir / "servos" / "xl430-w250.toml"
+    servo.write_text(servo.read_text().replace("\n[twin]\nencoder_noise_rad = 1\n", ""))
     with pytest.raises(ConfigError, match=r"snake8.toml: twin.servo.battery_resistance_ohm: "
                        "battery sag needs the current draw"):
         robot_with(config_dir, robot="battery_resistance_ohm = 0.5")

@@ -8,10 +8,10 @@ import re
 
 import numpy as np
 
-from snakebot.backends.base import JointState
 from snakebot.drive.display import WIDTH, DriveDisplay, Frame, render
 from snakebot.drive.loop import DriveCycle
 from snakebot.gaits.live import LiveGait
+from snakebot.types import JointState
 
 GAITS = ("sidewinding", "rolling", "lateral_undulation", "turn_in_place", "linear_progression")
 
