@@ -24,6 +24,9 @@ class RunSummary:
     ``backend_stats`` holds the backend's own counters (servo temperature, clipped commands,
     ...); ``extra`` holds backend-specific results printed beside the others (a mass-spring
     body's travel angle). ``log`` is the telemetry CSV, ``log_rows`` its data rows.
+    ``physics`` is the twin's physics health (penetration, airborne and upside-down fractions,
+    chatter, energy, stall; warnings past the thresholds in docs/physics.md) and, with the fuller
+    servo model, its electrical figures; None on a backend without them (hardware).
     """
 
     robot: str
@@ -53,6 +56,7 @@ class RunSummary:
     log: str | None = None
     log_rows: int = 0
     video: str | None = None
+    physics: Mapping[str, Any] | None = None
 
     @classmethod
     def from_run(
@@ -97,6 +101,7 @@ class RunSummary:
             extra=_frozen(extra or {}),
             log=log,
             log_rows=log_rows,
+            physics=None if metrics.get("physics") is None else _frozen(metrics["physics"]),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -133,6 +138,8 @@ class RunSummary:
             out["log_rows"] = self.log_rows
         if self.video is not None:
             out["video"] = self.video
+        if self.physics is not None:
+            out["physics"] = dict(self.physics)
         return out
 
 

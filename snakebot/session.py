@@ -107,10 +107,12 @@ def resolve_gait(
     ``gait`` is a registered gait name (default serpenoid), a gait file (``.toml`` path, as
     ``tune gait`` writes) or a Gait object (then ``params`` must be empty). ``gait_file`` names
     a gait file separately; with a ``gait`` name too, the two must agree. ``params`` override
-    the defaults (or the file's values). Raises GaitError for an unknown gait or parameter,
-    ConfigError for a bad gait file.
+    the defaults (or the file's values). Raises GaitError for an unknown gait or parameter or
+    a preset that cannot work with the robot's joint axes (GaitAxesWarning where it merely
+    fits badly), ConfigError for a bad gait file.
     """
-    from snakebot.gaits import Gait, load_gait_file, make_gait
+    from snakebot.config import RobotConfig
+    from snakebot.gaits import Gait, check_joint_axes, load_gait_file, make_gait
 
     if isinstance(gait, Gait):
         if params:
@@ -137,6 +139,8 @@ def resolve_gait(
             )
         name = file_name
     values.update(params or {})
+    if isinstance(robot, RobotConfig):  # a mass-spring body has muscles, not servo axes
+        check_joint_axes(name, [joint.axis for joint in robot.joints], robot.name)
     built = make_gait(
         name, robot.joint_count, values, lower_rad=robot.lower_rad, upper_rad=robot.upper_rad
     )

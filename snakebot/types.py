@@ -34,11 +34,13 @@ class BodyState:
     """Whole-body quantities only a twin (or a motion-capture rig) can measure.
 
     ``com_m`` is the centre of mass (3,) in the world frame, ``head_quat`` the head link's
-    orientation (w, x, y, z).
+    orientation (w, x, y, z). ``head_gyro_rad_s`` (3,) is what a gyro in the head reads: its
+    angular velocity in its own frame (None where no IMU is modelled).
     """
 
     com_m: np.ndarray
     head_quat: np.ndarray
+    head_gyro_rad_s: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ from snakebot.drive.setup import (
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
-from snakebot.gaits import parse_set_options
+from snakebot.gaits import check_joint_axes, parse_set_options
 from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
 from snakebot.telemetry.sidecar import gait_facts
 
@@ -156,6 +156,8 @@ def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoic
                 f"{item}: expected GAIT.KEY=VALUE with GAIT one of {', '.join(names)} "
                 "(KEY=VALUE alone only when one gait is listed)",
             )
+    for name in names:
+        check_joint_axes(name, [joint.axis for joint in robot.joints], robot.name)
     return [GaitChoice(name, parse_set_options(name, overrides[name])) for name in names]
 
 

@@ -45,6 +45,7 @@ def _as_json(spec: GaitSpec, origin: Origin) -> dict[str, object]:
         "entry_point": origin.entry_point if plugin else None,
         "default_search": list(spec.default_search),
         "rolls_over": spec.rolls_over,
+        "axes": {"even": spec.axes.even, "odd": spec.axes.odd, "required": spec.axes.required},
         "params": [
             {
                 "name": p.name,
@@ -75,6 +76,9 @@ def _as_text(spec: GaitSpec, origin: Origin) -> str:
     ]
     search = ", ".join(spec.default_search) or "none (name --params)"
     lines.append(f"    tune gait searches by default: {search}")
+    if spec.axes.even is not None or spec.axes.odd is not None:
+        strict = "refused" if spec.axes.required else "warned about"
+        lines.append(f"    joint axes: needs {spec.axes.describe()} (other axes are {strict})")
     return "\n".join(lines) + "\n"
 
 

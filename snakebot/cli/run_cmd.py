@@ -354,8 +354,25 @@ def print_summary(run: RunSummary) -> None:
         f"{fmt('max_abs_command_rad', ' rad')}",
         f"  efficiency   cost of transport {fmt('cost_of_transport')}",
     ]
+    physics = summary.get("physics")
+    if isinstance(physics, dict):
+        lines.append(physics_line(physics))
     if "log" in summary:
         lines.append(f"  log          {summary['log']} ({run.log_rows} rows)")
     if "video" in summary:
         lines.append(f"  video        {summary['video']}")
     print("\n".join(lines))
+    if isinstance(physics, dict):
+        for warning in physics.get("warnings", []):
+            print(f"warning: physics: {warning} (docs/physics.md)", file=sys.stderr)
+
+
+def physics_line(physics: dict[str, object]) -> str:
+    """One summary line of the twin's physics health."""
+    return (
+        f"  physics      penetration {physics['max_floor_penetration_mm']:.1f} mm floor, "
+        f"{physics['max_self_penetration_mm']:.1f} mm self; airborne "
+        f"{physics['airborne_fraction']:.0%}, upside down {physics['upside_down_fraction']:.0%}, "
+        f"chatter {physics['chatter']:.0%}, stall {physics['longest_stall_s']:.1f} s, "
+        f"{len(physics['warnings'])} warnings"  # type: ignore[arg-type]
+    )

@@ -52,8 +52,9 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--params",
         default="stiffness,damping,armature",
-        help="parameters to fit, from stiffness,damping,armature,friction_loss,delay "
-        f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s)",
+        help="parameters to fit, from stiffness,damping,armature,friction_loss,delay,p_divisor "
+        f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s; p_divisor: "
+        "the P-gain divisor, 256 or 128, instead of stiffness)",
     )
     parser.add_argument("--workers", type=positive_int, default=2,
                         help="parallel replays (default 2)")

@@ -45,6 +45,10 @@ FRICTION = Bounds(0, 10, "", "Coulomb coefficient; rubber on rough ground is abo
 SERVO_DAMPING = Bounds(0, 10, "N·m·s/rad", "a desk servo's is 0.001 to 1")
 ARMATURE = Bounds(0, 1, "kg·m²", "reflected rotor inertia; an XM430's is 0.045")
 FRICTION_LOSS = Bounds(0, 10, "N·m", "dry friction at the joint; an XM430's is 0.03")
+# One range for the P divisor, in the servo file and in a robot's [twin.servo] override alike.
+P_GAIN_DIVISOR = Bounds(
+    1, 1e6, "", "Position P Gain units per unit of duty per tick (256 on X series)"
+)
 
 ROBOT: dict[str, Bounds] = {
     "link.length_m": Bounds(0.01, 1.0, "m", "joint-to-joint pitch of one module"),
@@ -64,6 +68,7 @@ ROBOT: dict[str, Bounds] = {
     "twin.servo.actuator_delay_s": Bounds(
         0, MAX_ACTUATOR_DELAY_S, "s", "command to action; a Dynamixel chain's is a few ms"
     ),
+    "twin.servo.p_gain_divisor": P_GAIN_DIVISOR,
     "joints[].servo_id": Bounds(0, 252, "", "Dynamixel IDs (253 and up are reserved)"),
     "joints[].zero_offset_rad": Bounds(-math.pi, math.pi, "rad", "calibration offset"),
     "joints[].lower_rad": Bounds(-math.pi, 0, "rad", "joint limit; also lower_rad < upper_rad"),
@@ -79,9 +84,7 @@ SERVO: dict[str, Bounds] = {
     "physics.pwm_limit": Bounds(1, 2009, "", "PWM full scale (885 on X series); at most the "
                                 "PWM Limit register's maximum"),
     "physics.d_gain_loop_period_s": Bounds(1e-5, 0.1, "s", "the firmware's D-term period"),
-    "physics.p_gain_divisor": Bounds(
-        1, 1e6, "", "Position P Gain units per unit of duty per tick (256 on X series)"
-    ),
+    "physics.p_gain_divisor": P_GAIN_DIVISOR,
     "physics.d_gain_divisor": Bounds(
         1, 1e6, "", "Position D Gain units per unit of duty per tick per loop period (32)"
     ),

@@ -26,6 +26,7 @@ from snakebot.config.servo_file import (
     servo_table,
 )
 from snakebot.config.servo_settings import parse_settings
+from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable
 
@@ -80,7 +81,11 @@ def load_servo_model(model: str, robot_path: Path) -> ServoModel:
 
 
 def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
-    """``[twin.servo]``: servo parameters fitted by ``snakebot sysid``; the twin uses them."""
+    """``[twin.servo]``: servo parameters fitted by ``snakebot sysid``; the twin uses them.
+
+    ``p_gain_divisor`` overrides the servo file's, so it changes the servo's gain mapping: the
+    robot's register gains mean other SI gains, on the twin and on the bus alike.
+    """
     physics = servo.physics
 
     def number(key: str, default: float | None) -> float:
@@ -95,6 +100,8 @@ def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
         actuator_delay_s=(
             number("actuator_delay_s", None) if table.has("actuator_delay_s") else None
         ),
+        p_gain_divisor=number("p_gain_divisor", physics.p_gain_divisor),
+        extras=read_servo_extras(table, physics.extras),
     )
     table.done()
     return replace(servo, physics=fitted)
@@ -145,6 +152,18 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     link_t.done()
 
     joints = _parse_joints(root, control_table)
+
+    twin_t = root.table("twin", required=False)
+    twin = TwinConfig(
+        timestep_s=number(twin_t, "timestep_s", 0.002),
+        ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
+        axial_friction=number(twin_t, "axial_friction", 1.0),
+        lateral_friction=number(twin_t, "lateral_friction", 1.0),
+    )
+    # Before [gains]: a fitted p_gain_divisor changes what the gain registers mean.
+    servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
+    twin_t.done()
+
     if root.has("gains"):
         gains, position_i = parse_gains(root.table("gains"), servo)
     else:
@@ -158,16 +177,6 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         stop_policy=safety_t.text("stop_policy", "hold", choices=("hold", "limp")),  # type: ignore[arg-type]
     )
     safety_t.done()
-
-    twin_t = root.table("twin", required=False)
-    twin = TwinConfig(
-        timestep_s=number(twin_t, "timestep_s", 0.002),
-        ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
-        axial_friction=number(twin_t, "axial_friction", 1.0),
-        lateral_friction=number(twin_t, "lateral_friction", 1.0),
-    )
-    servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
-    twin_t.done()
     # Servo settings for the whole chain; merged per servo and checked against the backend's
     # connect checks by snakebot.setup (config diff/apply, calibrate).
     parse_settings(path, "settings", root.data.get("settings", {}), control_table)

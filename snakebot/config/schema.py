@@ -8,6 +8,7 @@ from typing import Literal
 
 import numpy as np
 
+from snakebot.config.servo_extras import NO_EXTRAS, ServoExtras
 from snakebot.servo import GainMapping
 from snakebot.types import PDGains, StopPolicy
 
@@ -30,7 +31,10 @@ class ServoPhysics:
     twin's factor on the SI stiffness), ``damping_nms`` (joint damping with torque on, replacing
     back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command leaving the controller
     to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no delay model) come from a
-    robot's ``[twin.servo]`` (sysid).
+    robot's ``[twin.servo]`` (sysid), which may also override ``p_gain_divisor`` (then the
+    robot's register gains are converted with the overridden divisor, for the twin and the bus
+    alike). ``extras`` (electrics, overload, encoder and IMU noise) come from the servo file's
+    ``[twin]``, overridden by the robot's ``[twin.servo]``.
     """
 
     stall_torque_nm: float
@@ -48,6 +52,7 @@ class ServoPhysics:
     stiffness_scale: float = 1.0
     damping_nms: float | None = None
     actuator_delay_s: float | None = None
+    extras: ServoExtras = NO_EXTRAS
 
 
 @dataclass(frozen=True)

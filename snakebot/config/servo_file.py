@@ -1,4 +1,5 @@
-"""Servo files, ``servos/<model>.toml``: the model, its physics, default gains and settings.
+"""Servo files, ``servos/<model>.toml``: the model, its physics, the twin's optional servo-model
+parts (``[twin]``) and settings.
 
 Every key is checked: ranges from snakebot.config.bounds, the model against its control table
 (snakebot.servo_tables: the model number and the encoder resolution must agree with it), the
@@ -8,12 +9,14 @@ Every key is checked: ranges from snakebot.config.bounds, the model against its 
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
 from snakebot.config import bounds
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.schema import GainRegisters, ServoModel, ServoPhysics
 from snakebot.config.servo_settings import parse_settings
+from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable, UnknownModelError, supported_models, table_for_model
 from snakebot.types import PDGains
@@ -136,7 +139,8 @@ def parse_servo_file(path: Path) -> ServoModel:
 
     The datasheet facts (model number, stall torque, no-load speed and its voltage, resolution,
     factory gains, register ranges) come from the model's control table; the file adds the
-    supply voltage, the twin's estimates and the gain mapping's divisors.
+    supply voltage, the twin's estimates, the gain mapping's divisors and the twin's optional
+    servo-model parts (``[twin]``, snakebot.config.servo_twin).
     """
     root = Table(path, read_toml(path))
     name = root.text("model")
@@ -171,6 +175,14 @@ def parse_servo_file(path: Path) -> ServoModel:
     if physics.pwm_limit > pwm_max:
         raise phys.error("pwm_limit", f"{table.model}'s PWM Limit is at most {pwm_max}")
     phys.done()
+    twin = root.table("twin", required=False)
+    if twin.has("p_gain_divisor"):
+        raise twin.error(
+            "p_gain_divisor", "the P-gain divisor is physics.p_gain_divisor (one key for the twin "
+            "and the bus); a robot's [twin.servo] may override it"
+        )
+    physics = replace(physics, extras=read_servo_extras(twin, physics.extras))
+    twin.done()
     parse_settings(path, "settings", root.data.get("settings", {}), table)
     root.mark_read("settings")
     root.done()

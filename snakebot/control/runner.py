@@ -126,6 +126,9 @@ def run_gait(
     summary["overruns"] = backend.stats.overruns
     summary["backend_stats"] = dict(backend.stats.extra)
     summary["interrupted"] = interrupted
+    health = getattr(backend, "physics_health", None)  # the twin's physics checks
+    if callable(health) and (physics := health()) is not None:
+        summary["physics"] = physics
     return RunResult(summary, interrupted, 0 if log is None else log.rows, stopped_by=stopped_by)
 
 

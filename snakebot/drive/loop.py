@@ -101,6 +101,9 @@ def run_drive(
     summary["keys"] = controller.events
     summary["governed_cycles"] = live.governed_cycles
     summary["interrupted"] = False
+    health = getattr(backend, "physics_health", None)  # the twin's physics checks
+    if callable(health) and (physics := health()) is not None:
+        summary["physics"] = physics
     return DriveResult(summary, controller.stop_reason or "", loop.cycle)
 
 

@@ -17,8 +17,9 @@ def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
     def write(cycle: DriveCycle) -> None:
         state = cycle.state
         com = None if cycle.body is None else cycle.body.com_m
+        imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
         log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
-                  state.velocity_rad_s, state.effort_nm, com)
+                  state.velocity_rad_s, state.effort_nm, com, imu)
 
     return write
 

@@ -6,7 +6,9 @@ errors that is a spring of stiffness K = tau_stall(V) * error_gain * P, with the
 unit of P = (ticks/rad) / (p_gain_divisor * PWM Limit). X-series firmware computes KPP = P/128 on
 an output out of 2 * PWM Limit, hence ``p_gain_divisor`` 256; KPD = D/16 per tick per loop
 period, hence ``d_gain_divisor`` 32 (D weighs p_gain_divisor / d_gain_divisor = 8 P units, per
-``d_gain_loop_period_s``). The divisors are per-servo numbers in the servo file (docs/twin.md).
+``d_gain_loop_period_s``). The divisors are per-servo numbers in the servo file (docs/twin.md);
+256 is bam's fit of one XL330, so a robot file's ``[twin.servo]`` may override ``p_gain_divisor``
+with what ``snakebot sysid --params p_divisor`` fits, and that robot's mapping uses it throughout.
 
 Only the Dynamixel layer and the robot-file loader use the register side; the Backend contract
 carries :class:`snakebot.types.PDGains` in SI.

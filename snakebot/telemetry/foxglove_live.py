@@ -195,6 +195,7 @@ class FoxgloveTelemetry:
         velocity: np.ndarray,
         effort: np.ndarray,
         com: np.ndarray | None,
+        imu: tuple[np.ndarray, np.ndarray | None] | None = None,
     ) -> None:
         """Send one cycle (see :meth:`~snakebot.telemetry.sink.CycleLog.write`)."""
         now_ns = self.time_ns(time_s)

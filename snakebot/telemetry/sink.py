@@ -25,9 +25,11 @@ class CycleLog(Protocol):
         velocity: np.ndarray,
         effort: np.ndarray,
         com: np.ndarray | None,
+        imu: tuple[np.ndarray, np.ndarray | None] | None = None,
     ) -> None:
         """Take one cycle: robot time (s), its number, (N,) command/position rad, velocity
-        rad/s, effort N m, and the centre of mass (3,) m or None (hardware)."""
+        rad/s, effort N m, the centre of mass (3,) m or None (hardware), and the head IMU
+        (quaternion (4,), gyro (3,) rad/s or None) or None."""
         ...
 
     def close(self) -> None:
@@ -61,10 +63,11 @@ class TelemetryTee:
         velocity: np.ndarray,
         effort: np.ndarray,
         com: np.ndarray | None,
+        imu: tuple[np.ndarray, np.ndarray | None] | None = None,
     ) -> None:
         """Write the cycle to every sink (see :meth:`CycleLog.write`)."""
         for sink in self.sinks:
-            sink.write(time_s, cycle, command, position, velocity, effort, com)
+            sink.write(time_s, cycle, command, position, velocity, effort, com, imu)
 
     def close(self) -> None:
         """Close every sink; the first failure is raised once all were tried."""

@@ -11,6 +11,7 @@ stopped early and stop costing time.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -81,6 +82,14 @@ class TwinBatch:
     ) -> None:
         self.robot = robot
         self.workers = max(1, workers)
+        if robot.servo.physics.extras.changes_physics:
+            warnings.warn(
+                f"{robot.name}: battery sag and the overload protection (the servo model's "
+                "battery_resistance_ohm, overload_trip_s) act between control periods of "
+                "`snakebot run`; batched tuning and sysid replays leave them out, so a result "
+                "may replay differently there (docs/physics.md)",
+                stacklevel=2,
+            )
         self.twin = TwinBackend(robot, friction=friction)
         self.twin.connect()
         model, data = self.twin.model, self.twin.data

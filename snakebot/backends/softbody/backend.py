@@ -22,6 +22,7 @@ from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.health import divergence_time_s
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
 from snakebot.types import BodyState, JointState, PDGains
@@ -198,6 +199,7 @@ class SoftBodyBackend(Backend):
             self._apply_muscles()
         warnings = data.warning.number
         before = int(warnings[_BAD_WARNINGS].sum())
+        time_before = float(data.time)
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
         for step in range(steps):
@@ -209,7 +211,8 @@ class SoftBodyBackend(Backend):
                 rule.apply(displacement, velocity, data.contact.geom)
         if int(warnings[_BAD_WARNINGS].sum()) != before or not np.isfinite(data.qpos).all():
             raise SimulationDivergedError(
-                float(data.time), "MuJoCo reported bad accelerations (state was reset)"
+                divergence_time_s(time_before, steps, float(model.opt.timestep), float(data.time)),
+                "MuJoCo reported bad accelerations (state was reset)"
             )
         self._track()
         if self._pacer is not None:

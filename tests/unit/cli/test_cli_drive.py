@@ -62,6 +62,7 @@ def test_a_short_drive_prints_its_summary_and_keeps_its_log(
     assert summary["gaits"] == ["serpenoid"] and summary["stopped_by"] == "quit"
     assert summary["keys"] == 5 and summary["distance_m"] > 0.05
     assert summary["max_abs_command_rad"] <= 0.3 + 1e-9
+    assert summary["physics"]["warnings"] == []  # the twin's physics health (docs/physics.md)
     data = read_log(log)
     assert data.values.shape[0] == summary["control_cycles"]
 

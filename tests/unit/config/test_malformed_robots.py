@@ -172,6 +172,8 @@ CASES = [
     twin_servo("negative friction loss", "friction_loss_nm = -0.1", "twin.servo.friction_loss_nm",
                RANGE),
     twin_servo("long delay", "actuator_delay_s = 0.5", "twin.servo.actuator_delay_s", RANGE),
+    twin_servo("zero P divisor override", "p_gain_divisor = 0", "twin.servo.p_gain_divisor",
+               RANGE),
     twin_servo("unknown twin.servo key", "backlash_rad = 0.1", "twin.servo.backlash_rad",
                "unknown key"),
     # -- [joint_defaults] ----------------------------------------------------------------------
@@ -227,6 +229,9 @@ CASES = [
           "[default_gains]\nposition_p = 640\n\n[settings]", "default_gains", "kept once"),
     servo("zero P divisor", "p_gain_divisor = 256", "p_gain_divisor = 0",
           "physics.p_gain_divisor", RANGE),
+    servo("P divisor in the servo file's twin table", "[settings]",
+          "[twin]\np_gain_divisor = 128\n\n[settings]", "twin.p_gain_divisor",
+          "the P-gain divisor is physics.p_gain_divisor"),
     servo("huge D divisor", "d_gain_divisor = 32", "d_gain_divisor = 1e9",
           "physics.d_gain_divisor", RANGE),
     servo("no D divisor", "d_gain_divisor = 32", "", "physics.d_gain_divisor", "missing"),
@@ -293,3 +298,12 @@ def test_docs_list_every_range_as_the_code_has_it() -> None:
     docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
     for key, limits in {**ROBOT, **SERVO}.items():
         assert f"| `{key}` | {limits.describe()} | {limits.why} |" in docs, key
+
+
+def test_docs_list_the_twin_servo_model_ranges() -> None:
+    from snakebot.config.servo_twin import BOUNDS
+
+    docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
+    for key, limits in BOUNDS.items():
+        for where in (f"twin.servo.{key}", f"twin.{key}"):
+            assert f"| `{where}` | {limits.describe()} | {limits.why} |" in docs, where
