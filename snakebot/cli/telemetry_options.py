@@ -14,6 +14,7 @@ from typing import Any
 from snakebot.backends.base import Backend
 from snakebot.cli.backend_options import backend_spec
 from snakebot.cli.common import check_writable
+from snakebot.errors import OutputError
 from snakebot.telemetry import CsvTelemetryWriter, column_names
 from snakebot.telemetry.sink import CycleLog, combine
 
@@ -118,16 +119,22 @@ def _open_foxglove(
     options = TelemetryOptions(port=args.foxglove, host=args.foxglove_host, mcap_path=args.mcap)
     health, alerts = backend_readings(backend)
     readings = SlowReadings(health=health, alerts=alerts, overruns=lambda: backend.stats.overruns)
-    sink = stack.enter_context(
-        FoxgloveTelemetry(
-            options,
-            servo_ids=getattr(robot, "servo_ids", range(robot.joint_count)),
-            rate_hz=rate_hz,
-            geometry=robot_geometry(robot, backend),
-            readings=readings,
-            drive=command == "drive",
+    try:
+        sink = stack.enter_context(
+            FoxgloveTelemetry(
+                options,
+                servo_ids=getattr(robot, "servo_ids", range(robot.joint_count)),
+                rate_hz=rate_hz,
+                geometry=robot_geometry(robot, backend),
+                readings=readings,
+                drive=command == "drive",
+            )
         )
-    )
+    except OutputError as exc:
+        if exc.path != f"{options.host}:{options.port}":
+            raise
+        # the port is taken: say which option chose it
+        raise OutputError(f"--foxglove={args.foxglove}", exc.reason) from exc
     if sink.port is not None:
         url = f"ws://{options.host}:{sink.port}"
         print(f"snakebot: Foxglove: open connection {url} (layout: docs/foxglove/"

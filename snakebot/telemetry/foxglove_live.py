@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from snakebot.errors import ConfigError, MissingDependencyError, OutputError
+from snakebot.errors import MissingDependencyError, OutputError
 from snakebot.telemetry import schemas
 from snakebot.telemetry.scene import LinkPoses, frame_transforms, scene_update
 
@@ -168,11 +168,10 @@ class FoxgloveTelemetry:
                 )
             except RuntimeError as exc:
                 reason = str(exc).removeprefix("FoxgloveError: ")
-                raise ConfigError(
-                    "--foxglove", "",
-                    f"cannot serve on {options.host}:{options.port}: {reason} "
-                    "(another snakebot or Foxglove bridge there? pick another port, "
-                    "--foxglove=8766)",
+                raise OutputError(
+                    f"{options.host}:{options.port}",
+                    f"cannot serve Foxglove there: {reason} (another snakebot or Foxglove "
+                    "bridge there? pick another port)",
                 ) from exc
 
     @property

@@ -73,7 +73,11 @@ def test_a_log_without_a_centre_of_mass_plots_without_the_path(
 ) -> None:
     lines = drive_log[0].read_text().splitlines()
     hardware = tmp_path / "hardware.csv"  # what a servo chain writes: no CoM
-    rows = [",".join([*line.split(",")[:-3], "nan", "nan", "nan"]) for line in lines[1:]]
+    com = [i for i, name in enumerate(lines[0].split(",")) if name.startswith("com_")]
+    rows = [
+        ",".join("nan" if i in com else value for i, value in enumerate(line.split(",")))
+        for line in lines[1:]
+    ]
     hardware.write_text("\n".join([lines[0], *rows]) + "\n")
     result = snakebot("log", "plot", str(hardware))
     assert result.returncode == 0, result.stderr

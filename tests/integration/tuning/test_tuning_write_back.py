@@ -47,7 +47,7 @@ def test_tune_gains_out_writes_a_copy_and_text_says_where(
     assert f"written to {out}" in text
     assert shipped_digest() == before
     written = tomllib.loads(out.read_text())["gains"]
-    assert load_robot(out).gains.position_p == written["position_p"]
+    assert load_robot(out).gain_registers.position_p == written["position_p"]
     assert written != tomllib.loads((shipped_configs() / "robots" / "snake8.toml").read_text())[
         "gains"
     ]
