@@ -61,6 +61,7 @@ ROBOT: dict[str, Bounds] = {
     "twin.timestep_s": Bounds(0.0001, 0.02, "s", "MuJoCo's step; 2 ms suits desk servos"),
     "twin.axial_friction": FRICTION,
     "twin.lateral_friction": FRICTION,
+    "twin.backward_friction": FRICTION,
     "twin.servo.stiffness_scale": Bounds(0.01, 100, "", "sysid's factor on the servo stiffness"),
     "twin.servo.damping_nms": SERVO_DAMPING,
     "twin.servo.armature_kgm2": ARMATURE,
@@ -87,8 +88,9 @@ SERVO: dict[str, Bounds] = {
     "physics.ticks_per_rev": Bounds(
         16, 2**21, "", "encoder ticks per turn; must match the control table's resolution"
     ),
-    "physics.pwm_limit": Bounds(1, 2009, "", "PWM full scale (885 on X series); at most the "
-                                "PWM Limit register's maximum"),
+    "physics.pwm_limit": Bounds(
+        1, 2009, "", "PWM full scale (885 on X series); at most the PWM Limit register's maximum"
+    ),
     "physics.d_gain_loop_period_s": Bounds(1e-5, 0.1, "s", "the firmware's D-term period"),
     "default_gains.position_p": GAIN,
     "default_gains.position_i": GAIN,

@@ -161,6 +161,10 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
         axial_friction=number(twin_t, "axial_friction", 1.0),
         lateral_friction=number(twin_t, "lateral_friction", 1.0),
+        friction_model=twin_t.text("friction_model", "auto", choices=("auto", "pairs", "scale")),  # type: ignore[arg-type]
+        backward_friction=(
+            number(twin_t, "backward_friction") if twin_t.has("backward_friction") else None
+        ),
     )
     servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
     twin_t.done()
@@ -206,8 +210,11 @@ def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, 
         fields = {**defaults, **_joint_fields(item)}
         for key in ("servo_id", "axis", "lower_rad", "upper_rad"):
             if key not in fields:
-                raise item.error(key, "missing (required; lower_rad, upper_rad and axis may come "
-                                 "from [joint_defaults])")
+                raise item.error(
+                    key,
+                    "missing (required; lower_rad, upper_rad and axis may come "
+                    "from [joint_defaults])",
+                )
         servo_id = fields["servo_id"]
         if servo_id in seen_ids:
             raise item.error(
@@ -224,8 +231,9 @@ def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, 
         )
         if joint.upper_rad - joint.lower_rad <= 0:
             raise item.error("upper_rad", "expected upper_rad > lower_rad")
-        parse_settings(Path(root.source), f"{item.path}.settings", item.data.get("settings", {}),
-                       control_table)
+        parse_settings(
+            Path(root.source), f"{item.path}.settings", item.data.get("settings", {}), control_table
+        )
         item.mark_read("settings")
         item.done()
         joints.append(joint)

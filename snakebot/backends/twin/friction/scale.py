@@ -1,0 +1,189 @@
+"""Scale friction: directional Coulomb friction in each link's own frame, on any ground.
+
+MuJoCo's contact pairs give body-aligned friction only between a capsule and a plane
+(locomotion.md §4); on a height field, a box or a cylinder the frame is world-aligned and lateral
+undulation stops. Here the ground contacts carry only normal forces (condim 1) and a force at
+each link's centre of mass stands for the friction of its scales or wheels. For every contact of
+a link with anything but another link, with normal n and normal force f_n:
+
+    a = the link's forward axis projected on the contact plane, l = n x a,
+    F = -f_n [mu_f|b tanh(v_a / v0) a + mu_lat tanh(v_l / v0) l]
+
+where v is the link's COM velocity, mu_f applies when v_a > 0 (sliding head-first) and mu_b when
+v_a < 0; backward >= forward models scales (Miller 1988; Hu et al. 2009). v0 regularises
+Coulomb's sign near zero speed; it is raised per link to ``h mu N / m`` where the slope mu N / v0
+would overshoot in one explicit step. The force uses the contact forces of the step before (one
+step of lag, learning-softbody-terrain.md §3.2).
+
+The force is computed inside ``mj_step`` by a ``mjcb_sensor`` callback: C through ctypes when a
+compiler is available (scale_c.py), numpy otherwise, with a warning.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import mujoco
+import numpy as np
+
+from snakebot.backends.twin.friction.layout import NUMERIC_NAME, SENSOR_NAME, Slot
+from snakebot.errors import ConfigError
+
+FrictionModel = Literal["auto", "pairs", "scale"]
+FRICTION_MODELS: tuple[FrictionModel, ...] = ("auto", "pairs", "scale")
+Implementation = Literal["c", "numpy"]
+DEFAULT_V0_M_S = 0.01
+_ENV_IMPLEMENTATION = "SNAKEBOT_SCALE_FRICTION"
+
+
+@dataclass(frozen=True)
+class ScaleFriction:
+    """Coefficients of the scale model: sliding forward, backward and sideways; v0 in m/s.
+
+    ConfigError (naming ``source``) unless all are finite and >= 0, backward >= forward and
+    v0 > 0.
+    """
+
+    forward: float
+    backward: float
+    lateral: float
+    v0_m_s: float = DEFAULT_V0_M_S
+    source: str = "--friction"
+
+    def __post_init__(self) -> None:
+        values = (self.forward, self.backward, self.lateral)
+        if not all(math.isfinite(v) and v >= 0 for v in values):
+            raise ConfigError(self.source, "", f"friction coefficients must be >= 0, got {values}")
+        if self.backward < self.forward:
+            raise ConfigError(
+                self.source,
+                "",
+                f"backward friction {self.backward:g} is below forward {self.forward:g}: scales "
+                "resist sliding tail-first at least as much as head-first",
+            )
+        if not (math.isfinite(self.v0_m_s) and self.v0_m_s > 0):
+            raise ConfigError(self.source, "", f"v0 must be > 0 m/s, got {self.v0_m_s}")
+
+
+def add_scale_friction(spec: mujoco.MjSpec, link_count: int, friction: ScaleFriction) -> None:
+    """Add the parameter element and the per-link load sensor to ``spec``.
+
+    The link geoms must already touch the ground with condim 1 (model_builder does that);
+    :func:`bind_scale_friction` completes the model after compiling.
+    """
+    data = [0.0] * len(Slot)
+    data[Slot.LINK_COUNT] = float(link_count)
+    data[Slot.MU_FORWARD] = friction.forward
+    data[Slot.MU_BACKWARD] = friction.backward
+    data[Slot.MU_LATERAL] = friction.lateral
+    data[Slot.V0_M_S] = friction.v0_m_s
+    spec.add_numeric(name=NUMERIC_NAME, data=data)
+    spec.add_sensor(
+        name=SENSOR_NAME,
+        type=mujoco.mjtSensor.mjSENS_USER,
+        dim=link_count,
+        needstage=mujoco.mjtStage.mjSTAGE_ACC,
+        datatype=mujoco.mjtDataType.mjDATATYPE_POSITIVE,
+    )
+
+
+def bind_scale_friction(
+    model: mujoco.MjModel, first_body: int, implementation: Implementation | None = None
+) -> Implementation:
+    """Point ``model``'s parameters at its link bodies (``first_body`` onward, consecutive) and
+    install the callback; returns the implementation in use ("c" or "numpy").
+
+    ``implementation`` None means $SNAKEBOT_SCALE_FRICTION, else C if it compiles (a warning and
+    numpy if not).
+    """
+    start = model.numeric_adr[model.numeric(NUMERIC_NAME).id]
+    model.numeric_data[start + Slot.FIRST_BODY] = first_body
+    return install(implementation)
+
+
+def install(implementation: Implementation | None = None) -> Implementation:
+    """Make MuJoCo compute scale friction in every model that carries its elements."""
+    choice = implementation or os.environ.get(_ENV_IMPLEMENTATION, "c")
+    if choice not in ("c", "numpy"):
+        raise ConfigError(_ENV_IMPLEMENTATION, "", f"expected c or numpy, got {choice!r}")
+    if choice == "c":
+        from snakebot.backends.twin.friction import scale_c
+
+        try:
+            library = scale_c.load()
+        except scale_c.CompileError as exc:
+            warnings.warn(
+                f"scale friction runs in numpy, about half as fast as C: {exc}",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+        else:
+            if not library.snakebot_installed():
+                mujoco.set_mjcb_sensor(None)
+                library.snakebot_install()
+            return "c"
+    if mujoco.get_mjcb_sensor() is not numpy_callback:
+        mujoco.set_mjcb_sensor(numpy_callback)
+    return "numpy"
+
+
+def numpy_callback(model: Any, data: Any, stage: int) -> None:
+    """The scale-friction force in numpy: the same formula as the C callback."""
+    if stage != mujoco.mjtStage.mjSTAGE_ACC:
+        return
+    nid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC_NAME)
+    sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, SENSOR_NAME)
+    if nid < 0 or sid < 0:
+        return
+    adr = model.numeric_adr[nid]
+    params = model.numeric_data[adr : adr + len(Slot)]
+    first, count = int(params[Slot.FIRST_BODY]), int(params[Slot.LINK_COUNT])
+    mu_f, mu_b, mu_l, v0 = params[Slot.MU_FORWARD : Slot.V0_M_S + 1]
+    bodies = slice(first, first + count)
+    load = data.sensordata[model.sensor_adr[sid] : model.sensor_adr[sid] + count]
+    xfrc = data.xfrc_applied[bodies]
+    xfrc[:] = 0.0
+    ncon = data.ncon
+    contact = data.contact
+    geom = contact.geom[:ncon]
+    efc = contact.efc_address[:ncon]
+    link = model.geom_bodyid[np.maximum(geom, 0)] - first
+    inside = (link >= 0) & (link < count)
+    keep = (inside[:, 0] != inside[:, 1]) & (efc >= 0) & (geom >= 0).all(axis=1)
+    k = np.where(inside[:, 0], link[:, 0], link[:, 1])[keep]
+    fn = data.efc_force[efc[keep]]
+    load[:] = np.bincount(k, fn, minlength=count)
+    if not k.size:
+        return
+    # COM velocity of each link from cvel (rotation, translation at the subtree COM).
+    cvel = data.cvel[bodies]
+    offset = data.xipos[bodies] - data.subtree_com[model.body_rootid[bodies]]
+    velocity = cvel[:, 3:] + np.cross(cvel[:, :3], offset)
+    h = model.opt.timestep
+    reg = np.maximum(v0, h * max(mu_f, mu_b, mu_l) * load / model.body_mass[bodies])
+    normal = contact.frame[:ncon, :3][keep]
+    axis = data.xmat[bodies][:, [0, 3, 6]][k]
+    v = velocity[k]
+    a = axis - np.sum(axis * normal, axis=1, keepdims=True) * normal
+    a_len = np.linalg.norm(a, axis=1)
+    aligned = a_len >= 1e-6
+    a = a / np.where(aligned, a_len, 1.0)[:, None]
+    lateral = np.cross(normal, a)
+    va, vl = np.sum(v * a, axis=1), np.sum(v * lateral, axis=1)
+    r = reg[k]
+    mu_a = np.where(va > 0, mu_f, mu_b)
+    force = (
+        -(fn * mu_a * np.tanh(va / r))[:, None] * a
+        - (fn * mu_l * np.tanh(vl / r))[:, None] * lateral
+    )
+    # A link end-on to the surface: isotropic, with the lateral coefficient.
+    vt = v - np.sum(v * normal, axis=1, keepdims=True) * normal
+    vt_len = np.linalg.norm(vt, axis=1)
+    iso = -(fn * mu_l * np.tanh(vt_len / r) / np.maximum(vt_len, 1e-12))[:, None] * vt
+    force = np.where(aligned[:, None], force, iso)
+    force[fn <= 0] = 0.0
+    np.add.at(xfrc[:, :3], k, force)
