@@ -22,6 +22,7 @@ from snakebot.cli.common import (
     print_json,
     robot_name,
 )
+from snakebot.cli.terrain_options import add_terrain_options, refuse_friction_model, twin_ground
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
 from snakebot.config.body_loader import load_robot_or_body
@@ -73,11 +74,7 @@ def add_parser(subparsers: Any) -> None:
         choices=("on", "off"),
         help="mass-spring bodies: Miller's directional friction on or off (default: the body file)",
     )
-    parser.add_argument(
-        "--terrain",
-        metavar="NAME[:KEY=VALUE,...]",
-        help="twin terrain: flat (default) or cliff, e.g. cliff:edge_m=0.1,height_m=0.04",
-    )
+    add_terrain_options(parser)
     parser.add_argument("--realtime", action="store_true", help="pace the twin to the wall clock")
     parser.add_argument(
         "--viewer", action="store_true", help="open MuJoCo's viewer (needs a display)"
@@ -124,18 +121,18 @@ def make_backend(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> B
     if isinstance(robot, BodyConfig):
         from snakebot.cli.softbody_options import make_softbody_backend
 
+        refuse_friction_model(args, "applies to the rigid twin only")
         return make_softbody_backend(robot, args)
     if args.directional is not None:
         raise ConfigError("--directional", "", "applies to mass-spring bodies only")
     if args.backend == "sim":
         from snakebot.backends.twin import GroundFriction, TwinBackend
-        from snakebot.backends.twin.cliff import parse_terrain
 
         friction = GroundFriction.parse(args.friction) if args.friction else None
-        terrain = parse_terrain(args.terrain) if args.terrain else None
         return TwinBackend(
-            robot, friction=friction, realtime=args.realtime or args.viewer, terrain=terrain
+            robot, friction=friction, realtime=args.realtime or args.viewer, **twin_ground(args)
         )
+    refuse_friction_model(args, "needs --backend sim")
     if args.viewer or args.video or args.friction or args.terrain:
         raise ConfigError(
             "--backend", "", "--viewer, --video, --friction and --terrain need --backend sim"

@@ -88,9 +88,8 @@ SERVO: dict[str, Bounds] = {
     "physics.ticks_per_rev": Bounds(
         16, 2**21, "", "encoder ticks per turn; must match the control table's resolution"
     ),
-    "physics.pwm_limit": Bounds(
-        1, 2009, "", "PWM full scale (885 on X series); at most the PWM Limit register's maximum"
-    ),
+    "physics.pwm_limit": Bounds(1, 2009, "", "PWM full scale (885 on X series); at most the "
+                                "PWM Limit register's maximum"),
     "physics.d_gain_loop_period_s": Bounds(1e-5, 0.1, "s", "the firmware's D-term period"),
     "default_gains.position_p": GAIN,
     "default_gains.position_i": GAIN,

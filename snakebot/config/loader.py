@@ -210,11 +210,8 @@ def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, 
         fields = {**defaults, **_joint_fields(item)}
         for key in ("servo_id", "axis", "lower_rad", "upper_rad"):
             if key not in fields:
-                raise item.error(
-                    key,
-                    "missing (required; lower_rad, upper_rad and axis may come "
-                    "from [joint_defaults])",
-                )
+                raise item.error(key, "missing (required; lower_rad, upper_rad and axis may come "
+                                 "from [joint_defaults])")
         servo_id = fields["servo_id"]
         if servo_id in seen_ids:
             raise item.error(
@@ -231,9 +228,8 @@ def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, 
         )
         if joint.upper_rad - joint.lower_rad <= 0:
             raise item.error("upper_rad", "expected upper_rad > lower_rad")
-        parse_settings(
-            Path(root.source), f"{item.path}.settings", item.data.get("settings", {}), control_table
-        )
+        parse_settings(Path(root.source), f"{item.path}.settings", item.data.get("settings", {}),
+                       control_table)
         item.mark_read("settings")
         item.done()
         joints.append(joint)

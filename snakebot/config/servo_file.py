@@ -47,10 +47,8 @@ def servo_table(model: str, path: Path) -> ServoTable:
         return table_for_model(model)
     except UnknownModelError:
         raise ConfigError(
-            path,
-            "model",
-            f"no control table for servo model {model!r}; snakebot supports "
-            f"{', '.join(supported_models())}",
+            path, "model", f"no control table for servo model {model!r}; snakebot supports "
+            f"{', '.join(supported_models())}"
         ) from None
 
 
@@ -71,7 +69,9 @@ def parse_servo_file(path: Path) -> ServoModel:
     name = root.text("model")
     table = servo_table(name, path)
     if servo_file_name(name) != path.stem:
-        raise root.error("model", f"this file is servos/{path.stem}.toml but names model {name!r}")
+        raise root.error(
+            "model", f"this file is servos/{path.stem}.toml but names model {name!r}"
+        )
     limits = bounds.SERVO
     model_number = root.integer("model_number", within=limits["model_number"])
     if model_number != table.model_number:

@@ -17,11 +17,8 @@ from snakebot.errors import ConfigError
 from snakebot.servo_tables import Register, ServoTable
 from snakebot.servo_tables.units import Unit, UnitError, display, parse_key, to_raw
 
-GAIN_KEYS = {
-    "position_p_gain": "position_p",
-    "position_i_gain": "position_i",
-    "position_d_gain": "position_d",
-}
+GAIN_KEYS = {"position_p_gain": "position_p", "position_i_gain": "position_i",
+             "position_d_gain": "position_d"}
 DERIVED = {
     "id": "comes from the robot file ([[joints]] servo_id)",
     "baud_rate": "comes from the robot file ([bus] baud)",
@@ -59,7 +56,9 @@ class Setting:
         return display(self.register, self.unit, raw, self.table)
 
 
-def parse_settings(source: Path, where: str, data: object, table: ServoTable) -> dict[str, Setting]:
+def parse_settings(
+    source: Path, where: str, data: object, table: ServoTable
+) -> dict[str, Setting]:
     """The settings table ``data`` found at key path ``where`` of ``source``, by register key.
 
     ConfigError naming ``source`` and ``where.<key>`` for a key that names no register (or a
@@ -92,15 +91,10 @@ def parse_settings(source: Path, where: str, data: object, table: ServoTable) ->
         except UnitError as exc:
             raise ConfigError(source, path, str(exc)) from None
         if not register.minimum <= raw <= register.maximum:
-            low, high = (
-                display(register, unit, r, table)[0] for r in (register.minimum, register.maximum)
-            )
-            raise ConfigError(
-                source,
-                path,
-                f"{value} is outside {low}..{high} "
-                f"{unit.symbol if unit else '(raw)'} for {table.model}",
-            )
+            low, high = (display(register, unit, r, table)[0] for r in
+                         (register.minimum, register.maximum))
+            raise ConfigError(source, path, f"{value} is outside {low}..{high} "
+                              f"{unit.symbol if unit else '(raw)'} for {table.model}")
         if register.key in out:
             raise ConfigError(source, path, f"{register.key} is set twice in [{where}]")
         out[register.key] = Setting(register, raw, unit, f"{source.name} {path}", table)

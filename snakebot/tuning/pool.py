@@ -16,6 +16,8 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.backends.twin import GroundFriction, TwinBackend
+from snakebot.backends.twin.friction.scale import FrictionModel
+from snakebot.backends.twin.terrain import Terrain
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -37,6 +39,8 @@ class PoolJob:
     rate_hz: float
     envelope: Envelope | None
     friction: GroundFriction | None = None
+    terrain: Terrain | None = None
+    friction_model: FrictionModel | None = None
 
 
 class _Recording(Gait):
@@ -81,7 +85,9 @@ def run_job(job: PoolJob) -> Trace:
     )
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     plan = RunPlan(job.duration_s, job.rate_hz, ramp_out=False)
-    twin = TwinBackend(robot, friction=job.friction)
+    twin = TwinBackend(
+        robot, friction=job.friction, terrain=job.terrain, friction_model=job.friction_model
+    )
     with contextlib.closing(twin):
         twin.connect()
         layout = twin_layout(twin.model, robot)

@@ -161,6 +161,15 @@ def replay_command(result: TuneResult, path: Path) -> str:
     )
     if plan.friction is not None:
         command += f" --friction {plan.friction.axial:g},{plan.friction.lateral:g}"
+        if plan.friction.backward is not None:
+            command = command.replace(
+                f"{plan.friction.axial:g},",
+                f"{plan.friction.axial:g},{plan.friction.backward:g},",
+            )
+    if plan.terrain is not None:
+        command += f" --terrain {plan.terrain.spec_text()}"
+    if plan.friction_model is not None:
+        command += f" --friction-model {plan.friction_model}"
     return command
 
 

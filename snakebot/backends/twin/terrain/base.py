@@ -104,6 +104,5 @@ def quat_about(axis: tuple[float, float, float], angle_rad: float) -> list[float
 
 def add_obstacle(world: mujoco.MjsBody, **attributes: Any) -> mujoco.MjsGeom:
     """A static obstacle geom that touches both the rigid links and mass points."""
-    return world.add_geom(
-        contype=OBSTACLE_BITS, conaffinity=OBSTACLE_BITS, rgba=list(OBSTACLE_RGBA), **attributes
-    )
+    attributes.setdefault("rgba", list(OBSTACLE_RGBA))
+    return world.add_geom(contype=OBSTACLE_BITS, conaffinity=OBSTACLE_BITS, **attributes)

@@ -25,8 +25,9 @@ class Param:
         if self.choices:
             return "|".join(self.choices)
         unit = f" {self.unit}" if self.unit else ""
-        kind = "an integer " if self.integer else ""
-        return f"{kind}{self.low:g}..{self.high:g}{unit}"
+        if self.integer:
+            return f"an integer {int(self.low)}..{int(self.high)}{unit}"
+        return f"{self.low:g}..{self.high:g}{unit}"
 
     def parse(self, option: str, key: str, raw: str) -> float | int | str:
         """The value of ``raw``; ConfigError naming ``key`` and the accepted range otherwise."""
