@@ -23,6 +23,7 @@ from snakebot.backends.twin.friction.scale import (
     ScaleFriction,
     add_scale_friction,
     bind_scale_friction,
+    python_callback_paused,
 )
 from snakebot.backends.twin.servo_model import ServoDynamics, history_samples, servo_dynamics
 from snakebot.backends.twin.terrain import BodyShape, Terrain, as_terrain
@@ -304,7 +305,8 @@ def compile_spec(spec: mujoco.MjSpec, robot: RobotConfig) -> mujoco.MjModel:
     """``spec.compile()``, with MuJoCo's refusal (a mass or size it cannot use, say) raised as a
     ConfigError naming the robot file and the table the offending element comes from."""
     try:
-        return spec.compile()
+        with python_callback_paused():
+            return spec.compile()
     except ValueError as exc:
         text = " ".join(str(exc).replace("Error:", "").split())
         element = re.search(r"Element name '([A-Za-z_]+?)\d*'", text)

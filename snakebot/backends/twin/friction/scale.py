@@ -21,9 +21,11 @@ compiler is available (scale_c.py), numpy otherwise, with a warning.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -131,6 +133,20 @@ def install(implementation: Implementation | None = None) -> Implementation:
     return "numpy"
 
 
+@contextlib.contextmanager
+def python_callback_paused() -> Iterator[None]:
+    """Lift the numpy callback while MuJoCo compiles: compiling runs the new model once, and
+    the Python bindings cannot hand a callback a model they have not wrapped yet."""
+    if mujoco.get_mjcb_sensor() is not numpy_callback:
+        yield
+        return
+    mujoco.set_mjcb_sensor(None)
+    try:
+        yield
+    finally:
+        mujoco.set_mjcb_sensor(numpy_callback)
+
+
 def numpy_callback(model: Any, data: Any, stage: int) -> None:
     """The scale-friction force in numpy: the same formula as the C callback."""
     if stage != mujoco.mjtStage.mjSTAGE_ACC:
@@ -142,6 +158,8 @@ def numpy_callback(model: Any, data: Any, stage: int) -> None:
     adr = model.numeric_adr[nid]
     params = model.numeric_data[adr : adr + len(Slot)]
     first, count = int(params[Slot.FIRST_BODY]), int(params[Slot.LINK_COUNT])
+    if first < 1 or count < 1 or first + count > model.nbody:
+        return  # not bound yet (MuJoCo runs the model once while compiling it)
     mu_f, mu_b, mu_l, v0 = params[Slot.MU_FORWARD : Slot.V0_M_S + 1]
     bodies = slice(first, first + count)
     load = data.sensordata[model.sensor_adr[sid] : model.sensor_adr[sid] + count]

@@ -41,6 +41,7 @@ static void snakebot_scale_friction(const mjModel* m, mjData* d, int stage) {
   if (nid < 0 || sid < 0) return;
   const mjtNum* p = m->numeric_data + m->numeric_adr[nid];
   int first = (int)p[FIRST], count = (int)p[COUNT];
+  if (first < 1 || count < 1 || first + count > m->nbody) return;   /* not bound yet */
   mjtNum mu_f = p[MU_F], mu_b = p[MU_B], mu_l = p[MU_L], v0 = p[V0];
   mjtNum mu_max = fmax(fmax(mu_f, mu_b), mu_l);
   mjtNum h = m->opt.timestep;
