@@ -78,7 +78,8 @@ def test_on_a_slope_the_snake_lies_on_the_incline() -> None:
         positions = link_positions(twin)
     # The floor rises towards +x: height above the tilted plane is the capsule radius.
     normal = np.array([-math.sin(math.radians(15)), 0.0, math.cos(math.radians(15))])
-    assert positions @ normal == pytest.approx(np.full(len(positions), robot.link.radius_m), abs=2e-3)
+    height = positions @ normal
+    assert height == pytest.approx(np.full(len(positions), robot.link.radius_m), abs=2e-3)
     assert positions[0, 2] > positions[-1, 2] + 0.1  # head uphill
 
 

@@ -52,7 +52,7 @@ def test_bad_text_names_the_key_and_what_it_accepts(text: str, key: str, words: 
 
 
 def test_a_pipe_too_narrow_for_the_links_is_refused() -> None:
-    with pytest.raises(ConfigError, match="inner_diameter_m.*2.2 link radii"):
+    with pytest.raises(ConfigError, match=r"inner_diameter_m.*2\.2 link radii"):
         parse_terrain("pipe:inner_diameter_m=0.04").check(SNAKE8)
 
 
