@@ -81,7 +81,8 @@ class Pegs(Terrain):
         points = np.column_stack([x.ravel(), y.ravel()])
         along = np.clip(points[:, 0], -body.body_length_m, 0.0)
         clear = np.hypot(points[:, 0] - along, points[:, 1])
-        return points[clear >= self.radius_m + body.radius_m + _CLEARANCE_M]
+        kept: np.ndarray = points[clear >= self.radius_m + body.radius_m + _CLEARANCE_M]
+        return kept
 
     def add_to(self, spec: mujoco.MjSpec, body: BodyShape) -> None:
         """One cylinder per centre."""
