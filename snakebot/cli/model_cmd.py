@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
         spec.compile()
     else:
         friction = GroundFriction.parse(args.friction) if args.friction else None
-        spec = build_spec(robot, friction=friction, **twin_ground(args))
+        spec = build_spec(robot, friction=friction, **twin_ground(args, robot))
         add_actuators(spec, robot)
         compile_spec(spec, robot)
         what = f"{robot.joint_count} joints"

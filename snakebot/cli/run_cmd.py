@@ -129,9 +129,8 @@ def make_backend(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> B
         from snakebot.backends.twin import GroundFriction, TwinBackend
 
         friction = GroundFriction.parse(args.friction) if args.friction else None
-        return TwinBackend(
-            robot, friction=friction, realtime=args.realtime or args.viewer, **twin_ground(args)
-        )
+        realtime = args.realtime or args.viewer
+        return TwinBackend(robot, friction=friction, realtime=realtime, **twin_ground(args, robot))
     refuse_friction_model(args, "needs --backend sim")
     if args.viewer or args.video or args.friction or args.terrain:
         raise ConfigError(

@@ -13,6 +13,7 @@ from snakebot.errors import ConfigError, UsageError
 if TYPE_CHECKING:
     from snakebot.backends.twin.friction.scale import FrictionModel
     from snakebot.backends.twin.terrain import Terrain
+    from snakebot.config import RobotConfig
 
 FRICTION_MODEL_CHOICES = ("auto", "pairs", "scale")
 
@@ -38,17 +39,22 @@ def add_terrain_options(parser: argparse.ArgumentParser, *, terrain: bool = True
     )
 
 
-def twin_terrain(args: argparse.Namespace) -> Terrain | None:
-    """``--terrain`` parsed for the rigid twin; UsageError (exit 2) naming the key if bad."""
+def twin_terrain(args: argparse.Namespace, robot: RobotConfig | None = None) -> Terrain | None:
+    """``--terrain`` parsed for the rigid twin (and checked against ``robot``'s size if given);
+    UsageError (exit 2) naming the key if bad."""
     text = getattr(args, "terrain", None)
     if not text:
         return None
+    from snakebot.backends.twin.model_builder import body_shape
     from snakebot.backends.twin.terrain import parse_terrain
 
     try:
-        return parse_terrain(text)
+        terrain = parse_terrain(text)
+        if robot is not None:
+            terrain.check(body_shape(robot))
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
+    return terrain
 
 
 def friction_model(args: argparse.Namespace) -> FrictionModel | None:
@@ -56,9 +62,9 @@ def friction_model(args: argparse.Namespace) -> FrictionModel | None:
     return cast("FrictionModel | None", getattr(args, "friction_model", None))
 
 
-def twin_ground(args: argparse.Namespace) -> dict[str, Any]:
+def twin_ground(args: argparse.Namespace, robot: RobotConfig | None = None) -> dict[str, Any]:
     """Keyword arguments for TwinBackend: ``terrain`` and ``friction_model`` from the options."""
-    return {"terrain": twin_terrain(args), "friction_model": friction_model(args)}
+    return {"terrain": twin_terrain(args, robot), "friction_model": friction_model(args)}
 
 
 def refuse_friction_model(args: argparse.Namespace, why: str) -> None:

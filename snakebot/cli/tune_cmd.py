@@ -202,7 +202,7 @@ def _twin_ground(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> d
             raise UsageError("--terrain: tuning a mass-spring body runs on flat ground only")
         refuse_friction_model(args, "applies to the rigid twin only")
         return {}
-    return twin_ground(args)
+    return twin_ground(args, robot)
 
 
 def _friction(robot: RobotConfig | BodyConfig, text: str | None) -> GroundFriction | None:

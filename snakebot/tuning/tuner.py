@@ -65,6 +65,7 @@ class TuneResult:
             "seed": self.seed,
             "duration_s": self.plan.duration_s,
             "rate_hz": self.plan.rate_hz,
+            "terrain": self.plan.terrain.spec_text() if self.plan.terrain else "flat",
         }
 
     @property
