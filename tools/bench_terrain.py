@@ -9,6 +9,7 @@ shuffled order; steps/s as the median over rounds and ratios taken within each r
   iso/field          isotropic (mu 1.0) on a flat height field (rough:roughness_m=0)
   scale-c/field      scale model in C on the same field
   scale-numpy/field  scale model in numpy on the same field
+  pairs/field        the robot's pairs on the same field (world-aligned: the issue's defect)
 
 Part 2, ``table``: per terrain (defaults) and robot, lateral undulation, sidewinding and rolling
 where the robot has the joints for them, played like ``snakebot run`` for ``--seconds``:
@@ -49,6 +50,7 @@ GROUNDS: dict[str, dict[str, Any]] = {
     "iso/field": {"terrain": FIELD, "friction": ISOTROPIC, "friction_model": "pairs"},
     "scale-c/field": {"terrain": FIELD},
     "scale-numpy/field": {"terrain": FIELD, "numpy": True},
+    "pairs/field": {"terrain": FIELD, "friction_model": "pairs"},
 }
 
 

@@ -25,7 +25,7 @@ TERRAIN_HELP = (
 FRICTION_MODEL_HELP = (
     "twin ground friction: pairs (MuJoCo capsule-plane pairs, fast, floor plane only), scale "
     "(directional friction from contact forces in each link's frame, any ground) or auto "
-    "(pairs on flat, slope, pegs, pole, cliff; scale on rough, step, pipe); default: the robot "
+    "(pairs on flat, slope, pegs, pole; scale on rough, step, pipe, cliff); default: the robot "
     "file's twin.friction_model, else auto"
 )
 

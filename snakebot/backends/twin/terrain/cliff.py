@@ -19,6 +19,7 @@ class CliffTerrain(Terrain):
 
     name = "cliff"
     summary = "Miller's rounded cliff: a plateau with a rounded front edge"
+    plane_ground = False  # the snake starts on the plateau's boxes, not the floor plane
 
     edge_m: float = param(_DEFAULT.edge_m, 0.001, 10.0, "m", "head to the edge")
     height_m: float = param(_DEFAULT.height_m, 0.001, 1.0, "m", "plateau height")
