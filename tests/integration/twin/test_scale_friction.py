@@ -42,6 +42,15 @@ def test_auto_picks_pairs_on_the_plane_and_scale_on_a_height_field() -> None:
         assert field.model.sensor("snakebot_contact_load").dim[0] == robot.link_count
 
 
+@pytest.mark.slow
+def test_rolling_rolls_on_a_height_field() -> None:
+    # Rolling needs friction where the module touches: at the COM it would not turn the body.
+    plane = distance("snake12", "rolling", 10.0)
+    field = distance("snake12", "rolling", 10.0, terrain=FLAT_FIELD)
+    assert plane > 0.3
+    assert field >= 0.8 * plane
+
+
 def backslide_m(backward: float) -> float:
     """How far a straight snake holding still slides down a 20 degree slope in 3 s."""
     robot = load_robot("snake8")
@@ -60,22 +69,27 @@ def test_scales_resist_sliding_tail_first() -> None:
     assert scaled < 0.1 * smooth
 
 
-def com_track(implementation: str, monkeypatch: pytest.MonkeyPatch) -> np.ndarray:
+def com_track(implementation: str, robot_name: str, monkeypatch: pytest.MonkeyPatch) -> np.ndarray:
     monkeypatch.setenv("SNAKEBOT_SCALE_FRICTION", implementation)
-    robot = load_robot("snake8")
+    robot = load_robot(robot_name)
     track = []
-    with TwinBackend(robot, terrain=FLAT_FIELD) as twin:
-        gait_rad = 0.4 * np.sin(0.7 * np.arange(robot.joint_count))
-        for _ in range(50):
-            twin.send_command_unchecked(gait_rad)
+    with TwinBackend(robot, terrain="rough:roughness_m=0.005") as twin:
+        for step in range(50):
+            twin.send_command_unchecked(
+                0.5 * np.sin(0.7 * np.arange(robot.joint_count) - 6 * step * 0.01)
+            )
             twin.advance(0.01)
             track.append(twin.body_state().com_m)
     return np.array(track)
 
 
-def test_c_and_numpy_compute_the_same_friction(monkeypatch: pytest.MonkeyPatch) -> None:
-    c_track = com_track("c", monkeypatch)
-    numpy_track = com_track("numpy", monkeypatch)
+# snake8's wheels feel friction at the module's COM, snake12's bare modules where they touch.
+@pytest.mark.parametrize("robot_name", ["snake8", "snake12"])
+def test_c_and_numpy_compute_the_same_friction(
+    robot_name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    c_track = com_track("c", robot_name, monkeypatch)
+    numpy_track = com_track("numpy", robot_name, monkeypatch)
     assert np.abs(c_track[-1] - c_track[0]).max() > 0.005  # it moved
     np.testing.assert_allclose(numpy_track, c_track, atol=1e-6)
 

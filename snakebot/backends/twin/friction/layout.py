@@ -21,3 +21,4 @@ class Slot(IntEnum):
     MU_BACKWARD = 3
     MU_LATERAL = 4
     V0_M_S = 5
+    AT_CONTACT = 6

@@ -70,6 +70,13 @@ class ScaleFriction:
         if not (math.isfinite(self.v0_m_s) and self.v0_m_s > 0):
             raise ConfigError(self.source, "", f"v0 must be > 0 m/s, got {self.v0_m_s}")
 
+    @property
+    def at_contact_point(self) -> bool:
+        """Bare modules (forward >= lateral) feel friction where they touch, so it can roll
+        them (rolling gaits); wheels and scales (forward < lateral) at their centre of mass,
+        as wheels on an axle do not roll sideways."""
+        return self.forward >= self.lateral
+
 
 def add_scale_friction(spec: mujoco.MjSpec, link_count: int, friction: ScaleFriction) -> None:
     """Add the parameter element and the per-link load sensor to ``spec``.
@@ -83,6 +90,7 @@ def add_scale_friction(spec: mujoco.MjSpec, link_count: int, friction: ScaleFric
     data[Slot.MU_BACKWARD] = friction.backward
     data[Slot.MU_LATERAL] = friction.lateral
     data[Slot.V0_M_S] = friction.v0_m_s
+    data[Slot.AT_CONTACT] = float(friction.at_contact_point)
     spec.add_numeric(name=NUMERIC_NAME, data=data)
     spec.add_sensor(
         name=SENSOR_NAME,
@@ -161,6 +169,7 @@ def numpy_callback(model: Any, data: Any, stage: int) -> None:
     if first < 1 or count < 1 or first + count > model.nbody:
         return  # not bound yet (MuJoCo runs the model once while compiling it)
     mu_f, mu_b, mu_l, v0 = params[Slot.MU_FORWARD : Slot.V0_M_S + 1]
+    at_contact = params[Slot.AT_CONTACT] > 0.5
     bodies = slice(first, first + count)
     load = data.sensordata[model.sensor_adr[sid] : model.sensor_adr[sid] + count]
     xfrc = data.xfrc_applied[bodies]
@@ -182,26 +191,41 @@ def numpy_callback(model: Any, data: Any, stage: int) -> None:
     offset = data.xipos[bodies] - data.subtree_com[model.body_rootid[bodies]]
     velocity = cvel[:, 3:] + np.cross(cvel[:, :3], offset)
     h = model.opt.timestep
-    reg = np.maximum(v0, h * max(mu_f, mu_b, mu_l) * load / model.body_mass[bodies])
+    mu_max = max(mu_f, mu_b, mu_l)
+    reg = np.maximum(v0, h * mu_max * load / model.body_mass[bodies])
     normal = contact.frame[:ncon, :3][keep]
     axis = data.xmat[bodies][:, [0, 3, 6]][k]
     v = velocity[k]
+    body = np.arange(first, first + count)[k]
+    arm = np.zeros_like(v)
+    if at_contact:  # velocity of the module's material at the contact point
+        arm = contact.pos[:ncon][keep] - data.xipos[body]
+        v = v + np.cross(cvel[k, :3], arm)
+
+    def regularised(direction: np.ndarray) -> np.ndarray:
+        """Per contact: v0, raised so the slope cannot overshoot at that point."""
+        if not at_contact:
+            return np.asarray(reg[k])
+        frames = data.ximat[body].reshape(-1, 3, 3)
+        local = np.einsum("nji,nj->ni", frames, np.cross(arm, direction))
+        inverse = 1 / model.body_mass[body] + np.sum(local**2 / model.body_inertia[body], axis=1)
+        return np.asarray(np.maximum(reg[k], h * mu_max * load[k] * inverse))
+
     a = axis - np.sum(axis * normal, axis=1, keepdims=True) * normal
     a_len = np.linalg.norm(a, axis=1)
     aligned = a_len >= 1e-6
     a = a / np.where(aligned, a_len, 1.0)[:, None]
     lateral = np.cross(normal, a)
     va, vl = np.sum(v * a, axis=1), np.sum(v * lateral, axis=1)
-    r = reg[k]
     mu_a = np.where(va > 0, mu_f, mu_b)
-    force = (
-        -(fn * mu_a * np.tanh(va / r))[:, None] * a
-        - (fn * mu_l * np.tanh(vl / r))[:, None] * lateral
-    )
+    along = (fn * mu_a * np.tanh(va / regularised(a)))[:, None] * a
+    force = -along - (fn * mu_l * np.tanh(vl / regularised(lateral)))[:, None] * lateral
     # A link end-on to the surface: isotropic, with the lateral coefficient.
     vt = v - np.sum(v * normal, axis=1, keepdims=True) * normal
     vt_len = np.linalg.norm(vt, axis=1)
-    iso = -(fn * mu_l * np.tanh(vt_len / r) / np.maximum(vt_len, 1e-12))[:, None] * vt
+    slip = vt / np.maximum(vt_len, 1e-12)[:, None]
+    iso = -(fn * mu_l * np.tanh(vt_len / regularised(slip)))[:, None] * slip
     force = np.where(aligned[:, None], force, iso)
-    force[fn <= 0] = 0.0
+    force[(fn <= 0) | (~aligned & (vt_len < 1e-12))] = 0.0
     np.add.at(xfrc[:, :3], k, force)
+    np.add.at(xfrc[:, 3:], k, np.cross(arm, force))

@@ -32,7 +32,19 @@ _TEMPLATE = r"""
 #include <mujoco/mujoco.h>
 
 /* Layout of the numeric element (see layout.py). */
-enum { FIRST = 0, COUNT, MU_F, MU_B, MU_L, V0 };
+enum { FIRST = 0, COUNT, MU_F, MU_B, MU_L, V0, AT_CONTACT };
+
+/* Inverse mass of body b for a force along unit d applied at offset r from its COM. */
+static mjtNum inv_mass(const mjModel* m, const mjData* d, int b, const mjtNum r[3],
+                       const mjtNum dir[3]) {
+  mjtNum arm[3], local[3];
+  mju_cross(arm, r, dir);
+  mju_mulMatTVec3(local, d->ximat + 9*b, arm);
+  const mjtNum* inertia = m->body_inertia + 3*b;
+  mjtNum inv = 1 / m->body_mass[b];
+  for (int i = 0; i < 3; i++) inv += local[i] * local[i] / inertia[i];
+  return inv;
+}
 
 static void snakebot_scale_friction(const mjModel* m, mjData* d, int stage) {
   if (stage != mjSTAGE_ACC) return;
@@ -43,11 +55,12 @@ static void snakebot_scale_friction(const mjModel* m, mjData* d, int stage) {
   int first = (int)p[FIRST], count = (int)p[COUNT];
   if (first < 1 || count < 1 || first + count > m->nbody) return;   /* not bound yet */
   mjtNum mu_f = p[MU_F], mu_b = p[MU_B], mu_l = p[MU_L], v0 = p[V0];
+  int at_contact = p[AT_CONTACT] > 0.5;
   mjtNum mu_max = fmax(fmax(mu_f, mu_b), mu_l);
   mjtNum h = m->opt.timestep;
   mjtNum* load = d->sensordata + m->sensor_adr[sid];   /* per link: summed normal force, N */
   mjtNum vel[6];
-  mjtNum lin[3 * count], reg[count];
+  mjtNum lin[3 * count], ang[3 * count], reg[count];
   memset(load, 0, count * sizeof(mjtNum));
 
   /* pass 1: normal load on each link from contacts with anything but another link */
@@ -65,6 +78,7 @@ static void snakebot_scale_friction(const mjModel* m, mjData* d, int stage) {
     int b = first + k;
     mj_objectVelocity(m, d, mjOBJ_BODY, b, vel, 0);
     lin[3*k] = vel[3]; lin[3*k+1] = vel[4]; lin[3*k+2] = vel[5];
+    ang[3*k] = vel[0]; ang[3*k+1] = vel[1]; ang[3*k+2] = vel[2];
     reg[k] = fmax(v0, h * mu_max * load[k] / m->body_mass[b]);
     mju_zero(d->xfrc_applied + 6*b, 6);
   }
@@ -80,7 +94,13 @@ static void snakebot_scale_friction(const mjModel* m, mjData* d, int stage) {
     mjtNum fn = d->efc_force[c->efc_address];
     if (fn <= 0) continue;
     const mjtNum* n = c->frame;
-    const mjtNum* v = lin + 3*k;
+    mjtNum r[3] = {0, 0, 0}, v[3] = {lin[3*k], lin[3*k+1], lin[3*k+2]};
+    if (at_contact) {  /* velocity of the module's material at the contact point */
+      mjtNum spin[3];
+      mju_sub3(r, c->pos, d->xipos + 3*b);
+      mju_cross(spin, ang + 3*k, r);
+      mju_addTo3(v, spin);
+    }
     mjtNum ax[3] = {d->xmat[9*b], d->xmat[9*b+3], d->xmat[9*b+6]};
     mjtNum an = mju_dot3(ax, n);
     mjtNum a[3] = {ax[0] - an*n[0], ax[1] - an*n[1], ax[2] - an*n[2]};
@@ -91,17 +111,31 @@ static void snakebot_scale_friction(const mjModel* m, mjData* d, int stage) {
       mjtNum t[3] = {v[0] - vn*n[0], v[1] - vn*n[1], v[2] - vn*n[2]};
       mjtNum tlen = mju_norm3(t);
       if (tlen < 1e-12) continue;
-      mjtNum s = -fn * mu_l * tanh(tlen / reg[k]) / tlen;
-      f[0] += s*t[0]; f[1] += s*t[1]; f[2] += s*t[2];
+      mjtNum dir[3] = {t[0] / tlen, t[1] / tlen, t[2] / tlen};
+      mjtNum rg = reg[k];
+      if (at_contact) rg = fmax(rg, h * mu_max * load[k] * inv_mass(m, d, b, r, dir));
+      mjtNum s = -fn * mu_l * tanh(tlen / rg) / tlen;
+      mjtNum force[3] = {s*t[0], s*t[1], s*t[2]}, torque[3];
+      mju_addTo3(f, force);
+      mju_cross(torque, r, force);
+      mju_addTo3(f + 3, torque);
       continue;
     }
     a[0] /= alen; a[1] /= alen; a[2] /= alen;
     mjtNum l[3];
     mju_cross(l, n, a);
     mjtNum va = mju_dot3(v, a), vl = mju_dot3(v, l);
-    mjtNum sa = -fn * (va > 0 ? mu_f : mu_b) * tanh(va / reg[k]);
-    mjtNum sl = -fn * mu_l * tanh(vl / reg[k]);
-    f[0] += sa*a[0] + sl*l[0]; f[1] += sa*a[1] + sl*l[1]; f[2] += sa*a[2] + sl*l[2];
+    mjtNum ra = reg[k], rl = reg[k];
+    if (at_contact) {
+      ra = fmax(ra, h * mu_max * load[k] * inv_mass(m, d, b, r, a));
+      rl = fmax(rl, h * mu_max * load[k] * inv_mass(m, d, b, r, l));
+    }
+    mjtNum sa = -fn * (va > 0 ? mu_f : mu_b) * tanh(va / ra);
+    mjtNum sl = -fn * mu_l * tanh(vl / rl);
+    mjtNum force[3] = {sa*a[0] + sl*l[0], sa*a[1] + sl*l[1], sa*a[2] + sl*l[2]}, torque[3];
+    mju_addTo3(f, force);
+    mju_cross(torque, r, force);
+    mju_addTo3(f + 3, torque);
   }
 }
 
