@@ -2,18 +2,21 @@
 
 MuJoCo's contact pairs give body-aligned friction only between a capsule and a plane
 (locomotion.md §4); on a height field, a box or a cylinder the frame is world-aligned and lateral
-undulation stops. Here the ground contacts carry only normal forces (condim 1) and a force at
-each link's centre of mass stands for the friction of its scales or wheels. For every contact of
-a link with anything but another link, with normal n and normal force f_n:
+undulation stops. Here the ground contacts carry only normal forces (condim 1) and a friction
+force stands for the module's scales, wheels or skin. For every contact of a link with anything
+but another link, with normal n and normal force f_n:
 
     a = the link's forward axis projected on the contact plane, l = n x a,
     F = -f_n [mu_f|b tanh(v_a / v0) a + mu_lat tanh(v_l / v0) l]
 
-where v is the link's COM velocity, mu_f applies when v_a > 0 (sliding head-first) and mu_b when
-v_a < 0; backward >= forward models scales (Miller 1988; Hu et al. 2009). v0 regularises
-Coulomb's sign near zero speed; it is raised per link to ``h mu N / m`` where the slope mu N / v0
-would overshoot in one explicit step. The force uses the contact forces of the step before (one
-step of lag, learning-softbody-terrain.md §3.2).
+mu_f applies when v_a > 0 (sliding head-first) and mu_b when v_a < 0; backward >= forward models
+scales (Miller 1988; Hu et al. 2009). Wheels and scales (forward < lateral): v is the link's COM
+velocity and F acts at the COM (an axle does not roll sideways). Bare modules: v is the
+material's velocity at the contact point and F acts there, so friction can roll the body
+(rolling gaits). v0 regularises Coulomb's sign near zero speed; it is raised where the slope
+mu N / v0 would overshoot in one explicit step (``h mu N`` times the inverse mass at the point of
+action). The force uses the contact forces of the step before (one step of lag,
+learning-softbody-terrain.md §3.2).
 
 The force is computed inside ``mj_step`` by a ``mjcb_sensor`` callback: C through ctypes when a
 compiler is available (scale_c.py), numpy otherwise, with a warning.

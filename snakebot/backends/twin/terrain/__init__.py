@@ -5,7 +5,6 @@ from snakebot.backends.twin.terrain.base import BodyShape, StartPose, Terrain
 from snakebot.backends.twin.terrain.registry import (
     TERRAINS,
     as_terrain,
-    describe_terrains,
     parse_terrain,
 )
 
@@ -15,6 +14,5 @@ __all__ = [
     "StartPose",
     "Terrain",
     "as_terrain",
-    "describe_terrains",
     "parse_terrain",
 ]

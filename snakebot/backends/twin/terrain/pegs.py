@@ -30,7 +30,7 @@ class Pegs(Terrain):
     """
 
     name = "pegs"
-    summary = "a row of pegs or a random peg field (obstacle-aided locomotion)"
+    summary = "a random peg field, a peg lattice or a row (obstacle-aided locomotion)"
 
     layout: str = param(
         "field", choices=("field", "lattice", "row"), help="a random field, a lattice or one row"

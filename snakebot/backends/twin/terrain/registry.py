@@ -58,12 +58,3 @@ def as_terrain(value: Terrain | Cliff | str | None) -> Terrain:
     if isinstance(value, Cliff):
         return CliffTerrain.of(value)
     return value
-
-
-def describe_terrains() -> str:
-    """A listing of every terrain and its keys, for ``--help`` and docs."""
-    lines = []
-    for name, kind in TERRAINS.items():
-        keys = ", ".join(f"{k}={p.accepted()}" for k, p in kind.params().items())
-        lines.append(f"{name}: {kind.summary}" + (f" [{keys}]" if keys else ""))
-    return "\n".join(lines)
