@@ -138,7 +138,8 @@ def _check_spec(name: str, obj: object) -> BackendSpec:
 
 _TERRAIN = BackendOption(
     "terrain",
-    "flat (default) or cliff[:key=value,...], e.g. cliff:edge_m=0.1,height_m=0.04",
+    "flat (default), slope, pegs, rough, step, pipe, pole or cliff, with key=value options, "
+    "e.g. pegs:layout=row,spacing_m=0.15 (docs/terrain.md); a mass-spring body takes flat or cliff",
     metavar="NAME[:KEY=VALUE,...]",
 )
 _REALTIME = BackendOption("realtime", "pace the simulation to the wall clock", flag=True)
@@ -161,6 +162,12 @@ TWIN = BackendSpec(
             metavar="AXIAL,LATERAL",
         ),
         _TERRAIN,
+        BackendOption(
+            "friction_model",
+            "ground friction: pairs (capsule-plane pairs, floor plane only), scale (directional "
+            "friction in each link's frame, any ground) or auto (default: the robot file's)",
+            metavar="auto|pairs|scale",
+        ),
         _REALTIME,
         _DIRECTIONAL,
         BackendOption("timestep_s", "physics timestep in s (default: the robot file's)"),

@@ -25,7 +25,10 @@ from snakebot.session import DEFAULT_BACKEND
 
 # argparse types where the command line checks a value before any backend is made
 _TYPES: dict[str, Callable[[str], Any]] = {"port": port_arg, "baud": baud_arg}
-_CHOICES: dict[str, tuple[str, ...]] = {"directional": ("on", "off")}
+_CHOICES: dict[str, tuple[str, ...]] = {
+    "directional": ("on", "off"),
+    "friction_model": ("auto", "pairs", "scale"),
+}
 
 
 def flag(option: str) -> str:

@@ -6,7 +6,6 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from snakebot.backends.twin.cliff import parse_terrain
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
     add_actuators,
@@ -22,6 +21,12 @@ from snakebot.cli.common import (
     report_dry_run,
     robot_name,
 )
+from snakebot.cli.terrain_options import (
+    TERRAIN_HELP,
+    add_terrain_options,
+    refuse_friction_model,
+    twin_ground,
+)
 from snakebot.config.body import BodyConfig
 from snakebot.config.body_loader import load_robot_or_body
 from snakebot.errors import OutputError
@@ -36,9 +41,8 @@ def add_parser(subparsers: Any) -> None:
         "--friction",
         help="AXIAL,LATERAL ground friction (overrides the robot's); MU for a mass-spring body",
     )
-    parser.add_argument(
-        "--terrain", metavar="NAME[:KEY=VALUE,...]", help="flat (default) or cliff[:key=value,...]"
-    )
+    parser.add_argument("--terrain", metavar="NAME[:KEY=VALUE,...]", help=TERRAIN_HELP)
+    add_terrain_options(parser, terrain=False)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     add_dry_run(parser, "no MJCF file")
     parser.set_defaults(handler=run, writes=True)
@@ -48,16 +52,16 @@ def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
     robot = load_robot_or_body(robot_name(args, hardware=False, what="model"))
     check_writable(args.out, "model")
-    terrain = parse_terrain(args.terrain, "--terrain") if args.terrain else None
     if isinstance(robot, BodyConfig):
         from snakebot.cli.softbody_options import describe_body, softbody_spec
 
+        refuse_friction_model(args, "applies to the rigid twin only")
         spec = softbody_spec(robot, args)
         what = describe_body(robot)
         spec.compile()
     else:
         friction = GroundFriction.parse(args.friction, "--friction") if args.friction else None
-        spec = build_spec(robot, friction=friction, terrain=terrain)
+        spec = build_spec(robot, friction=friction, **twin_ground(args, robot))
         add_actuators(spec, robot)
         compile_spec(spec, robot)
         what = f"{robot.joint_count} joints"

@@ -34,6 +34,7 @@ from snakebot.cli.common import (
     robot_name,
 )
 from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
+from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, TERRAIN_HELP
 from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
@@ -50,7 +51,8 @@ from snakebot.session import (
 from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = (
-    "friction", "directional", "terrain", "realtime", "port", "baud", "allow_extra_servos",
+    "friction", "friction_model", "directional", "terrain", "realtime", "port", "baud",
+    "allow_extra_servos",
 )
 """The backend option flags ``run`` offers; each one is refused with a backend without it."""
 
@@ -90,7 +92,8 @@ def add_parser(subparsers: Any) -> None:
             "friction": "twin ground friction along and across each module; equal values = "
             "isotropic (overrides the robot's ground model); one number MU for a mass-spring "
             "body's floor",
-            "terrain": "twin terrain: flat (default) or cliff, e.g. cliff:edge_m=0.1,height_m=0.04",
+            "terrain": TERRAIN_HELP,
+            "friction_model": FRICTION_MODEL_HELP,
             "realtime": "pace the twin to the wall clock",
             "port": "serial port for --backend dynamixel (default: robot config)",
             "baud": "baud rate for --backend dynamixel",

@@ -34,10 +34,11 @@ from snakebot.cli.common import (
     robot_write_target,
     write_report,
 )
+from snakebot.cli.terrain_options import add_terrain_options, refuse_friction_model, twin_ground
 from snakebot.config import RobotConfig, load_robot
 from snakebot.config.body import BodyConfig
 from snakebot.config.body_loader import load_robot_or_body
-from snakebot.errors import ConfigError, SafetyLimitError
+from snakebot.errors import ConfigError, SafetyLimitError, UsageError
 from snakebot.gaits import get_spec, parse_set_options
 
 if TYPE_CHECKING:
@@ -115,6 +116,7 @@ def _add_gait_parser(commands: Any) -> None:
     )
     parser.add_argument("--rate", type=RATE_HZ, default=100.0, help="control rate in Hz")
     parser.add_argument("--friction", metavar="AXIAL,LATERAL", help="override the ground model")
+    add_terrain_options(parser)
     parser.add_argument(
         "--engine",
         choices=ENGINES,
@@ -174,6 +176,7 @@ def run_gait(args: argparse.Namespace) -> int:
         engine=args.engine,
         allow_roll=args.allow_roll or get_spec(args.gait).rolls_over,
         friction=_friction(robot, args.friction),
+        **_twin_ground(robot, args),
     )
     objective = objective_for(args.objective, args.heading, robot.body_length_m)
     bar = None if args.quiet else ProgressBar(budget)
@@ -209,6 +212,16 @@ def run_gait(args: argparse.Namespace) -> int:
             "contact); narrow --bounds or raise --budget. Nothing was written to --out"
         )
     return 0
+
+
+def _twin_ground(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> dict[str, Any]:
+    """--terrain and --friction-model for the rigid twin; a mass-spring body refuses them."""
+    if isinstance(robot, BodyConfig):
+        if args.terrain:
+            raise UsageError("--terrain: tuning a mass-spring body runs on flat ground only")
+        refuse_friction_model(args, "applies to the rigid twin only")
+        return {}
+    return twin_ground(args, robot)
 
 
 def _friction(robot: RobotConfig | BodyConfig, text: str | None) -> GroundFriction | None:

@@ -61,6 +61,7 @@ ROBOT: dict[str, Bounds] = {
     "twin.timestep_s": Bounds(0.0001, 0.02, "s", "MuJoCo's step; 2 ms suits desk servos"),
     "twin.axial_friction": FRICTION,
     "twin.lateral_friction": FRICTION,
+    "twin.backward_friction": FRICTION,
     "twin.servo.stiffness_scale": Bounds(0.01, 100, "", "sysid's factor on the servo stiffness"),
     "twin.servo.damping_nms": SERVO_DAMPING,
     "twin.servo.armature_kgm2": ARMATURE,

@@ -159,6 +159,10 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
         axial_friction=number(twin_t, "axial_friction", 1.0),
         lateral_friction=number(twin_t, "lateral_friction", 1.0),
+        friction_model=twin_t.text("friction_model", "auto", choices=("auto", "pairs", "scale")),  # type: ignore[arg-type]
+        backward_friction=(
+            number(twin_t, "backward_friction") if twin_t.has("backward_friction") else None
+        ),
     )
     # Before [gains]: a fitted p_gain_divisor changes what the gain registers mean.
     servo = _with_servo_fit(servo, twin_t.table("servo", required=False))

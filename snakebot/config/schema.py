@@ -14,6 +14,7 @@ from snakebot.types import PDGains, StopPolicy
 
 Axis = Literal["yaw", "pitch"]
 GroundModel = Literal["anisotropic", "isotropic"]
+FrictionModelName = Literal["auto", "pairs", "scale"]
 
 # Longest actuator delay a robot file may set: far above a Dynamixel chain's few milliseconds
 # of bus transfer and servo loop, and it sizes the twin's command history (docs/twin.md).
@@ -145,12 +146,20 @@ class SafetyConfig:
 
 @dataclass(frozen=True)
 class TwinConfig:
-    """MuJoCo twin options: timestep and ground friction along/across each link."""
+    """MuJoCo twin options: timestep and ground friction along/across each link.
+
+    ``friction_model``: "pairs" (MuJoCo capsule-plane pairs), "scale" (directional friction
+    computed from contact forces, any ground) or "auto" (pairs where the snake lies on the floor
+    plane, scale elsewhere). ``backward_friction`` (scale model; None = ``axial_friction``) is
+    the coefficient for sliding tail-first.
+    """
 
     timestep_s: float
     ground: GroundModel
     axial_friction: float
     lateral_friction: float
+    friction_model: FrictionModelName = "auto"
+    backward_friction: float | None = None
 
 
 @dataclass(frozen=True)

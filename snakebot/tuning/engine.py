@@ -20,7 +20,9 @@ import numpy as np
 from mujoco import batch as mj_batch
 
 from snakebot.backends.twin import GroundFriction, TwinBackend
+from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.model_builder import hold_ctrl_history, joint_name, link_name
+from snakebot.backends.twin.terrain import Terrain
 from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleSchedule
 from snakebot.tuning.commands import BatchCommands
@@ -78,7 +80,13 @@ class TwinBatch:
     """
 
     def __init__(
-        self, robot: RobotConfig, *, workers: int = 2, friction: GroundFriction | None = None
+        self,
+        robot: RobotConfig,
+        *,
+        workers: int = 2,
+        friction: GroundFriction | None = None,
+        terrain: Terrain | None = None,
+        friction_model: FrictionModel | None = None,
     ) -> None:
         self.robot = robot
         self.workers = max(1, workers)
@@ -90,7 +98,9 @@ class TwinBatch:
                 "may replay differently there (docs/physics.md)",
                 stacklevel=2,
             )
-        self.twin = TwinBackend(robot, friction=friction)
+        self.twin = TwinBackend(
+            robot, friction=friction, terrain=terrain, friction_model=friction_model
+        )
         self.twin.connect()
         model, data = self.twin.model, self.twin.data
         self.model = model

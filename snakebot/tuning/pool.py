@@ -14,6 +14,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 from snakebot.backends.twin import GroundFriction, TwinBackend
+from snakebot.backends.twin.friction.scale import FrictionModel
+from snakebot.backends.twin.terrain import Terrain
 from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
@@ -36,6 +38,8 @@ class PoolJob:
     rate_hz: float
     envelope: Envelope | None
     friction: GroundFriction | None = None
+    terrain: Terrain | None = None
+    friction_model: FrictionModel | None = None
 
 
 class _StopRunError(Exception):
@@ -52,7 +56,9 @@ def run_job(job: PoolJob) -> Trace:
     )
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     plan = RunPlan(job.duration_s, job.rate_hz, ramp_out=False)
-    twin = TwinBackend(robot, friction=job.friction)
+    twin = TwinBackend(
+        robot, friction=job.friction, terrain=job.terrain, friction_model=job.friction_model
+    )
     rows = TraceRows(robot.joint_count)
     window = max(1, round((job.envelope.stop_after_s if job.envelope else 1.0) * job.rate_hz))
     with contextlib.closing(twin):

@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 from snakebot.backends.twin import GroundFriction
+from snakebot.backends.twin.friction.scale import FrictionModel
+from snakebot.backends.twin.terrain import Terrain
 from snakebot.config.body import BodyConfig
 from snakebot.config.schema import RobotConfig
 from snakebot.gaits import Gait, make_gait
@@ -55,6 +57,8 @@ class EvalPlan:
     engine: str = "batch"
     allow_roll: bool = False
     friction: GroundFriction | None = None
+    terrain: Terrain | None = None
+    friction_model: FrictionModel | None = None
 
 
 class SearchProblem(Protocol):
@@ -120,10 +124,22 @@ class GaitProblem:
         self.plan = plan
         self.listener = listener
         self.history: list[Evaluation] = []
-        self._twin = TwinBatch(robot, workers=plan.workers, friction=plan.friction)
+        self._twin = TwinBatch(
+            robot,
+            workers=plan.workers,
+            friction=plan.friction,
+            terrain=plan.terrain,
+            friction_model=plan.friction_model,
+        )
         self.envelope = Envelope.for_robot(
             robot, float(self._twin.start_com_m[2]), allow_roll=plan.allow_roll
         )
+        if plan.terrain is not None and plan.terrain.name != "flat":
+            # The airborne check measures heights above the floor plane at z = 0; off the flat
+            # floor (a plateau, a slope, a step) that is not the ground, so it is not judged.
+            self.envelope = replace(
+                self.envelope, contact_tolerance_m=math.inf, lift_limit_m=math.inf
+            )
         self._pool = ProcessPool(plan.workers) if plan.engine == "processes" else None
 
     def close(self) -> None:
@@ -172,6 +188,8 @@ class GaitProblem:
                     plan.rate_hz,
                     self.envelope,
                     plan.friction,
+                    plan.terrain,
+                    plan.friction_model,
                 )
                 for p in params
             ]

@@ -65,6 +65,7 @@ class TuneResult:
             "seed": self.seed,
             "duration_s": self.plan.duration_s,
             "rate_hz": self.plan.rate_hz,
+            "terrain": self.plan.terrain.spec_text() if self.plan.terrain else "flat",
         }
 
     @property
@@ -162,6 +163,15 @@ def replay_command(result: TuneResult, path: Path) -> str:
     )
     if plan.friction is not None:
         command += f" --friction {plan.friction.axial:g},{plan.friction.lateral:g}"
+        if plan.friction.backward is not None:
+            command = command.replace(
+                f"{plan.friction.axial:g},",
+                f"{plan.friction.axial:g},{plan.friction.backward:g},",
+            )
+    if plan.terrain is not None:
+        command += f" --terrain {plan.terrain.spec_text()}"
+    if plan.friction_model is not None:
+        command += f" --friction-model {plan.friction_model}"
     return command
 
 

@@ -6,8 +6,7 @@ from __future__ import annotations
 import math
 
 from snakebot.backends.softbody.backend import SoftBodyBackend
-from snakebot.backends.twin.cliff import Cliff
-from snakebot.backends.twin.factory import terrain_option
+from snakebot.backends.twin.cliff import Cliff, parse_terrain
 from snakebot.backends.twin.model_builder import GroundFriction
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError
@@ -40,7 +39,7 @@ def make_softbody(
         body,
         friction=floor_friction_option(friction),
         directional=directional_option(directional),
-        terrain=terrain_option(terrain),
+        terrain=body_terrain_option(terrain),
         realtime=bool(realtime),
     )
 
@@ -92,3 +91,15 @@ def directional_option(value: bool | str | None) -> bool | None:
     if value in ("on", "off"):
         return value == "on"
     raise ConfigError("directional", "", f"expected on or off, got {value!r}")
+
+
+def body_terrain_option(value: Cliff | str | None) -> Cliff | None:
+    """A mass-spring body's ground: ``"flat"`` (None), ``"cliff[:key=value,...]"`` or a Cliff;
+    ConfigError (source ``terrain``) otherwise (the rigid twin's other terrains do not apply)."""
+    if value is None or isinstance(value, Cliff):
+        return value
+    if isinstance(value, str):
+        return parse_terrain(value, option="terrain")
+    raise ConfigError(
+        "terrain", "", f"expected 'flat', 'cliff[:key=value,...]' or a Cliff, got {value!r}"
+    )

@@ -12,6 +12,7 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.health import (
     DEFAULT_LIMITS,
     HealthLimits,
@@ -28,6 +29,7 @@ from snakebot.backends.twin.model_builder import (
 )
 from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
+from snakebot.backends.twin.terrain import Terrain, as_terrain
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, ServoFaultError, SimulationDivergedError
 from snakebot.types import BodyState, JointState, PDGains
@@ -58,7 +60,10 @@ class TwinBackend(Backend):
     """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
 
     ``friction`` overrides the robot's ground model (``--friction``); ``timestep_s`` overrides
-    ``twin.timestep_s``; ``terrain`` adds Miller's cliff (the snake starts on its plateau).
+    ``twin.timestep_s``; ``terrain`` (a Terrain, a Cliff, ``--terrain`` text such as
+    ``"pegs:density=12"``, or None for flat) sets the ground and the start pose;
+    ``friction_model`` ("auto", "pairs", "scale"; None: the robot file's) how the ground's
+    friction is made. A bad terrain raises ConfigError here, naming the key.
     Control periods passed to ``advance`` must be whole numbers of steps. ``health`` sets the
     physics checks (``twin.health.HealthLimits``; None: no checks), reported by
     ``physics_health``. The servo file's ``[twin]`` parts (docs/physics.md) add current draw,
@@ -74,7 +79,8 @@ class TwinBackend(Backend):
         friction: GroundFriction | None = None,
         timestep_s: float | None = None,
         realtime: bool = False,
-        terrain: Cliff | None = None,
+        terrain: Terrain | Cliff | str | None = None,
+        friction_model: FrictionModel | None = None,
         health: HealthLimits | None = DEFAULT_LIMITS,
         seed: int = 0,
         raise_on_overload: bool = True,
@@ -86,7 +92,8 @@ class TwinBackend(Backend):
         self._seed = seed
         self.raise_on_overload = raise_on_overload
         self.robot = robot
-        self.terrain = terrain
+        self.terrain = as_terrain(terrain)
+        self._friction_model = friction_model
         self.joint_count = robot.joint_count
         self.stop_policy = robot.safety.stop_policy
         self._friction = friction
@@ -104,6 +111,7 @@ class TwinBackend(Backend):
             friction=self._friction,
             timestep_s=self._timestep_override,
             terrain=self.terrain,
+            friction_model=self._friction_model,
         )
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from snakebot.backends.twin.cliff import Cliff, parse_terrain
+from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.model_builder import GroundFriction
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
@@ -16,13 +16,18 @@ from snakebot.errors import ConfigError
 
 if TYPE_CHECKING:
     from snakebot.backends.base import Backend
+    from snakebot.backends.twin.friction.scale import FrictionModel
+    from snakebot.backends.twin.terrain import Terrain
+
+FRICTION_MODELS = ("auto", "pairs", "scale")
 
 
 def make_twin(
     robot: RobotConfig | BodyConfig,
     *,
     friction: GroundFriction | str | tuple[float, float] | float | None = None,
-    terrain: Cliff | str | None = None,
+    terrain: Terrain | Cliff | str | None = None,
+    friction_model: str | None = None,
     realtime: bool = False,
     directional: bool | str | None = None,
     timestep_s: float | None = None,
@@ -30,17 +35,23 @@ def make_twin(
     """The MuJoCo twin of ``robot``, unconnected: a TwinBackend for a servo chain, the soft-body
     twin for a mass-spring body (``directional`` applies to those only).
 
-    ``friction``: AXIAL,LATERAL (text, a pair or a GroundFriction) over the robot's ground
-    model; ``terrain``: ``flat``, ``cliff[:key=value,...]`` or a Cliff; ``realtime``: pace to
-    the wall clock; ``timestep_s``: the physics step in s. ConfigError for a bad value.
+    ``friction``: AXIAL,LATERAL or FORWARD,BACKWARD,LATERAL (text, a pair or a GroundFriction)
+    over the robot's ground model; ``terrain``: ``NAME[:key=value,...]`` (flat, slope, pegs,
+    rough, step, pipe, pole, cliff: docs/terrain.md; a mass-spring body takes flat or cliff), a
+    Terrain or a Cliff; ``friction_model``: auto, pairs or scale (None: the robot file's);
+    ``realtime``: pace to the wall clock; ``timestep_s``: the physics step in s. ConfigError
+    (source: the option's name) for a bad value.
     """
     if isinstance(robot, BodyConfig):
         if timestep_s is not None:
             raise ConfigError("timestep_s", "", "a mass-spring body's timestep is in its body file")
         from snakebot.backends.softbody.factory import make_softbody
 
+        if friction_model is not None:
+            raise ConfigError("friction_model", "", "applies to the rigid twin only")
         return make_softbody(
-            robot, friction=friction, terrain=terrain, realtime=realtime, directional=directional
+            robot, friction=friction, terrain=terrain, realtime=realtime,  # type: ignore[arg-type]
+            directional=directional,
         )
     if not isinstance(robot, RobotConfig):
         raise ConfigError(
@@ -53,7 +64,8 @@ def make_twin(
     return TwinBackend(
         robot,
         friction=ground_friction_option(friction),
-        terrain=terrain_option(terrain),
+        terrain=terrain_option(terrain, robot),
+        friction_model=friction_model_option(friction_model),
         realtime=bool(realtime),
         timestep_s=timestep_s,
     )
@@ -79,12 +91,29 @@ def ground_friction_option(
     return GroundFriction.parse(f"{axial!r},{lateral!r}", option="friction")
 
 
-def terrain_option(value: Cliff | str | None) -> Cliff | None:
-    """The ``terrain`` option: ``"flat"`` (None), ``"cliff[:key=value,...]"`` or a Cliff."""
-    if value is None or isinstance(value, Cliff):
-        return value
+def terrain_option(value: Terrain | Cliff | str | None, robot: RobotConfig) -> Terrain:
+    """The ``terrain`` option as a Terrain checked against ``robot``'s size: ``"flat"``,
+    ``"NAME[:key=value,...]"``, a Terrain or a Cliff (None: flat); ConfigError (source
+    ``terrain``) naming the key otherwise."""
+    from snakebot.backends.twin.model_builder import body_shape
+    from snakebot.backends.twin.terrain import Terrain, as_terrain, parse_terrain
+
     if isinstance(value, str):
-        return parse_terrain(value, option="terrain")
+        terrain = parse_terrain(value, option="terrain")
+    elif value is None or isinstance(value, Cliff | Terrain):
+        terrain = as_terrain(value)
+    else:
+        raise ConfigError(
+            "terrain", "", f"expected NAME[:key=value,...], a Terrain or a Cliff, got {value!r}"
+        )
+    terrain.check(body_shape(robot))
+    return terrain
+
+
+def friction_model_option(value: str | None) -> FrictionModel | None:
+    """The ``friction_model`` option: auto, pairs or scale (None: the robot file's)."""
+    if value is None or value in FRICTION_MODELS:
+        return value  # type: ignore[return-value]
     raise ConfigError(
-        "terrain", "", f"expected 'flat', 'cliff[:key=value,...]' or a Cliff, got {value!r}"
+        "friction_model", "", f"expected one of {', '.join(FRICTION_MODELS)}, got {value!r}"
     )

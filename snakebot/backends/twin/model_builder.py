@@ -16,7 +16,17 @@ import mujoco
 import numpy as np
 
 from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.friction.layout import NUMERIC_NAME
+from snakebot.backends.twin.friction.scale import (
+    FRICTION_MODELS,
+    FrictionModel,
+    ScaleFriction,
+    add_scale_friction,
+    bind_scale_friction,
+    python_callback_paused,
+)
 from snakebot.backends.twin.servo_model import ServoDynamics, history_samples, servo_dynamics
+from snakebot.backends.twin.terrain import BodyShape, Terrain, as_terrain
 from snakebot.config.paths import scene_path
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
@@ -24,8 +34,12 @@ from snakebot.errors import ConfigError
 SCENE_PATH = scene_path()
 """The twin's scene (floor, light, tracking camera), shipped as package data."""
 # Links collide with each other (bit 2) but reach the floor only through explicit pairs: a second,
-# isotropic floor contact would cancel the anisotropy (locomotion.md §4.4, gotcha 3).
+# isotropic floor contact would cancel the anisotropy (locomotion.md §4.4, gotcha 3). With the
+# scale model they touch the ground (bit 1) too, normal force only (condim 1, their priority
+# wins over the terrain's), and friction comes from friction/scale.py.
 _LINK_CONTYPE = 2
+_SCALE_LINK_CONTYPE = 1 | 2
+_SCALE_LINK_PRIORITY = 2
 _SPIN_ROLL_FRICTION = (0.005, 0.0001, 0.0001)
 _AXIS_VECTORS = {"yaw": (0.0, 0.0, 1.0), "pitch": (0.0, 1.0, 0.0)}
 # Actuator history interpolation: 0 holds the last sample, so the delay acts in whole timesteps;
@@ -35,10 +49,14 @@ _LINEAR_INTERP = 1
 
 @dataclass(frozen=True)
 class GroundFriction:
-    """Coulomb friction of every module on the floor, along and across the module."""
+    """Coulomb friction of every module on the floor, along and across the module.
+
+    ``backward`` (the scale model only; None = ``axial``) is for sliding tail-first.
+    """
 
     axial: float
     lateral: float
+    backward: float | None = None
 
     @property
     def roll_resistant(self) -> bool:
@@ -56,19 +74,33 @@ class GroundFriction:
         roll = 4.0 * self.lateral * radius_m if self.roll_resistant else _SPIN_ROLL_FRICTION[1]
         return [self.axial, self.lateral, _SPIN_ROLL_FRICTION[0], roll, roll]
 
+    def scale(self, source: str = "friction") -> ScaleFriction:
+        """The scale model's coefficients: forward = axial, backward, lateral."""
+        backward = self.axial if self.backward is None else self.backward
+        return ScaleFriction(self.axial, backward, self.lateral, source=source)
+
     @classmethod
     def parse(cls, text: str, option: str = "friction") -> GroundFriction:
-        """Parse ``AXIAL,LATERAL`` (two non-negative numbers)."""
+        """Parse ``AXIAL,LATERAL`` or ``FORWARD,BACKWARD,LATERAL`` (non-negative numbers)."""
         parts = text.split(",")
         try:
-            axial, lateral = (float(p) for p in parts)
+            values = [float(p) for p in parts]
         except ValueError:
+            values = []
+        if len(values) not in (2, 3):
             raise ConfigError(
-                option, "", f"expected AXIAL,LATERAL (two numbers, e.g. 0.02,1.0), got {text!r}"
-            ) from None
-        if not (axial >= 0 and lateral >= 0 and math.isfinite(axial + lateral)):
+                option,
+                "",
+                "expected AXIAL,LATERAL or FORWARD,BACKWARD,LATERAL (numbers, e.g. 0.02,1.0), "
+                f"got {text!r}",
+            )
+        if not all(v >= 0 and math.isfinite(v) for v in values):
             raise ConfigError(option, "", f"friction coefficients must be >= 0, got {text!r}")
-        return cls(axial, lateral)
+        if len(values) == 3:
+            forward, backward, lateral = values
+            ScaleFriction(forward, backward, lateral, source=option)  # backward >= forward
+            return cls(forward, lateral, backward)
+        return cls(values[0], values[1])
 
 
 def ground_friction(robot: RobotConfig, override: GroundFriction | None = None) -> GroundFriction:
@@ -78,7 +110,28 @@ def ground_friction(robot: RobotConfig, override: GroundFriction | None = None) 
     twin = robot.twin
     if twin.ground == "isotropic":
         return GroundFriction(twin.lateral_friction, twin.lateral_friction)
-    return GroundFriction(twin.axial_friction, twin.lateral_friction)
+    return GroundFriction(twin.axial_friction, twin.lateral_friction, twin.backward_friction)
+
+
+def resolve_friction_model(
+    robot: RobotConfig, terrain: Terrain, model: FrictionModel | None = None
+) -> FrictionModel:
+    """The friction model that applies, "pairs" or "scale": ``model`` (``--friction-model``),
+    else the robot file's ``twin.friction_model``; "auto" means pairs where the snake lies on the
+    floor plane, scale elsewhere."""
+    chosen = model or robot.twin.friction_model
+    if chosen not in FRICTION_MODELS:
+        raise ConfigError(
+            "--friction-model", "", f"expected one of {FRICTION_MODELS}, got {chosen!r}"
+        )
+    if chosen == "auto":
+        return "pairs" if terrain.plane_ground else "scale"
+    return chosen
+
+
+def body_shape(robot: RobotConfig) -> BodyShape:
+    """The chain's dimensions, as terrains lay themselves out around it."""
+    return BodyShape(robot.link_count, robot.link.length_m, robot.link.radius_m)
 
 
 def link_name(index: int) -> str:
@@ -97,10 +150,19 @@ def build_spec(
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
     scene_path: Path = SCENE_PATH,
-    terrain: Cliff | None = None,
+    terrain: Terrain | Cliff | str | None = None,
+    friction_model: FrictionModel | None = None,
 ) -> mujoco.MjSpec:
-    """An ``MjSpec`` of ``robot`` in the scene (on ``terrain``'s plateau if one is given);
-    compile it, or ``to_xml()`` it for a viewer."""
+    """An ``MjSpec`` of ``robot`` in the scene on ``terrain`` (a Terrain, a Cliff, ``--terrain``
+    text, or None for flat), with the ground friction of ``friction_model`` (None: the robot
+    file's); compile it with :func:`build_model`, or ``to_xml()`` it for a viewer.
+
+    ConfigError naming the ``--terrain`` key if the terrain cannot host this robot.
+    """
+    ground_terrain = as_terrain(terrain)
+    shape = body_shape(robot)
+    ground_terrain.check(shape)
+    model_name = resolve_friction_model(robot, ground_terrain, friction_model)
     spec = mujoco.MjSpec.from_file(str(scene_path))
     spec.modelname = robot.name
     spec.compiler.degree = False
@@ -115,13 +177,14 @@ def build_spec(
     for index in range(robot.link_count):
         body = parent.add_body(name=link_name(index))
         if index == 0:
-            base = terrain.start_height_m if terrain is not None else 0.0
-            body.pos = [0.0, 0.0, base + radius + 1e-3]
+            start = ground_terrain.start_pose(shape)
+            body.pos = list(start.pos)
+            body.quat = list(start.quat)
             body.add_freejoint(name="root")
         else:
             body.pos = [-length, 0.0, 0.0]
             _add_joint(body, robot, index - 1, dynamics)
-        body.add_geom(
+        geom = body.add_geom(
             name=f"{link_name(index)}_geom",
             type=mujoco.mjtGeom.mjGEOM_CAPSULE,
             fromto=[-radius, 0, 0, -(length - radius), 0, 0],
@@ -131,16 +194,22 @@ def build_spec(
             conaffinity=_LINK_CONTYPE,
             rgba=[0.85, 0.45, 0.1, 1] if index == 0 else [0.15, 0.15, 0.17, 1],
         )
-        spec.add_pair(
-            name=f"floor_{link_name(index)}",
-            geomname1="floor",
-            geomname2=f"{link_name(index)}_geom",
-            condim=6 if ground.roll_resistant else 3,
-            friction=ground.pair_friction(radius),
-        )
+        if model_name == "scale":
+            geom.contype = geom.conaffinity = _SCALE_LINK_CONTYPE
+            geom.condim = 1
+            geom.priority = _SCALE_LINK_PRIORITY
+        else:
+            spec.add_pair(
+                name=f"floor_{link_name(index)}",
+                geomname1=ground_terrain.pair_geom,
+                geomname2=f"{link_name(index)}_geom",
+                condim=6 if ground.roll_resistant else 3,
+                friction=ground.pair_friction(radius),
+            )
         parent = body
-    if terrain is not None:
-        terrain.add_to(spec)
+    ground_terrain.add_to(spec, shape)
+    if model_name == "scale":
+        add_scale_friction(spec, robot.link_count, ground.scale(str(robot.source)))
     head = spec.body(link_name(0))
     head.add_camera(
         name="track",
@@ -203,15 +272,31 @@ def build_model(
     *,
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
-    terrain: Cliff | None = None,
+    terrain: Terrain | Cliff | str | None = None,
+    friction_model: FrictionModel | None = None,
 ) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
     """Compile the twin of ``robot``; returns the model and the spec it came from.
 
+    With the scale friction model this installs its callback (friction/scale.py).
     ConfigError naming the robot file if MuJoCo refuses the model (see :func:`compile_spec`).
     """
-    spec = build_spec(robot, friction=friction, timestep_s=timestep_s, terrain=terrain)
+    spec = build_spec(
+        robot,
+        friction=friction,
+        timestep_s=timestep_s,
+        terrain=terrain,
+        friction_model=friction_model,
+    )
     add_actuators(spec, robot)
-    return compile_spec(spec, robot), spec
+    model = compile_spec(spec, robot)
+    if uses_scale_friction(model):
+        bind_scale_friction(model, model.body(link_name(0)).id)
+    return model, spec
+
+
+def uses_scale_friction(model: mujoco.MjModel) -> bool:
+    """True if ``model`` was built with the scale friction model."""
+    return bool(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC_NAME) >= 0)
 
 
 # Which robot-file table a MuJoCo element named in a compile error comes from.
@@ -222,7 +307,8 @@ def compile_spec(spec: mujoco.MjSpec, robot: RobotConfig) -> mujoco.MjModel:
     """``spec.compile()``, with MuJoCo's refusal (a mass or size it cannot use, say) raised as a
     ConfigError naming the robot file and the table the offending element comes from."""
     try:
-        return spec.compile()
+        with python_callback_paused():
+            return spec.compile()
     except ValueError as exc:
         text = " ".join(str(exc).replace("Error:", "").split())
         element = re.search(r"Element name '([A-Za-z_]+?)\d*'", text)

@@ -135,7 +135,9 @@ def test_control_period_must_be_whole_steps() -> None:
 
 def test_friction_option_parsing() -> None:
     assert GroundFriction.parse("0.02,1.0") == GroundFriction(0.02, 1.0)
-    for bad in ["0.1", "a,b", "-1,1", "1,2,3"]:
+    # Three numbers are the scale model's forward, backward, lateral.
+    assert GroundFriction.parse("0.05,0.5,1") == GroundFriction(0.05, 1.0, 0.5)
+    for bad in ["0.1", "a,b", "-1,1", "1,2,3,4", "0.5,0.1,1"]:
         with pytest.raises(ConfigError, match=r"^friction: "):
             GroundFriction.parse(bad)
 

@@ -43,7 +43,7 @@ def test_bad_option_values_name_the_flag(capsys: pytest.CaptureFixture[str]) -> 
     assert main(["run", "--friction", "slippery", "--duration", "0.1"]) == 2  # usage
     assert "--friction: expected AXIAL,LATERAL" in capsys.readouterr().err
     assert main(["run", "--terrain", "moon", "--duration", "0.1"]) == 2
-    assert "--terrain: expected one of flat, cliff" in capsys.readouterr().err
+    assert "--terrain: expected one of flat, slope" in capsys.readouterr().err
 
 
 def test_a_viewer_on_hardware_is_refused_for_what_it_is(capsys: pytest.CaptureFixture[str]) -> None:
