@@ -22,6 +22,7 @@ from snakebot.errors import SnakebotError, UsageError
 COMMANDS = (
     "run", "drive", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune",
     "sysid",
+    "rl",
 )
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
