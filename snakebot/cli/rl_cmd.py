@@ -116,15 +116,18 @@ def _number(text: str) -> float | int:
 
 
 def env_kwargs(args: argparse.Namespace, encoding: str) -> dict[str, Any]:
-    """The kwargs of gymnasium.make: robot, encoding and --set, checked by building them."""
-    kwargs = {"robot": args.robot, "encoding": encoding, **parse_settings(args.set)}
+    """The kwargs of gymnasium.make: robot, encoding and --set, checked by building them, with
+    every default filled in (a policy keeps the settings it was trained with, whatever later
+    versions change)."""
+    given = parse_settings(args.set)
     for key in ("robot", "encoding"):
-        if key in parse_settings(args.set):
+        if key in given:
             raise UsageError(f"--set {key}=...: use --{key}")
-    from snakebot.rl.settings import GoalSettings, VelocitySettings, split_kwargs
+    from snakebot.rl.settings import GoalSettings, VelocitySettings, settings_dict, split_kwargs
 
-    split_kwargs(dict(kwargs), GoalSettings if "Goal" in args.env else VelocitySettings)
-    return kwargs
+    task = GoalSettings if "Goal" in args.env else VelocitySettings
+    kwargs = {"robot": args.robot, "encoding": encoding, **given}
+    return settings_dict(*split_kwargs(kwargs, task))
 
 
 def run_train(args: argparse.Namespace) -> int:

@@ -28,7 +28,7 @@ from snakebot.config.body_loader import load_robot_or_body
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
-from snakebot.errors import ConfigError, OutputError
+from snakebot.errors import ConfigError, OutputError, UsageError
 from snakebot.gaits import Gait, load_gait_file, make_gait, parse_set_options
 from snakebot.telemetry import CsvTelemetryWriter
 
@@ -46,6 +46,10 @@ def add_parser(subparsers: Any) -> None:
         help="override a gait parameter (repeatable), e.g. --set omega=pi",
     )
     parser.add_argument("--gait-file", type=Path, help="replay a saved gait (TOML)")
+    parser.add_argument("--policy", metavar="DIR", help="play a trained policy (`snakebot rl "
+                        "train`) as the gait; needs snakebot[rl]")
+    parser.add_argument("--command", metavar="A,B", help="with --policy: speed,turn_rate (m/s, "
+                        "rad/s) for a velocity policy; goal X,Y (m, X ahead) for a goal policy")
     parser.add_argument(
         "--backend",
         choices=("sim", "dynamixel"),
@@ -169,9 +173,16 @@ def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
     hardware = args.backend == "dynamixel"
     robot = load_robot_or_body(robot_name(args, hardware=hardware, what="run --backend dynamixel"))
-    gait_name, gait = build_gait(robot, args)
+    if args.policy is None:
+        if args.command is not None:
+            raise UsageError("--command goes with --policy (a trained policy's command)")
+        gait_name, gait = build_gait(robot, args)
     plan = RunPlan(duration_s=args.duration, rate_hz=args.rate)
     backend = make_backend(robot, args)
+    if args.policy is not None:  # a closed-loop gait reads the backend it drives
+        from snakebot.rl.cli_policy import policy_gait
+
+        gait_name, gait = policy_gait(robot, backend, args)
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     safety = SafetyLayer.for_robot(robot)
     # Outputs open before the backend connects: one that cannot be written stops the run before

@@ -21,7 +21,7 @@ class SnakeEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     """A ``gymnasium.Env`` around the twin loop. Subclasses add the task: ``_obs`` and
     ``_task_step``/``_task_reset``; ``observation_size`` gives the observation's length."""
 
-    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 (gymnasium's)
 
     def __init__(self, settings: EnvSettings, render_mode: str | None = None) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -72,7 +72,7 @@ class SnakeEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         truncated = not terminated and self.steps >= self.settings.max_steps
         return self._obs(), float(reward), bool(terminated), bool(truncated), info
 
-    def render(self) -> np.ndarray | None:  # type: ignore[override]
+    def render(self) -> np.ndarray | None:
         """An RGB frame (H, W, 3) uint8 from the tracking camera, when render_mode is set."""
         if self.render_mode != "rgb_array":
             return None

@@ -26,8 +26,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from snakebot.errors import ConfigError
-from snakebot.gaits import CompoundGait, DftGait, DftShiftGait, PhasedGait, SerpenoidGait
-from snakebot.gaits import SimpleGait
+from snakebot.gaits import (
+    CompoundGait,
+    DftGait,
+    DftShiftGait,
+    PhasedGait,
+    SerpenoidGait,
+    SimpleGait,
+)
 from snakebot.gaits.base import FloatArray
 
 ENCODINGS = ("simple", "sinusoid", "dft", "dft_shift", "compound")
@@ -111,16 +117,18 @@ def make_encoding(
         wave_bound = (limit - mean_bound) / (2.0 * math.sqrt(2.0) * max(bins - 1, 1))
         scale = np.concatenate(([mean_bound], np.full(2 * (bins - 1), wave_bound)))
         dim = 2 * bins - 1
-        limits = {"lower_rad": tuple(lower.tolist()), "upper_rad": tuple(upper.tolist())}
+        low, high = tuple(lower.tolist()), tuple(upper.tolist())
         if name == "dft":
             return Encoding(
                 name, n, dim, 0, phase_hz,
-                lambda a: DftGait(n, _coefficients(a, scale), **limits),
+                lambda a: DftGait(n, _coefficients(a, scale), lower_rad=low, upper_rad=high),
             )
         rate = n * phase_hz  # joints/s: one lap of the shape per 1/phase_hz s
         return Encoding(
             name, n, dim, 1, phase_hz,
-            lambda a: DftShiftGait(n, _coefficients(a, scale), shift_rate=rate, **limits),
+            lambda a: DftShiftGait(
+                n, _coefficients(a, scale), shift_rate=rate, lower_rad=low, upper_rad=high
+            ),
         )
     raise ConfigError("encoding", "", f"unknown encoding {name!r}; expected one of "
                       f"{', '.join(ENCODINGS)}")

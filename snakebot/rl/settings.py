@@ -91,7 +91,7 @@ class VelocitySettings:
     speed_range_mps: tuple[float, float] = (0.0, 0.25)
     turn_range_rad_s: tuple[float, float] = (-0.3, 0.3)
     command_period_s: float = 5.0
-    speed_sigma_mps: float = 0.05
+    speed_sigma_mps: float = 0.1
     turn_sigma_rad_s: float = 0.15
     turn_weight: float = 0.5
     effort_weight: float = 0.05
@@ -111,7 +111,11 @@ def _positive(key: str, value: object) -> None:
 def _range(key: str, value: object, minimum: float) -> None:
     ok = isinstance(value, tuple | list) and len(value) == 2
     if ok:
-        low, high = (float(v) for v in value)  # type: ignore[union-attr]
+        assert isinstance(value, tuple | list)
+        try:
+            low, high = (float(v) for v in value)
+        except (TypeError, ValueError):
+            low = high = math.nan
         ok = math.isfinite(low) and math.isfinite(high) and minimum <= low <= high
     if not ok:
         raise ConfigError(key, "", f"expected (low, high) with {minimum:g} <= low <= high, "

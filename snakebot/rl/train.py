@@ -185,7 +185,8 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         folder.mkdir(parents=True, exist_ok=True)
         csv_file = (folder / "learning_curve.csv").open("w", newline="")
     except OSError as exc:
-        raise OutputError(folder, f"cannot write the training output: {exc.strerror or exc}") from exc
+        reason = exc.strerror or str(exc)
+        raise OutputError(folder, f"cannot write the training output: {reason}") from exc
     cpu_start = _cpu_s()
     venv = make_vec_env(settings.env_id, settings.env_kwargs, settings.n_envs, settings.vec,
                         settings.seed)

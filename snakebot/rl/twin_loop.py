@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 
 import mujoco
-import numpy as np
 
 from snakebot.backends.base import BodyState, JointCommand, JointState
 from snakebot.backends.twin import TwinBackend

@@ -16,7 +16,7 @@ import numpy as np
 
 from snakebot.rl.base_env import SnakeEnv
 from snakebot.rl.observe import velocity_observation
-from snakebot.rl.settings import EnvSettings, VelocitySettings, split_kwargs
+from snakebot.rl.settings import VelocitySettings, split_kwargs
 from snakebot.rl.twin_loop import StepOutcome
 
 
