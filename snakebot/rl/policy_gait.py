@@ -161,7 +161,9 @@ class PolicyGait(Gait):
         self._last_time_s = time_s
         # Half a control period of slack: gait times are sums of floats.
         if self._gait is None or time_s >= self._next_decision_s - 1e-6:
-            self._gait = self.encoding.gait(self.policy.actor(self.observation()))
+            # float32, as the env's action space hands actions over in training
+            action = self.policy.actor(self.observation()).astype(np.float32)
+            self._gait = self.encoding.gait(action.astype(np.float64))
             self.decisions += 1
             period = 1.0 / self.settings.action_hz
             self._next_decision_s = max(self._next_decision_s + period, time_s + 0.5 * period)

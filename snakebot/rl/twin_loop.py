@@ -81,8 +81,11 @@ class TwinLoop:
             command = safety.filter(target, dt, safety.ramp_in(self.state.time_s))
             backend.send_command(JointCommand(command))
             backend.advance(dt)
-            clock.advance(gait, dt)
-            self.state = state = backend.read_state()
+            state = backend.read_state()
+            # Robot time, as the runner's gait time: a policy played by `run` turns its phases
+            # by the same float differences.
+            clock.advance(gait, state.time_s - self.state.time_s)
+            self.state = state
             power = state.effort_nm * state.velocity_rad_s
             work += float(power[power > 0].sum()) * dt
         return StepOutcome(com_before, self.body().com_m, work, self.state)

@@ -36,7 +36,7 @@ def random_policy(folder: Path, env_id: str, action_dim: int, obs_dim: int, seed
     folder.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     actor = NumpyActor(
-        (rng.normal(0, 1.0, (16, obs_dim)), rng.normal(0, 1.0, (action_dim, 16))),
+        (rng.normal(0, 0.5, (16, obs_dim)), rng.normal(0, 0.5, (action_dim, 16))),
         (rng.normal(0, 0.3, 16), rng.normal(0, 0.3, action_dim)),
     )
     save_actor(actor, folder / "actor.npz")
