@@ -146,9 +146,11 @@ def run_train(args: argparse.Namespace) -> int:
     if args.json:
         print_json(summary)
     else:
-        print(f"done in {summary['wall_s']:.0f} s ({summary['steps_per_s']:.0f} steps/s); "
+        ended = "interrupted after" if result.interrupted else "done:"
+        print(f"{ended} {summary['steps']} steps in {summary['wall_s']:.0f} s "
+              f"({summary['steps_per_s']:.0f} steps/s, {summary['cpu_s']:.0f} CPU s); "
               f"policy, learning_curve.csv and .png in {out}")
-    return 0
+    return 130 if result.interrupted else 0
 
 
 def run_eval(args: argparse.Namespace) -> int:

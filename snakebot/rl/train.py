@@ -84,6 +84,7 @@ class TrainResult:
     steps: int
     folder: Path
     cpu_s: float = math.nan
+    interrupted: bool = False
 
     @property
     def steps_per_s(self) -> float:
@@ -173,12 +174,13 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
           plot: bool = True) -> TrainResult:
     """Train, then save policy.json, actor.npz, policy.zip, learning_curve.csv (+ .png).
 
+    Ctrl-C ends training early and still saves the policy learned so far (``interrupted``).
     The curve CSV is written row by row, so an interrupted run keeps what it measured. Raises
     MissingDependencyError naming the ``rl-train`` extra, ConfigError for bad settings,
     OutputError when the folder cannot be written.
     """
-    sb3 = require("stable_baselines3", "rl train")
     torch = require("torch", "rl train")
+    sb3 = require("stable_baselines3", "rl train")
     callbacks = require("stable_baselines3.common.callbacks", "rl train")
     torch.set_num_threads(1)  # one core per env process; PPO's small MLP gains nothing more
     try:
@@ -201,10 +203,14 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
             tracker.on_rollout(int(self.num_timesteps))
 
     ppo_kwargs = {"n_steps": settings.rollout_steps // settings.n_envs, **settings.ppo}
+    interrupted = False
     try:
         model = sb3.PPO("MlpPolicy", venv, seed=settings.seed, verbose=0, device="cpu",
                         **ppo_kwargs)
-        model.learn(total_timesteps=settings.steps, callback=Callback())
+        try:
+            model.learn(total_timesteps=settings.steps, callback=Callback())
+        except KeyboardInterrupt:  # Ctrl-C: keep the policy learned so far
+            interrupted = True
     finally:
         venv.close()
         csv_file.close()
@@ -217,6 +223,7 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
     meta = {
         "algo": settings.algo,
         "steps": steps,
+        "interrupted": interrupted,
         "seed": settings.seed,
         "n_envs": settings.n_envs,
         "vec": settings.vec,
@@ -229,7 +236,7 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         "versions": {"stable_baselines3": sb3.__version__, "torch": torch.__version__},
     }
     write_settings(folder, settings.env_id, settings.env_kwargs, meta)
-    result = TrainResult(tracker.curve, wall, steps, folder, cpu)
+    result = TrainResult(tracker.curve, wall, steps, folder, cpu, interrupted)
     if plot:
         from snakebot.rl.plots import curve_plot
 
@@ -286,6 +293,7 @@ def dump_json(result: TrainResult) -> dict[str, Any]:
         "steps": result.steps,
         "wall_s": round(result.wall_s, 2),
         "cpu_s": round(result.cpu_s, 2),
+        "interrupted": result.interrupted,
         "steps_per_s": round(result.steps_per_s, 2),
         "final_mean_return": None if last is None else _finite(last.mean_return),
         "final_success_rate": None if last is None else _finite(last.success_rate),

@@ -38,7 +38,7 @@ def rollout(env_id: str, seed: int, steps: int, **kwargs: object) -> list[tuple]
     obs, info = env.reset(seed=seed)
     out = [(obs, 0.0, info)]
     for _ in range(steps):
-        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        obs, reward, _, _, info = env.step(env.action_space.sample())
         out.append((obs, reward, info))
     env.close()
     return out
@@ -72,13 +72,14 @@ def test_goal_reward_pays_for_moving_toward_the_goal_not_away() -> None:
 def test_reaching_the_goal_terminates_with_the_bonus() -> None:
     env = gymnasium.make(GOAL, encoding="sinusoid", goal_radius_bl=0.5)
     env.reset(seed=0, options={"goal_xy_m": (0.8, 0.0)})  # 1.4 body lengths ahead
-    for step in range(200):
-        obs, reward, terminated, truncated, info = env.step(np.zeros(4, dtype=np.float32))
+    steps = 0
+    for steps in range(1, 201):  # noqa: B007 (the count is the result)
+        _, _, terminated, truncated, info = env.step(np.zeros(4, dtype=np.float32))
         if terminated:
             break
     assert terminated and not truncated and info["is_success"]
     assert info["reward_terms"]["goal"] == 10.0 and info["distance_bl"] <= 0.5
-    assert step < 100
+    assert steps < 100
     env.close()
 
 
@@ -152,7 +153,7 @@ def test_make_vec_runs_both_envs(mode: str) -> None:
         obs, _ = envs.reset(seed=3)
         assert obs.shape[0] == 2 and not np.array_equal(obs[0], obs[1])
         for _ in range(3):
-            obs, rewards, terminated, truncated, _ = envs.step(envs.action_space.sample())
+            obs, rewards, _, _, _ = envs.step(envs.action_space.sample())
         assert rewards.shape == (2,) and np.all(np.isfinite(rewards))
         envs.close()
 
@@ -166,9 +167,9 @@ def test_render_is_an_rgb_frame() -> None:
 
 
 def test_bad_settings_name_the_setting() -> None:
-    with pytest.raises(ConfigError, match="goal_distanse_bl.*goal_distance_bl"):
+    with pytest.raises(ConfigError, match=r"goal_distanse_bl.*goal_distance_bl"):
         gymnasium.make(GOAL, goal_distanse_bl=(1, 2))
-    with pytest.raises(ConfigError, match="control_hz.*whole multiple"):
+    with pytest.raises(ConfigError, match=r"control_hz.*whole multiple"):
         gymnasium.make(GOAL, action_hz=10, control_hz=25)
-    with pytest.raises(ConfigError, match="encoding.*dft_shift"):
+    with pytest.raises(ConfigError, match=r"encoding.*dft_shift"):
         gymnasium.make(VELOCITY, encoding="rotating_dft")

@@ -64,7 +64,7 @@ def test_dft_shift_is_a_true_fractional_shift(shift: float) -> None:
 
 
 def test_dft_bins_stop_below_nyquist() -> None:
-    with pytest.raises(ConfigError, match="dft_bins.*Nyquist"):
+    with pytest.raises(ConfigError, match=r"dft_bins.*Nyquist"):
         make_encoding("dft_shift", N, LOWER, UPPER, dft_bins=5)  # bin 4 is Nyquist for N = 8
     assert make_encoding("dft_shift", N, LOWER, UPPER, dft_bins=4).action_dim == 7
 
