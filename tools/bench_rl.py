@@ -12,7 +12,8 @@ PPO: stable-baselines3 PPO (defaults, n_steps = 2048 / n_envs) learning for --pp
 SnakeGoal-v0 (dft_shift), for each vectorisation (dummy x1, dummy x2, subproc x2): the fastest
 is the CLI's default (snakebot/cli/rl_cmd.py DEFAULT_N_ENVS, DEFAULT_VEC).
 
-    python tools/bench_rl.py [--rounds 5] [--steps 200] [--ppo-steps 4096] [--skip-ppo] [--json]
+    python tools/bench_rl.py [--rounds 5] [--steps 200] [--ppo-steps 4096] [--skip-ppo]
+                             [--skip-env] [--json]
 """
 
 from __future__ import annotations
@@ -116,10 +117,12 @@ def main() -> None:
     parser.add_argument("--encodings", default=",".join(snakebot.rl.ENCODINGS))
     parser.add_argument("--ppo-steps", type=int, default=4096)
     parser.add_argument("--skip-ppo", action="store_true")
+    parser.add_argument("--skip-env", action="store_true")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    result: dict[str, Any] = {"env_vs_bare": bench_envs(args.rounds, args.steps,
-                                                        args.encodings.split(","))}
+    result: dict[str, Any] = {"env_vs_bare": {}}
+    if not args.skip_env:
+        result["env_vs_bare"] = bench_envs(args.rounds, args.steps, args.encodings.split(","))
     if not args.skip_ppo:
         result["ppo"] = bench_ppo(args.ppo_steps)
     if args.json:
