@@ -37,6 +37,8 @@ def add_parser(subparsers: Any) -> None:
     train.add_argument("--steps", type=positive_int, default=200_000,
                        help="env steps to train (default 200000)")
     _vec_options(train)
+    train.add_argument("--rollout", type=positive_int, default=2048,
+                       help="env steps per PPO update, over all envs (default 2048)")
     train.add_argument("--out", type=Path, help="policy folder (default rl-runs/ENV-ENCODING)")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
     train.set_defaults(handler=run_train)
@@ -137,7 +139,7 @@ def run_train(args: argparse.Namespace) -> int:
     kwargs = env_kwargs(args, args.encoding)
     out = args.out or Path("rl-runs") / f"{args.env.split('/')[-1]}-{args.encoding}"
     settings = TrainSettings(args.env, kwargs, args.steps, seed=args.seed, n_envs=args.n_envs,
-                             vec=args.vec, algo=args.algo)
+                             vec=args.vec, algo=args.algo, rollout_steps=args.rollout)
     if not args.json:
         print(f"training {args.env} ({args.encoding}, {args.robot}) for {args.steps} steps on "
               f"{args.n_envs} {args.vec} env(s) -> {out}")

@@ -88,7 +88,7 @@ class VelocitySettings:
     ``command_period_s``; reward = exp(-(v - v_cmd)^2 / speed_sigma^2) + turn_weight *
     exp(-(w - w_cmd)^2 / turn_sigma^2) - effort_weight * mean (effort / stall torque)^2."""
 
-    speed_range_mps: tuple[float, float] = (0.0, 0.25)
+    speed_range_mps: tuple[float, float] = (0.05, 0.35)
     turn_range_rad_s: tuple[float, float] = (-0.3, 0.3)
     command_period_s: float = 5.0
     speed_sigma_mps: float = 0.1

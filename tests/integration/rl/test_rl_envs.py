@@ -119,7 +119,7 @@ def test_velocity_env_measures_the_speed_the_snake_moves_at() -> None:
 
 def test_velocity_observation_holds_only_what_servos_report_and_the_command() -> None:
     env = gymnasium.make(VELOCITY, encoding="sinusoid")
-    obs, _ = env.reset(seed=0, options={"command": (0.25, -0.3)})
+    obs, _ = env.reset(seed=0, options={"command": (0.35, -0.3)})
     n = 8
     assert obs.shape == (3 * n + 2 + 2,)
     np.testing.assert_allclose(obs[-2:], [1.0, -1.0])  # the command, scaled by its ranges
