@@ -72,7 +72,8 @@ def bench_envs(rounds: int, steps: int, encodings: list[str]) -> dict[str, Any]:
     nstep = any_env.loop.backend.steps_for(any_env.loop.dt_s)
     joints = any_env.robot.joint_count
     rows: dict[str, dict[str, list[float]]] = {
-        e: {"env": [], "bare": [], "ratio_wall": [], "ratio_cpu": []} for e in encodings
+        e: {"env": [], "bare": [], "ratio_wall": [], "ratio_cpu": [], "env_cpu_ms": []}
+        for e in encodings
     }
     for _ in range(rounds):
         order = list(encodings)
@@ -85,6 +86,7 @@ def bench_envs(rounds: int, steps: int, encodings: list[str]) -> dict[str, Any]:
             row["bare"].append(steps / bare_wall)
             row["ratio_wall"].append(bare_wall / env_wall)
             row["ratio_cpu"].append(bare_cpu / env_cpu)
+            row["env_cpu_ms"].append(1000 * env_cpu / steps)
     for env in envs.values():
         env.close()
     return {
@@ -128,10 +130,11 @@ def main() -> None:
     if args.json:
         print(json.dumps(result, indent=2))
         return
-    print(f"{'encoding':10s} {'env/s':>8s} {'bare/s':>8s} {'ratio wall':>11s} {'ratio cpu':>10s}")
+    print(f"{'encoding':10s} {'env/s':>8s} {'bare/s':>8s} {'ratio wall':>11s} {'ratio cpu':>10s} "
+          f"{'CPU ms/step':>12s}")
     for encoding, row in result["env_vs_bare"].items():
         print(f"{encoding:10s} {row['env']:8.0f} {row['bare']:8.0f} {row['ratio_wall']:11.2f} "
-              f"{row['ratio_cpu']:10.2f}")
+              f"{row['ratio_cpu']:10.2f} {row['env_cpu_ms']:12.2f}")
     for name, row in result.get("ppo", {}).items():
         print(f"PPO {name:10s} {row['steps_per_s']:7.1f} steps/s ({row['cpu_s']} CPU s, "
               f"{row['wall_s']} s wall)")

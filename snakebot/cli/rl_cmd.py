@@ -149,8 +149,9 @@ def run_train(args: argparse.Namespace) -> int:
         print_json(summary)
     else:
         ended = "interrupted after" if result.interrupted else "done:"
+        cpu = "" if summary["cpu_s"] is None else f", {summary['cpu_s']:.0f} CPU s"
         print(f"{ended} {summary['steps']} steps in {summary['wall_s']:.0f} s "
-              f"({summary['steps_per_s']:.0f} steps/s, {summary['cpu_s']:.0f} CPU s); "
+              f"({summary['steps_per_s']:.0f} steps/s{cpu}); "
               f"policy, learning_curve.csv and .png in {out}")
     return 130 if result.interrupted else 0
 

@@ -215,7 +215,9 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         venv.close()
         csv_file.close()
     wall = time.monotonic() - tracker.start
-    cpu = _cpu_s() - cpu_start
+    # subproc workers are children of multiprocessing's forkserver, not of this process: their
+    # CPU time cannot be counted here, so none is reported rather than a part of it.
+    cpu = _cpu_s() - cpu_start if settings.vec == "dummy" else math.nan
     steps = int(model.num_timesteps)
     model.save(folder / MODEL_FILE)
     save_actor(actor_from_sb3(model), folder / "actor.npz")
@@ -229,7 +231,7 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         "vec": settings.vec,
         "ppo": ppo_kwargs,
         "wall_s": round(wall, 2),
-        "cpu_s": round(cpu, 2),
+        "cpu_s": _finite(round(cpu, 2)),
         "steps_per_s": round(steps / wall, 2) if wall > 0 else None,
         "final_mean_return": None if last is None else _finite(last.mean_return),
         "final_success_rate": None if last is None else _finite(last.success_rate),
@@ -246,8 +248,8 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
 
 
 def _cpu_s() -> float:
-    """CPU seconds of this process and its finished children (the subproc workers, once
-    closed): what the run cost whatever else the machine was doing."""
+    """CPU seconds of this process and its waited-for children: what a dummy-vectorised run
+    cost whatever else the machine was doing."""
     own = resource.getrusage(resource.RUSAGE_SELF)
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
@@ -292,7 +294,7 @@ def dump_json(result: TrainResult) -> dict[str, Any]:
         "folder": str(result.folder),
         "steps": result.steps,
         "wall_s": round(result.wall_s, 2),
-        "cpu_s": round(result.cpu_s, 2),
+        "cpu_s": _finite(round(result.cpu_s, 2)),
         "interrupted": result.interrupted,
         "steps_per_s": round(result.steps_per_s, 2),
         "final_mean_return": None if last is None else _finite(last.mean_return),
