@@ -171,13 +171,13 @@ def run_eval(args: argparse.Namespace) -> int:
 
 def run_compare(args: argparse.Namespace) -> int:
     """Train each encoding in turn; curves side by side in compare.png."""
-    from snakebot.rl.compare import compare
-
     encodings = [e.strip() for e in args.encodings.split(",") if e.strip()]
     bad = [e for e in encodings if e not in ENCODING_CHOICES]
     if bad or not encodings:
         raise ConfigError("--encodings", args.encodings,
                           f"expected a comma list of {', '.join(ENCODING_CHOICES)}")
+    from snakebot.rl.compare import compare
+
     runs = {e: env_kwargs(args, e) for e in encodings}
     summary = compare(args.env, runs, args.steps, args.out, seed=args.seed,
                       n_envs=args.n_envs, vec=args.vec)
