@@ -138,7 +138,8 @@ class _Tracker:
         for i in np.flatnonzero(dones):
             self.done_returns.append(float(self.returns[i]))
             self.done_lengths.append(int(self.lengths[i]))
-            self.done_success.append(bool(infos[i].get("is_success", False)))
+            if "is_success" in infos[i]:  # the goal task; the velocity task has no success
+                self.done_success.append(bool(infos[i]["is_success"]))
             self.returns[i] = 0.0
             self.lengths[i] = 0
             self.episodes += 1
