@@ -28,6 +28,10 @@ class GaitError(SnakebotError, ValueError):
     """A gait was asked for with an unknown name or invalid parameters."""
 
 
+class GaitAxesWarning(UserWarning):
+    """A gait runs on a robot whose joint axes are not the ones it was made for."""
+
+
 class SafetyLimitError(SnakebotError):
     """A command or state left the envelope the safety layer guarantees."""
 
@@ -96,3 +100,35 @@ class OutputError(SnakebotError):
         self.path = str(path)
         self.reason = reason
         super().__init__(f"{self.path}: {reason}")
+
+
+class BackendOptionError(UsageError, TypeError):
+    """A backend was given an option it does not take (``port`` with the twin, say).
+
+    ``backend`` is the backend's name, ``option`` the keyword refused and ``accepted`` the ones
+    it takes. A usage error: the option does nothing there, so refusing it beats ignoring it.
+    """
+
+    def __init__(self, backend: str, option: str, accepted: Sequence[str]) -> None:
+        self.backend = backend
+        self.option = option
+        self.accepted = tuple(accepted)
+        takes = ", ".join(self.accepted) if self.accepted else "none"
+        super().__init__(
+            f"the {backend} backend takes no option {option!r} (its options: {takes})"
+        )
+
+
+class PhysicsHealthError(BackendError):
+    """The twin computed something no real snake could do: a hard physics-health limit was
+    passed (docs/physics.md). ``time_s`` is when, ``check`` which limit, ``detail`` by how much."""
+
+    def __init__(self, time_s: float, check: str, detail: str) -> None:
+        self.time_s = time_s
+        self.check = check
+        self.detail = detail
+        super().__init__(
+            f"physics health: {check} at t={time_s:.4f} s: {detail}. The twin is not credible "
+            "here: lower the gains or the timestep (twin.timestep_s), raise the armature, or "
+            "see docs/physics.md"
+        )

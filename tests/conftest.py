@@ -2,16 +2,24 @@
 
 from __future__ import annotations
 
-import os
 import shutil
+import signal
 from pathlib import Path
 
 import pytest
 
+# MUJOCO_GL is not preset here: importing snakebot's backends picks the offscreen platform the way
+# any program using snakebot gets it, before a test module's own `import mujoco` could fix GLFW.
+import snakebot.backends  # noqa: F401
+
 REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "firmware_configs"
 
-os.environ.setdefault("MUJOCO_GL", "egl")
+# A suite started in the background by a non-interactive shell inherits SIGINT ignored, and so would
+# every `snakebot` it spawns: the Ctrl-C tests would then send a signal nobody hears. Restore
+# Python's handler, so the children start with the default disposition (and KeyboardInterrupt).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture

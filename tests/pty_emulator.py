@@ -19,7 +19,8 @@ class Emulator:
 
     def __init__(self, proc: subprocess.Popen[str]) -> None:
         self.proc = proc
-        self.first = self.event()
+        # Start-up imports MuJoCo and builds the chain: tens of seconds on a loaded machine.
+        self.first = self.event(timeout_s=90.0)
         self.port = str(self.first["port"])
 
     def event(self, timeout_s: float = 20.0) -> dict[str, Any]:
@@ -55,7 +56,7 @@ def emulator(*args: str) -> Iterator[Emulator]:
     finally:
         if proc.poll() is None:
             proc.send_signal(signal.SIGINT)
-            proc.wait(timeout=10)
+            proc.wait(timeout=30)
         assert proc.returncode == 0, proc.stderr.read() if proc.stderr else ""
 
 

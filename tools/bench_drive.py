@@ -21,15 +21,25 @@ from collections.abc import Callable
 
 import numpy as np
 
-from snakebot.backends.base import JointState
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.display import DriveDisplay
 from snakebot.drive.loop import DriveCycle
 from snakebot.gaits import LiveControls, LiveGait, make_gait
+from snakebot.types import JointState
 
 DT = 0.01
 GAIT = {"snake8": "serpenoid", "snake12": "sidewinding"}
+
+
+def drive_cycle(
+    k: int, target: np.ndarray, command: np.ndarray, state: JointState, live: LiveGait
+) -> DriveCycle:
+    return DriveCycle(
+        cycle=k, gait_time_s=k * DT, target_rad=target, command_rad=command, state=state,
+        body=None, amplitude=1.0, scored=True, period_s=DT, overrun=False,
+        achieved_rate_hz=1.0 / DT, status=live.status(), keys=(),
+    )
 
 
 def live_gait(robot: RobotConfig) -> LiveGait:
@@ -67,7 +77,7 @@ def cases(robot: RobotConfig) -> tuple[dict[str, Callable[[int], object]], Drive
         notice=lambda: "", rate_hz=100.0, servo_ids=robot.servo_ids, health=dict,
         alerts=tuple, overruns=lambda: 0,
     )
-    record = DriveCycle(0, 0.0, np.zeros(n), np.zeros(n), state, None, live.status(), ())
+    record = drive_cycle(0, np.zeros(n), np.zeros(n), state, live)
     start = 3.0
 
     def plain(k: int) -> object:
@@ -79,7 +89,7 @@ def cases(robot: RobotConfig) -> tuple[dict[str, Callable[[int], object]], Drive
     def with_status(k: int) -> object:
         target = live.command(start + k * DT)
         command = safety.filter(target, DT)
-        return DriveCycle(k, k * DT, target, command, state, None, live.status(), ())
+        return drive_cycle(k, target, command, state, live)
 
     def shown(k: int) -> object:
         display(record)

@@ -29,13 +29,13 @@ from typing import Any
 import dynamixel_sdk as sdk
 import numpy as np
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.dynamixel.backend import DynamixelBackend
 from snakebot.backends.dynamixel.checks import cycle_wire_time_s
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.emulation import EmulatedChain, make_chain_for_ids, register_chain
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.types import JointCommand
 
 MODEL = "XL430-W250"
 BAUD = 1_000_000

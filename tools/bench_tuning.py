@@ -31,6 +31,7 @@ from mujoco import rollout
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
+from snakebot.control.cycle import CycleSchedule
 from snakebot.gaits import make_gait
 from snakebot.tuning.commands import GaitCommands
 from snakebot.tuning.engine import TwinBatch
@@ -66,16 +67,17 @@ def run_batch(robot_name: str, params: list[dict[str, float]], workers: int) -> 
     batch = TwinBatch(robot, workers=workers)
     gaits = [make_gait("serpenoid", robot.joint_count, p) for p in params]
     envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
-    batch.run(GaitCommands(gaits, robot, 0.01), DURATION_S, 100.0, envelope=envelope)
+    batch.run(GaitCommands(gaits, robot), DURATION_S, 100.0, envelope=envelope)
 
 
 def run_rollout(robot_name: str, params: list[dict[str, float]], workers: int) -> None:
     robot = load_robot(robot_name)
     batch = TwinBatch(robot, workers=workers)
     gaits = [make_gait("serpenoid", robot.joint_count, p) for p in params]
-    commands = GaitCommands(gaits, robot, 0.01)
+    commands = GaitCommands(gaits, robot)
     cycles = round(DURATION_S * 100)
-    commands.reset(np.zeros((len(gaits), robot.joint_count)))
+    schedule = CycleSchedule(100.0, DURATION_S, robot.safety.ramp_s)
+    commands.reset(np.zeros((len(gaits), robot.joint_count)), schedule)
     idle = np.zeros((len(gaits), robot.joint_count))
     rows = np.stack([commands(k, k * 0.01, idle)[1] for k in range(cycles)], axis=1)
     steps = batch.twin.steps_for(0.01)

@@ -2,6 +2,7 @@
 
 For 8, 16 and 32 servos, each round runs, back to back in one process and in shuffled order:
   snakebot       the runner path of `snakebot run` (gait -> safety -> TwinBackend, metrics)
+  facade         the same through snakebot.connect(robot).run(...), what a script calls
   snakebot+log   the same with the per-cycle CSV telemetry log
   bare_step      the exported MJCF, numpy ctrl every 10 ms, one mj_step() call per physics step
   bare_nstep     the same, one mj_step(m, d, nstep) call per control period
@@ -23,6 +24,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+import snakebot
 from snakebot.backends.twin import TwinBackend, build_spec
 from snakebot.backends.twin.model_builder import add_actuators
 from snakebot.config import RobotConfig, load_robot
@@ -57,6 +59,15 @@ def run_snakebot(robot: RobotConfig, seconds: float, log_dir: Path | None) -> fl
     return steps / wall
 
 
+def run_facade(robot: RobotConfig, seconds: float) -> float:
+    with snakebot.connect(robot, backend="twin") as snake:
+        start = time.perf_counter()
+        snake.run("serpenoid", duration_s=seconds, rate_hz=RATE_HZ, ramp_out=False)
+        wall = time.perf_counter() - start
+        steps = round(seconds / snake.backend.model.opt.timestep)  # type: ignore[attr-defined]
+    return steps / wall
+
+
 def run_bare(xml_path: Path, joints: int, seconds: float, nstep_call: bool) -> float:
     model = mujoco.MjModel.from_xml_path(str(xml_path))
     data = mujoco.MjData(model)
@@ -82,7 +93,7 @@ def main() -> None:
     parser.add_argument("--sizes", default="8,16,32")
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
-    variants = ["snakebot", "snakebot+log", "bare_step", "bare_nstep"]
+    variants = ["snakebot", "facade", "snakebot+log", "bare_step", "bare_nstep"]
     with tempfile.TemporaryDirectory() as tmp:
         tmp_path = Path(tmp)
         robots, xml = {}, {}
@@ -95,7 +106,7 @@ def main() -> None:
             xml[n].write_text(spec.to_xml())
         results: dict[tuple[int, str], list[float]] = {(n, v): [] for n in sizes for v in variants}
         ratios: dict[tuple[int, str], list[float]] = {
-            (n, v): [] for n in sizes for v in ("step", "nstep", "log_step")
+            (n, v): [] for n in sizes for v in ("step", "facade_step", "nstep", "log_step")
         }
         for _ in range(args.rounds):
             for n in sizes:
@@ -105,6 +116,8 @@ def main() -> None:
                 for variant in order:
                     if variant == "snakebot":
                         got[variant] = run_snakebot(robots[n], args.seconds, None)
+                    elif variant == "facade":
+                        got[variant] = run_facade(robots[n], args.seconds)
                     elif variant == "snakebot+log":
                         got[variant] = run_snakebot(robots[n], args.seconds, tmp_path)
                     else:
@@ -113,6 +126,7 @@ def main() -> None:
                         )
                     results[(n, variant)].append(got[variant])
                 ratios[(n, "step")].append(got["snakebot"] / got["bare_step"])
+                ratios[(n, "facade_step")].append(got["facade"] / got["bare_step"])
                 ratios[(n, "nstep")].append(got["snakebot"] / got["bare_nstep"])
                 ratios[(n, "log_step")].append(got["snakebot+log"] / got["bare_step"])
 
@@ -120,15 +134,16 @@ def main() -> None:
     print(
         "| servos | "
         + " | ".join(f"{v} steps/s" for v in variants)
-        + " | snakebot / bare_step | snakebot / bare_nstep | snakebot+log / bare_step |"
+        + " | snakebot / bare_step | facade / bare_step | snakebot / bare_nstep"
+        " | snakebot+log / bare_step |"
     )
-    print("|---" * (len(variants) + 4) + "|")
+    print("|---" * (len(variants) + 5) + "|")
     for n in sizes:
         cells = [f"{statistics.median(results[(n, v)]):,.0f}" for v in variants]
         cells += [
             f"{statistics.median(ratios[(n, k)]):.2f} "
             f"({min(ratios[(n, k)]):.2f}-{max(ratios[(n, k)]):.2f})"
-            for k in ("step", "nstep", "log_step")
+            for k in ("step", "facade_step", "nstep", "log_step")
         ]
         print(f"| {n} | " + " | ".join(cells) + " |")
 

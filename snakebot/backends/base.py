@@ -7,71 +7,22 @@ from __future__ import annotations
 
 import abc
 import logging
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 from types import TracebackType
-from typing import Literal
 
 import numpy as np
 
 from snakebot.errors import BackendStateError
-
-StopPolicy = Literal["hold", "limp"]
+from snakebot.types import (
+    BodyState,
+    CycleStats,
+    JointCommand,
+    JointState,
+    PDGains,
+    StopPolicy,
+)
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class JointState:
-    """One snapshot of every joint, head to tail.
-
-    ``position_rad``, ``velocity_rad_s`` and ``effort_nm`` have shape (N,); ``time_s`` is robot
-    time (simulated on the twin, monotonic wall clock on hardware).
-    """
-
-    time_s: float
-    position_rad: np.ndarray
-    velocity_rad_s: np.ndarray
-    effort_nm: np.ndarray
-
-
-@dataclass(frozen=True)
-class BodyState:
-    """Whole-body quantities only a twin (or a motion-capture rig) can measure.
-
-    ``com_m`` is the centre of mass (3,) in the world frame, ``head_quat`` the head link's
-    orientation (w, x, y, z).
-    """
-
-    com_m: np.ndarray
-    head_quat: np.ndarray
-
-
-@dataclass(frozen=True)
-class JointCommand:
-    """Goal positions for every joint, head to tail, shape (N,), radians."""
-
-    position_rad: np.ndarray
-
-
-@dataclass(frozen=True)
-class ServoGains:
-    """Position-loop gains in the servo's own register units (Position P/I/D Gain).
-
-    The same numbers drive the hardware registers and, through the servo model, the twin's PD.
-    """
-
-    position_p: int
-    position_i: int = 0
-    position_d: int = 0
-
-
-@dataclass
-class CycleStats:
-    """Timing bookkeeping a real-time backend keeps for the runner's summary."""
-
-    overruns: int = 0
-    worst_lateness_s: float = 0.0
-    extra: dict[str, float] = field(default_factory=dict)
 
 
 class Backend(abc.ABC):
@@ -165,8 +116,11 @@ class Backend(abc.ABC):
             )
         self._send_command(position)
 
-    def set_gains(self, gains: ServoGains) -> None:
-        """Apply position-loop gains (servo register units) to every joint."""
+    def set_gains(self, gains: PDGains) -> None:
+        """Apply position-loop gains to every joint: stiffness (N·m/rad) and damping (N·m·s/rad).
+
+        Each backend realises them its own way (the twin as they are, a servo chain in its
+        registers, rounded and clipped to what they reach)."""
         self._require_connected()
         self._set_gains(gains)
 
@@ -188,6 +142,12 @@ class Backend(abc.ABC):
         self._require_connected()
         return None
 
+    def health(self) -> Mapping[str, np.ndarray]:
+        """Slow readings about the hardware's condition, by name with units in the name (e.g.
+        ``temperature_c`` (N,)), as of the backend's last reading; cheap (no bus traffic), so a
+        display may ask every cycle. Empty where the backend measures none (the default)."""
+        return {}
+
     @property
     def time_s(self) -> float:
         """Robot time now, in seconds."""
@@ -207,7 +167,7 @@ class Backend(abc.ABC):
     def _send_command(self, position_rad: np.ndarray) -> None: ...
 
     @abc.abstractmethod
-    def _set_gains(self, gains: ServoGains) -> None: ...
+    def _set_gains(self, gains: PDGains) -> None: ...
 
     @abc.abstractmethod
     def _set_torque(self, enabled: bool) -> None: ...

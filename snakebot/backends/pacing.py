@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from snakebot.backends.base import CycleStats
+from snakebot.types import CycleStats
 
 
 class Pacer:

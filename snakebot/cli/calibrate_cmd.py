@@ -4,16 +4,21 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 from typing import Any
 
 from snakebot.cli.common import (
+    add_bus_options,
     add_robot_option,
-    port_arg,
+    check_writable,
+    copy_for_write,
     positive_float,
     print_json,
     robot_name,
+    robot_write_target,
 )
 from snakebot.config import load_robot
+from snakebot.errors import UsageError
 from snakebot.setup import Link, SetupError, load_settings
 from snakebot.setup.calibrate import MAX_OFFSET_DEG, measure, refusals, write_offsets
 from snakebot.setup.console import confirm
@@ -28,19 +33,29 @@ def add_parser(subparsers: Any) -> None:
         "(joints[].zero_offset_rad; comments and layout kept). Homing Offset stays 0.",
     )
     add_robot_option(parser, hardware="always")
-    parser.add_argument("--port", type=port_arg,
-                        help="serial port (default: the robot's bus.port)")
+    add_bus_options(parser, baud=False)  # the rate comes from the robot's settings
     parser.add_argument("--max-offset-deg", type=positive_float, default=MAX_OFFSET_DEG,
                         help=f"refuse offsets beyond this (default {MAX_OFFSET_DEG:g})")
     parser.add_argument("--dry-run", action="store_true", help="show the offsets, write nothing")
+    parser.add_argument("--out", type=Path, metavar="FILE",
+                        help="write a copy of the robot file with the new offsets here")
     parser.add_argument("--yes", action="store_true", help="write without asking")
     parser.add_argument("--json", action="store_true", help="print the offsets as JSON")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
     """Measure, show, check, confirm, write."""
     robot = load_robot(robot_name(args, hardware=True, what="calibrate"))
+    target = robot_write_target(args, robot.source, "the zero offsets")
+    if target is None and not args.dry_run:
+        raise UsageError(
+            "calibrate writes the zero offsets into a robot file: name it by path "
+            "(--robot FILE.toml) or give --out FILE; a robot named by name may be a file "
+            "installed with snakebot, which it never writes"
+        )
+    if args.out is not None:
+        check_writable(args.out, "robot file")
     chain = load_settings(robot)
     port = args.port or robot.bus.port
     with Link(port, chain.baud, model=robot.servo.name) as link:
@@ -62,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
     if args.dry_run:
         print("dry run: nothing written")
         return 0
-    confirm(f"Write these offsets into {robot.source}?", assume_yes=args.yes, what="calibrate")
-    write_offsets(robot, zeros)
-    print(f"wrote {len(zeros)} zero offsets into {robot.source} (joints[].zero_offset_rad)")
+    assert target is not None
+    confirm(f"Write these offsets into {target}?", assume_yes=args.yes, what="calibrate")
+    copy_for_write(robot.source, target)
+    write_offsets(robot, zeros, path=target)
+    print(f"wrote {len(zeros)} zero offsets into {target} (joints[].zero_offset_rad)")
     return 0

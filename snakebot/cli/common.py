@@ -11,6 +11,7 @@ import sys
 import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from snakebot.config.ports import check_port
 from snakebot.errors import ConfigError, OutputError, UsageError
@@ -173,3 +174,143 @@ def os_reason(exc: OSError) -> str:
     """What the operating system said, with the file it said it about."""
     reason = exc.strerror or str(exc)
     return f"{reason} ({exc.filename})" if exc.filename else reason
+
+
+def named_by_path(robot: str | None) -> bool:
+    """True when ``--robot`` named a file (``.toml`` or an existing path), not a robot name."""
+    return robot is not None and (robot.endswith(".toml") or Path(robot).is_file())
+
+
+def robot_write_target(args: argparse.Namespace, source: Path, what: str) -> Path | None:
+    """The robot file a command may write ``what`` into, or None when it must write nothing.
+
+    ``--out FILE`` (a copy of the robot file with the new values; the original is untouched),
+    else the robot file itself when ``--robot`` named it by path. A robot named by name (or the
+    default) is never written: it may be a file shipped inside the installed package.
+    ``--dry-run`` writes nothing. UsageError if ``--out`` is the shipped file itself.
+    """
+    from snakebot.config.paths import shipped_configs
+
+    if getattr(args, "dry_run", False):
+        return None
+    out: Path | None = getattr(args, "out", None)
+    target = out if out is not None else (source if named_by_path(args.robot) else None)
+    if target is None:
+        return None
+    shipped = shipped_configs().resolve()
+    if target.resolve().is_relative_to(shipped) and "_data" in shipped.parts:
+        raise UsageError(
+            f"{target} is a robot file installed with snakebot; write {what} elsewhere with "
+            "--out FILE (a copy) and use --robot FILE from then on"
+        )
+    return target
+
+
+def copy_for_write(source: Path, target: Path) -> None:
+    """Start ``target`` as a copy of robot file ``source`` (nothing to do when they are one);
+    OutputError naming ``target`` if it cannot be written."""
+    if target.resolve() == source.resolve():
+        return
+    try:
+        _make_folder(target.parent)
+        target.write_bytes(source.read_bytes())
+    except OSError as exc:
+        raise OutputError(target, f"cannot write the robot file: {os_reason(exc)}") from exc
+
+
+def not_written_note(args: argparse.Namespace, what: str) -> str:
+    """Why a command left every robot file as it was."""
+    if getattr(args, "dry_run", False):
+        return f"dry run: {what} not written"
+    return (f"{what} not written: --robot named a robot, not a file; pass --robot FILE.toml to "
+            "update that file, or --out FILE for a copy with the new values")
+
+
+def add_write_back_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--out FILE`` and ``--dry-run`` (``--no-write`` kept as its old name) for a command
+    that writes its result (``what``) into a robot file."""
+    parser.add_argument(
+        "--out",
+        type=Path,
+        metavar="FILE",
+        help=f"write a copy of the robot file with the new {what} here (the original stays)",
+    )
+    parser.add_argument(
+        "--dry-run",
+        "--no-write",
+        dest="dry_run",
+        action="store_true",
+        help=f"write no {what} anywhere (without it, they go into --robot FILE or --out)",
+    )
+
+
+def gait_arg(text: str) -> str:
+    """argparse type: a known gait name (built-in, plugin or registered), else a usage error
+    listing the gaits. Nothing is imported: a plugin gait that fails to load, or that two
+    plugins offer, is reported when used (exit 1, naming the plugin), not as bad usage."""
+    from snakebot.errors import GaitError
+    from snakebot.gaits import GAITS
+
+    try:
+        GAITS.origin(text)
+    except GaitError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def gait_list_arg(text: str) -> str:
+    """argparse type: comma-separated known gait names (kept as the text)."""
+    for name in (n.strip() for n in text.split(",")):
+        if name:
+            gait_arg(name)
+    return text
+
+
+def baud_arg(text: str) -> int:
+    """argparse type: a Dynamixel baud rate (one of snakebot.config.loader.BAUD_RATES)."""
+    from snakebot.config.loader import BAUD_RATES
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value not in BAUD_RATES:
+        rates = ", ".join(map(str, BAUD_RATES))
+        raise argparse.ArgumentTypeError(f"expected one of {rates}, got {text!r}")
+    return value
+
+
+def add_bus_options(parser: Any, *, backend: str = "", baud: bool = True) -> None:
+    """``--port`` and ``--baud``, the same on every command: no default of their own, the robot
+    file's ``bus.port`` / ``bus.baud`` fill them in. ``backend`` names the option that makes them
+    apply (``--backend dynamixel``), for the help text."""
+    when = f"with {backend}; " if backend else ""
+    parser.add_argument(
+        "--port", type=port_arg,
+        help=f"serial port {when}(default: the robot's bus.port)",
+    )
+    if baud:
+        parser.add_argument(
+            "--baud", type=baud_arg,
+            help=f"baud rate {when}(default: the robot's bus.baud)",
+        )
+
+
+def add_dry_run(parser: Any, what: str) -> None:
+    """``--dry-run``: check every option and input, say what would happen, write nothing
+    (``what``: what the command would otherwise write)."""
+    parser.add_argument(
+        "--dry-run", action="store_true",
+        help=f"check everything and show the plan; write nothing ({what})",
+    )
+
+
+def report_dry_run(args: argparse.Namespace, plan: dict[str, object]) -> int:
+    """Print what a ``--dry-run`` would have done (``plan``; JSON with ``--json``); exit 0."""
+    if getattr(args, "json", False):
+        print_json({"dry_run": True, **plan})
+    else:
+        print("dry run: nothing was written or moved; the plan:")
+        for key, value in plan.items():
+            print(f"  {key:<14} {value}")
+    return 0

@@ -6,7 +6,14 @@ import argparse
 import sys
 from typing import Any
 
-from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_name
+from snakebot.cli.common import (
+    add_bus_options,
+    add_dry_run,
+    add_robot_option,
+    baud_arg,
+    print_json,
+    robot_name,
+)
 from snakebot.config import load_robot
 from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
 from snakebot.setup.console import confirm
@@ -25,7 +32,7 @@ def add_parser(subparsers: Any) -> None:
     diff = actions.add_parser("diff", help="list settings that differ; exit 1 if any do")
     _robot_and_port(diff)
     diff.add_argument("--json", action="store_true", help="print one JSON object")
-    diff.set_defaults(handler=run_diff)
+    diff.set_defaults(handler=run_diff, writes=False)
 
     write = actions.add_parser(
         "apply", help="write the differences (torque off for EEPROM, baud changes last)",
@@ -33,7 +40,8 @@ def add_parser(subparsers: Any) -> None:
     _robot_and_port(write)
     write.add_argument("--dry-run", action="store_true", help="print the plan, write nothing")
     write.add_argument("--yes", action="store_true", help="do not ask before torque goes off")
-    write.set_defaults(handler=run_apply)
+    write.add_argument("--json", action="store_true", help="print one JSON object")
+    write.set_defaults(handler=run_apply, writes=True)
 
     assign = actions.add_parser(
         "assign-id", help="give one (factory-fresh) servo its ID and baud rate",
@@ -45,14 +53,16 @@ def add_parser(subparsers: Any) -> None:
     assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
     assign.add_argument("--from", dest="from_id", type=servo_id_arg,
                         help="only the servo answering as this ID (default: the only servo)")
-    assign.add_argument("--baud", type=int,
+    assign.add_argument("--new-baud", type=baud_arg,
                         help="baud rate to set (default: the robot's bus.baud)")
-    assign.set_defaults(handler=run_assign)
+    add_dry_run(assign, "the servo keeps its ID and rate")
+    assign.add_argument("--json", action="store_true", help="print one JSON object")
+    assign.set_defaults(handler=run_assign, writes=True)
 
 
 def _robot_and_port(parser: argparse.ArgumentParser) -> None:
     add_robot_option(parser, hardware="always")
-    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
+    add_bus_options(parser, baud=False)  # servos are found at any rate
 
 
 def servo_id_arg(text: str) -> int:
@@ -110,15 +120,22 @@ def run_apply(args: argparse.Namespace) -> int:
     with Link(port, chain.baud, model=robot.servo.name) as link:
         diff = survey(link, chain)
         plan = plan_apply(chain, diff)
-        if plan.empty:
-            print(f"{robot.name} on {port}: nothing to write, all servos hold the settings")
+        steps = [step.describe() for step in plan.steps]
+        if plan.empty or args.dry_run:
+            if args.json:
+                print_json({"robot": robot.name, "port": port, "steps": steps,
+                            "written": False, "dry_run": args.dry_run})
+            elif plan.empty:
+                print(f"{robot.name} on {port}: nothing to write, all servos hold the settings")
+            else:
+                print(f"plan for {robot.name} on {port} ({len(steps)} steps):")
+                print("\n".join(f"  {step}" for step in steps))
+                print("dry run: nothing was written")
             return 0
-        print(f"plan for {robot.name} on {port} ({len(plan.steps)} steps):")
-        for step in plan.steps:
-            print(f"  {step.describe()}")
-        if args.dry_run:
-            print("dry run: nothing was written")
-            return 0
+        out = sys.stderr if args.json else sys.stdout
+        print(f"plan for {robot.name} on {port} ({len(steps)} steps):", file=out)
+        for step in steps:
+            print(f"  {step}", file=out)
         if plan.limp:
             ids = ", ".join(map(str, plan.limp))
             print(f"WARNING: torque goes off on servo(s) {ids} to write EEPROM settings: those "
@@ -128,9 +145,13 @@ def run_apply(args: argparse.Namespace) -> int:
         done = iter(range(1, total + 1))
 
         def report(step: Step) -> None:
-            print(f"  [{next(done)}/{total}] {step.describe()}", flush=True)
+            print(f"  [{next(done)}/{total}] {step.describe()}", file=out, flush=True)
 
         apply(link, chain, plan, diff, on_step=report)
+    if args.json:
+        print_json({"robot": robot.name, "port": port, "steps": steps, "written": True,
+                    "dry_run": False})
+        return 0
     print("done: every write read back, the final diff is empty; torque is left off "
           "(`snakebot run` turns it on)")
     return 0
@@ -139,15 +160,23 @@ def run_apply(args: argparse.Namespace) -> int:
 def run_assign(args: argparse.Namespace) -> int:
     """Find the lone servo, set its ID and baud rate, verify."""
     robot = load_robot(robot_name(args, hardware=True, what="config assign-id"))
-    baud = args.baud or robot.bus.baud
+    baud = args.new_baud or robot.bus.baud
     port = args.port or robot.bus.port
     where = f"ID {args.from_id}" if args.from_id is not None else "the servo"
     print(f"searching for {where} at {', '.join(map(str, SEARCH_BAUDS))} baud ...",
           file=sys.stderr, flush=True)
     with Link(port, SEARCH_BAUDS[0], model=robot.servo.name) as link:
-        result = assign_id(link, to_id=args.to, baud=baud, from_id=args.from_id)
+        result = assign_id(link, to_id=args.to, baud=baud, from_id=args.from_id,
+                           dry_run=args.dry_run)
     found = result.found
-    if not result.changed:
+    if args.json:
+        print_json({"port": port, "found_id": found.servo_id, "found_baud": found.baud,
+                    "id": result.servo_id, "baud": result.baud,
+                    "written": result.changed and not args.dry_run, "dry_run": args.dry_run})
+    elif args.dry_run:
+        print(f"dry run: servo ID {found.servo_id} at {found.baud} baud would become ID "
+              f"{result.servo_id} at {result.baud} baud; nothing was written")
+    elif not result.changed:
         print(f"servo is already ID {found.servo_id} at {found.baud} baud; nothing written")
     else:
         print(f"servo ID {found.servo_id} at {found.baud} baud is now ID {result.servo_id} at "

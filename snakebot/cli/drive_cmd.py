@@ -9,27 +9,46 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from snakebot.backends.base import Backend
-from snakebot.cli.common import add_robot_option, positive_float, print_json, robot_name
-from snakebot.cli.run_cmd import make_backend
+from snakebot.cli.backend_options import (
+    add_backend_argument,
+    add_option_flags,
+    backend_spec,
+    flag_errors,
+    given_options,
+)
+from snakebot.cli.common import (
+    add_dry_run,
+    add_robot_option,
+    check_writable,
+    gait_list_arg,
+    positive_float,
+    print_json,
+    report_dry_run,
+    robot_name,
+)
+from snakebot.cli.telemetry_options import add_telemetry_options, drive_observer, open_telemetry
 from snakebot.config import RobotConfig, load_robot
-from snakebot.control.metrics import RunMetrics
-from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController, GaitChoice
-from snakebot.drive.loop import DriveObserver, DriveResult, run_drive
-from snakebot.drive.observers import backend_readings, csv_log_observer
+from snakebot.drive.loop import DriveObserver, DriveResult
+from snakebot.drive.observers import backend_readings
+from snakebot.drive.setup import (
+    DEFAULT_SMOOTHING_S,
+    DEFAULT_TRANSITION_S,
+    MAX_GAITS,
+    SPATIAL_GAITS,
+    default_gaits,
+    live_gait,
+)
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
-from snakebot.gaits import parse_set_options
-from snakebot.gaits.live import LiveGait
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.gaits import check_joint_axes, parse_set_options
+from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
+from snakebot.telemetry.sidecar import gait_facts
 
-PLANAR_GAITS = ("serpenoid",)
-SPATIAL_GAITS = ("sidewinding", "rolling", "lateral_undulation", "turn_in_place",
-                 "linear_progression")
+BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
+"""The backend option flags ``drive`` offers."""
 
 
 def add_parser(subparsers: Any) -> None:
@@ -43,22 +62,20 @@ def add_parser(subparsers: Any) -> None:
         "docs/driving.md has the details and the script format.",
     )
     add_robot_option(parser, hardware="with --backend dynamixel")
-    parser.add_argument(
-        "--backend",
-        choices=("sim", "dynamixel"),
-        default="sim",
-        help="sim: the MuJoCo twin (default); dynamixel: the servo chain",
-    )
-    parser.add_argument("--port", help="serial port for --backend dynamixel (default: robot)")
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
-    parser.add_argument(
-        "--allow-extra-servos",
-        action="store_true",
-        help="--backend dynamixel: servos on the bus that the robot file does not name are "
-        "expected (left alone); without it connect refuses, naming them",
+    add_backend_argument(parser)
+    add_option_flags(
+        parser,
+        ("port", "baud", "allow_extra_servos"),
+        helps={
+            "port": "serial port for --backend dynamixel (default: robot)",
+            "baud": "baud rate for --backend dynamixel",
+            "allow_extra_servos": "--backend dynamixel: servos on the bus that the robot file "
+            "does not name are expected (left alone); without it connect refuses, naming them",
+        },
     )
     parser.add_argument(
         "--gaits",
+        type=gait_list_arg,
         help="comma-separated gaits for keys 1-9 (default: serpenoid on all-yaw robots; "
         f"{','.join(SPATIAL_GAITS)} on yaw/pitch ones)",
     )
@@ -77,47 +94,53 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--record", type=Path, help="write the keys applied as a script")
     parser.add_argument(
-        "--rate", type=positive_float, default=100.0, help="control rate in Hz (default 100)"
+        "--rate",
+        type=positive_float,
+        default=DEFAULT_RATE_HZ,
+        help=f"control rate in Hz (default {DEFAULT_RATE_HZ:g})",
     )
     parser.add_argument(
         "--smoothing",
         type=float,
-        default=0.5,
+        default=DEFAULT_SMOOTHING_S,
         metavar="S",
-        help="seconds for a control to move one unit (default 0.5)",
+        help=f"seconds for a control to move one unit (default {DEFAULT_SMOOTHING_S:g})",
     )
     parser.add_argument(
         "--transition",
         type=float,
-        default=1.0,
+        default=DEFAULT_TRANSITION_S,
         metavar="S",
-        help="shortest blend between gaits in s (default 1; longer when the servos need it)",
+        help=f"shortest blend between gaits in s (default {DEFAULT_TRANSITION_S:g}; longer when "
+        "the servos need it)",
     )
-    parser.add_argument(
-        "--friction",
-        metavar="AXIAL,LATERAL",
-        help="twin ground friction along and across each module (overrides the robot's)",
-    )
-    parser.add_argument(
-        "--realtime",
-        action="store_true",
-        help="pace the twin to the wall clock (always on without --script)",
+    add_option_flags(
+        parser,
+        ("friction", "realtime"),
+        helps={
+            "friction": "twin ground friction along and across each module (overrides the "
+            "robot's)",
+            "realtime": "pace the twin to the wall clock (always on without --script)",
+        },
     )
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
+    add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run, viewer=False, video=None, directional=None, terrain=None)
+    add_dry_run(parser, "no servo moves, no log or script")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoice]:
     """The gait list from --gaits (or the robot's default) with the --set overrides."""
-    planar = all(joint.axis == "yaw" for joint in robot.joints)
     names = (
         [n.strip() for n in args.gaits.split(",") if n.strip()]
         if args.gaits
-        else list(PLANAR_GAITS if planar else SPATIAL_GAITS)
+        else list(default_gaits(robot))
     )
-    if not names or len(names) > 9:
-        raise ConfigError("--gaits", "", f"expected 1 to 9 gait names, got {args.gaits!r}")
+    if not names or len(names) > MAX_GAITS:
+        raise ConfigError(
+            "--gaits", "", f"expected 1 to {MAX_GAITS} gait names, got {args.gaits!r}"
+        )
     overrides: dict[str, list[str]] = {name: [] for name in names}
     for item in args.set:
         key = item.partition("=")[0]
@@ -133,24 +156,9 @@ def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoic
                 f"{item}: expected GAIT.KEY=VALUE with GAIT one of {', '.join(names)} "
                 "(KEY=VALUE alone only when one gait is listed)",
             )
+    for name in names:
+        check_joint_axes(name, [joint.axis for joint in robot.joints], robot.name)
     return [GaitChoice(name, parse_set_options(name, overrides[name])) for name in names]
-
-
-def make_live(robot: RobotConfig, args: argparse.Namespace) -> LiveGait:
-    """The live gait for this robot: its limits and speed, steering on the yaw joints."""
-    for option, value in (("--smoothing", args.smoothing), ("--transition", args.transition)):
-        if not (value >= 0 and np.isfinite(value)):
-            raise ConfigError(option, "", f"expected seconds >= 0, got {value!r}")
-    return LiveGait(
-        robot.joint_count,
-        lower_rad=robot.lower_rad,
-        upper_rad=robot.upper_rad,
-        max_speed_rad_s=robot.max_speed_rad_s,
-        period_s=1.0 / args.rate,
-        steer=[1.0 if joint.axis == "yaw" else 0.0 for joint in robot.joints],
-        smoothing_s=args.smoothing,
-        transition_s=args.transition,
-    )
 
 
 def make_source(args: argparse.Namespace) -> InputSource:
@@ -168,43 +176,55 @@ def make_source(args: argparse.Namespace) -> InputSource:
 
 def run(args: argparse.Namespace) -> int:
     """Load, connect, drive until a stop, summarise; servos end as the stop policy says."""
-    hardware = args.backend == "dynamixel"
-    robot = load_robot(robot_name(args, hardware=hardware, what="drive --backend dynamixel"))
+    spec = backend_spec(args)
+    robot = load_robot(
+        robot_name(args, hardware=spec.hardware, what=f"drive --backend {args.backend}")
+    )
+    given = given_options(args, spec, BACKEND_OPTIONS)
     choices = gait_choices(robot, args)
-    live = make_live(robot, args)
-    for choice in choices:
-        live.check(choice.name, choice.params)
+    with flag_errors((), {"smoothing_s": "--smoothing", "transition_s": "--transition"}):
+        live = live_gait(
+            robot,
+            rate_hz=args.rate,
+            smoothing_s=args.smoothing,
+            transition_s=args.transition,
+            gaits=choices,
+        )
     source = make_source(args)
-    if args.backend == "sim" and args.script is None:
-        args.realtime = True  # a person drives: the twin keeps to the wall clock
-    backend = make_backend(robot, args)
-    safety = SafetyLayer.for_robot(robot)
-    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+    if args.script is None or args.foxglove is not None:  # a person drives or watches
+        given = watched(spec, given)
+    if args.dry_run:
+        for path, what in ((args.log, "log"), (args.record, "script")):
+            if path is not None:
+                check_writable(path, what)
+        return report_dry_run(args, {
+            "robot": robot.name, "gaits": ",".join(c.name for c in choices),
+            "backend": spec.name, "log": args.log, "record": args.record,
+        })
+    with flag_errors(BACKEND_OPTIONS):
+        snake = Snake.prepare(robot, spec, **given)
+    backend = snake.backend
     with contextlib.ExitStack() as stack:
         recorder = _recorder(stack, args, robot)
         controller = DriveController(live, choices, on_event=recorder)
         observers: list[DriveObserver] = []
-        if args.log:
-            log = stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
-            observers.append(csv_log_observer(log))
+        telemetry = open_telemetry(
+            stack, args, command="drive", robot=robot, backend=backend, rate_hz=args.rate,
+            gait={"gaits": [gait_facts(c.name, None, c.params) for c in choices]},
+        )
+        observers += [o for o in (drive_observer(telemetry),) if o is not None]
         signals = stack.enter_context(StopSignals())
         stack.enter_context(source)
-        stack.enter_context(backend)
+        with flag_errors(BACKEND_OPTIONS):
+            stack.enter_context(snake)
         display = _display(stack, args, robot, backend, controller)
         if display is not None:
             observers.append(display)
-        result = run_drive(
-            backend,
-            live,
-            safety,
-            controller,
-            source,
-            rate_hz=args.rate,
-            metrics=metrics,
-            observers=observers,
-            stop_check=signals,
-        )
-    summary = _summary(robot, args, choices, result)
+        with flag_errors((), {"rate_hz": "--rate"}):
+            result = snake.drive(
+                live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
+            )
+    summary = {**_summary(robot, args, choices, result), **telemetry.summary}
     if args.json:
         print_json(summary)
     else:
@@ -227,7 +247,7 @@ def _recorder(
     except OSError as exc:
         raise ConfigError(args.record, "", f"cannot write the recording ({exc.strerror})") from exc
     header = (
-        f"snakebot drive recording: robot {robot.name}, backend {args.backend}, rate "
+        f"snakebot drive recording: robot {robot.name}, backend {backend_spec(args).name}, rate "
         f"{args.rate:g} Hz\nreplay: snakebot drive --robot {robot.name} --script {args.record}"
     )
     return ScriptRecorder(stream, header)
@@ -244,12 +264,14 @@ def _display(
         return None
     from snakebot.drive.display import DriveDisplay
 
-    where = f" ({args.port or robot.bus.port})" if args.backend == "dynamixel" else ""
+    port = getattr(backend, "port", None)
+    where = f" ({port})" if port else ""
 
     health, alerts = backend_readings(backend)
+    name = backend_spec(args).name
     display = DriveDisplay(
         sys.stderr,
-        title=f"snakebot drive: {robot.name} on {args.backend}{where}, {robot.joint_count} "
+        title=f"snakebot drive: {robot.name} on {name}{where}, {robot.joint_count} "
         f"joints, stop policy {robot.safety.stop_policy}",
         gaits=[c.name for c in controller.gaits],
         gait_index=lambda: controller.gait_index,
@@ -280,7 +302,7 @@ def _summary(
     summary: dict[str, object] = {
         "robot": robot.name,
         "gaits": [c.name for c in choices],
-        "backend": args.backend,
+        "backend": backend_spec(args).name,
         **result.summary,
     }
     if args.log:

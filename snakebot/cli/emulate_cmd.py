@@ -20,9 +20,10 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-from snakebot.cli.common import add_robot_option, print_json
+from snakebot.cli.common import add_robot_option, baud_arg, print_json
 from snakebot.config import RobotConfig, load_robot
 from snakebot.errors import ConfigError
+from snakebot.servo import FACTORY_BAUD
 
 if TYPE_CHECKING:
     from snakebot.emulation.bench import ServoBench
@@ -41,7 +42,7 @@ def add_parser(subparsers: Any) -> None:
         "power-cycles every servo.",
     )
     add_robot_option(parser)
-    parser.add_argument("--baud", type=int, help="line rate (default: the robot's bus.baud)")
+    parser.add_argument("--baud", type=baud_arg, help="line rate (default: the robot's bus.baud)")
     parser.add_argument(
         "--physics",
         action="store_true",
@@ -60,7 +61,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--scramble", type=int, metavar="SEED",
                         help="start the robot's servos with wrong settings (ignored when the "
                         "state file exists)")
-    parser.set_defaults(handler=run)
+    # writes=False: the state file is the emulated servos' own EEPROM, not an output
+    parser.set_defaults(handler=run, writes=False)
 
 
 def _bench(
@@ -76,7 +78,7 @@ def _bench(
                           "and --scramble")
     motion = None
     if args.fresh:
-        chain = EmulatedChain(baud=57600)
+        chain = EmulatedChain(baud=FACTORY_BAUD)
     elif args.physics:
         from snakebot.emulation.physics import make_twin_chain
 

@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from snakebot.cli.common import print_json
+from snakebot.cli.common import gait_arg, print_json
 from snakebot.gaits import GAITS, GaitSpec, ParamSpec, get_spec
 from snakebot.plugins import Origin
 
@@ -17,9 +17,9 @@ def add_parser(subparsers: Any) -> None:
         "gaits",
         help="list gaits (built-in, plugins, ...) with their parameters, defaults and bounds",
     )
-    parser.add_argument("name", nargs="?", help="show only this gait")
+    parser.add_argument("name", nargs="?", type=gait_arg, help="show only this gait")
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=False)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -45,6 +45,7 @@ def _as_json(spec: GaitSpec, origin: Origin) -> dict[str, object]:
         "entry_point": origin.entry_point if plugin else None,
         "default_search": list(spec.default_search),
         "rolls_over": spec.rolls_over,
+        "axes": {"even": spec.axes.even, "odd": spec.axes.odd, "required": spec.axes.required},
         "params": [
             {
                 "name": p.name,
@@ -75,6 +76,9 @@ def _as_text(spec: GaitSpec, origin: Origin) -> str:
     ]
     search = ", ".join(spec.default_search) or "none (name --params)"
     lines.append(f"    tune gait searches by default: {search}")
+    if spec.axes.even is not None or spec.axes.odd is not None:
+        strict = "refused" if spec.axes.required else "warned about"
+        lines.append(f"    joint axes: needs {spec.axes.describe()} (other axes are {strict})")
     return "\n".join(lines) + "\n"
 
 

@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK  (argcomplete's marker: this program answers completion requests)
 """``snakebot`` command line: ``main(argv) -> int``; exit codes are decided here and only here.
 
 Exit codes: 0 success, 1 a user-fixable error (bad config, unwritable output, bus failure, servo
@@ -7,30 +8,86 @@ fault), 2 usage, 3 a bug in snakebot, 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
+import json
 import os
+import signal
 import sys
 import traceback
 import warnings
-from collections.abc import Sequence
-from typing import TextIO
+from collections.abc import Iterator, Sequence
+from typing import Any, NoReturn, TextIO
 
 from snakebot import __version__
-from snakebot.errors import SnakebotError, UsageError
+from snakebot.backends.offscreen_gl import choose_offscreen_gl
+from snakebot.errors import ConfigError, GaitError, SnakebotError, UsageError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
-COMMANDS = (
+COMMANDS: tuple[str, ...] = (
     "run", "drive", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune",
     "sysid",
-    "rl",
+    "log", "rl",
 )
+COMMANDS += ("robots", "ports")  # issue 9: where robots come from, which serial ports exist
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The top-level parser with one subcommand per module in ``COMMANDS``."""
-    parser = argparse.ArgumentParser(
+class CliParser(argparse.ArgumentParser):
+    """The parser class of every snakebot command and subcommand (``add_subparsers`` hands it
+    down): no abbreviated long options, and errors raised as :class:`ParseError` so
+    :func:`main` prints them with the usage of the subcommand that was being parsed."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs["allow_abbrev"] = False
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        """Raise ParseError (exit 2) instead of printing and exiting."""
+        raise ParseError(self, message)
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        """As argparse, recording the innermost (sub)parser that ran as ``cli_parser``."""
+        parsed, extras = super().parse_known_args(args, namespace)
+        if not hasattr(parsed, "cli_parser"):
+            parsed.cli_parser = self  # a subcommand's parser ran first and set itself
+        return parsed, extras
+
+    def parse_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        """As argparse, but an unknown option is reported by the subcommand that got it, with
+        that subcommand's usage and the nearest option it does have."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            owner: CliParser = getattr(parsed, "cli_parser", self)
+            known = [s for a in owner._actions for s in a.option_strings]
+            hint = ""
+            close = difflib.get_close_matches(extras[0].split("=", 1)[0], known, n=1)
+            if close:
+                hint = f" (did you mean {close[0]}?)"
+            owner.error(f"unrecognized arguments: {' '.join(extras)}{hint}")
+        return parsed
+
+
+class ParseError(Exception):
+    """A usage error found by argparse, with the parser whose usage to show."""
+
+    def __init__(self, parser: argparse.ArgumentParser, message: str) -> None:
+        super().__init__(message)
+        self.parser = parser
+        self.message = message
+
+
+def build_parser() -> CliParser:
+    """The top-level parser with one subcommand per module in ``COMMANDS``.
+
+    Every leaf (sub)command also takes ``--debug`` (after the subcommand too) and ``--json``.
+    """
+    parser = CliParser(
         prog="snakebot", description="Drive a Dynamixel servo snake or its MuJoCo twin."
     )
     parser.add_argument("--version", action="version", version=f"snakebot {__version__}")
@@ -39,7 +96,30 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMANDS:
         module = importlib.import_module(f"snakebot.cli.{name}_cmd")
         module.add_parser(subparsers)
+    for _path, leaf in leaf_parsers(parser):
+        leaf.add_argument(
+            "--debug",
+            action="store_true",
+            default=argparse.SUPPRESS,  # keeps a --debug given before the command
+            help="show tracebacks for errors",
+        )
     return parser
+
+
+def leaf_parsers(
+    parser: argparse.ArgumentParser, path: tuple[str, ...] = ()
+) -> Iterator[tuple[tuple[str, ...], argparse.ArgumentParser]]:
+    """Every (sub)command parser that runs a handler, with its command words (``("tune",
+    "gains")``); aliases are listed once."""
+    groups = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not groups:
+        yield path, parser
+        return
+    seen: set[int] = set()
+    for name, child in groups[0].choices.items():
+        if id(child) not in seen:
+            seen.add(id(child))
+            yield from leaf_parsers(child, (*path, name))
 
 
 def _show_warning(
@@ -54,56 +134,156 @@ def _show_warning(
     print(f"snakebot: warning: {message}", file=file or sys.stderr)
 
 
+_decided_exit_code: int | None = None
+"""Set once the command is over: a signal from then on ends the process with this code."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit code.
 
     Ctrl-C at any point, building the parser (which imports every command) included, ends with
     ``snakebot: interrupted`` and 130, never a traceback.
     """
+    global _decided_exit_code
+    # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
+    # without a display only EGL or OSMesa render --video offscreen.
+    choose_offscreen_gl()
     try:
-        return _main(argv)
+        code = _main(argv)
     except KeyboardInterrupt:
+        _decided_exit_code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except ImportError as exc:
+        # Ctrl-C while a C extension (MuJoCo) initialises reaches us as "initialization failed".
+        if not _caused_by_interrupt(exc):
+            raise
+        _decided_exit_code = EXIT_INTERRUPTED
+        print("snakebot: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    _decided_exit_code = code
+    return code
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
 
 
 def _main(argv: Sequence[str] | None) -> int:
+    words = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
+    if _interrupt_seen:
+        # A Ctrl-C during start-up that a C extension's init swallowed (MuJoCo's pybind11
+        # modules do): honour it before the command touches anything.
+        raise KeyboardInterrupt
+    if "_ARGCOMPLETE" in os.environ:
+        _complete(parser)
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse: --help (0) or a usage error (2)
+        args = parser.parse_args(words)
+    except SystemExit as exc:  # argparse: --help or --version (0)
         return int(exc.code or 0)
+    except ParseError as exc:
+        if "--json" not in words:
+            exc.parser.print_usage(sys.stderr)
+        return _fail(f"{exc.parser.prog}: error: {exc.message}", EXIT_USAGE, "--json" in words)
+    as_json = bool(getattr(args, "json", False))
     try:
         return int(args.handler(args))
     except UsageError as exc:
-        print(f"snakebot {args.command}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return _fail(f"snakebot {args.command}: error: {exc}", EXIT_USAGE, as_json)
     except SnakebotError as exc:
         if args.debug:
             traceback.print_exc()
-        print(f"snakebot: error: {exc}", file=sys.stderr)
-        return EXIT_ERROR
+        code = EXIT_USAGE if names_an_option(exc) else EXIT_ERROR
+        return _fail(f"snakebot: error: {exc}", code, as_json)
     except BrokenPipeError:
         return EXIT_ERROR
     except Exception:
         traceback.print_exc()
-        print(
+        return _fail(
             "snakebot: internal error (a bug in snakebot); please report it with the traceback",
-            file=sys.stderr,
+            EXIT_BUG,
+            as_json,
         )
-        return EXIT_BUG
+
+
+def _complete(parser: argparse.ArgumentParser) -> None:
+    """Answer a shell's completion request (argcomplete's protocol: the optional
+    ``snakebot[completion]`` extra, docs/cli.md); argcomplete prints the candidates and exits.
+    Without argcomplete installed, nothing happens."""
+    try:
+        import argcomplete
+    except ImportError:
+        return
+    argcomplete.autocomplete(parser)
+
+
+def names_an_option(exc: SnakebotError) -> bool:
+    """True for an error about a command-line value (exit 2): a ConfigError whose source is an
+    option (``--friction``), or a GaitError about ``--set KEY=VALUE``."""
+    if isinstance(exc, ConfigError):
+        return exc.source.startswith("--")
+    return isinstance(exc, GaitError) and str(exc).startswith("--")
+
+
+def _fail(message: str, code: int, as_json: bool) -> int:
+    """Print ``message`` on stderr; with ``--json`` as one ``{"error", "code"}`` object there
+    instead, so stdout holds only what the command itself printed (a scan's findings, say)."""
+    if as_json:
+        print(json.dumps({"error": message, "code": code}, ensure_ascii=False), file=sys.stderr)
+    else:
+        print(message, file=sys.stderr)
+    return code
 
 
 def entry_point() -> None:
-    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice."""
+    """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice.
+
+    SIGTERM is treated like Ctrl-C (a killed run still ramps out and applies the stop policy).
+    Once the command is over, SIGINT and SIGTERM are ignored: the servos are as the stop policy
+    left them, and an impatient user's third Ctrl-C must not turn the command's exit code into
+    a death by signal while the interpreter shuts down (which takes a second on a loaded machine,
+    after Python has put the default handlers back).
+    """
+    global _decided_exit_code
+    _install_signal_handlers()
     try:
-        # MuJoCo picks its OpenGL platform when first imported, which building the parser does:
-        # on Linux without a display only EGL renders --video offscreen (twin/video.py).
-        if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-            os.environ.setdefault("MUJOCO_GL", "egl")
         warnings.showwarning = _show_warning
         code = main()
     except KeyboardInterrupt:
+        _decided_exit_code = code = EXIT_INTERRUPTED
         print("snakebot: interrupted", file=sys.stderr)
-        code = EXIT_INTERRUPTED
+    _ignore_signals_from_now_on()
     sys.exit(code)
+
+
+_interrupt_seen = False
+"""A SIGINT/SIGTERM arrived while the command was still running (even if it was swallowed)."""
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    global _interrupt_seen
+    if _decided_exit_code is None:
+        _interrupt_seen = True
+        raise KeyboardInterrupt
+    # The command is over; the exit code it decided stands.
+
+
+def _install_signal_handlers() -> None:
+    # SIGINT only where Python's own handler is in place (a background job keeps ignoring it).
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _on_signal)
+    if hasattr(signal, "SIGTERM") and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _on_signal)
+
+
+def _ignore_signals_from_now_on() -> None:
+    # SIG_IGN, unlike a Python handler, survives the interpreter's shutdown.
+    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if signum is not None and signal.getsignal(signum) is _on_signal:
+            signal.signal(signum, signal.SIG_IGN)

@@ -13,7 +13,15 @@ from snakebot.backends.twin.model_builder import (
     build_spec,
     compile_spec,
 )
-from snakebot.cli.common import add_robot_option, check_writable, os_reason, robot_name
+from snakebot.cli.common import (
+    add_dry_run,
+    add_robot_option,
+    check_writable,
+    os_reason,
+    print_json,
+    report_dry_run,
+    robot_name,
+)
 from snakebot.config.body import BodyConfig
 from snakebot.config.body_loader import load_robot_or_body
 from snakebot.errors import OutputError
@@ -31,14 +39,16 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--terrain", metavar="NAME[:KEY=VALUE,...]", help="flat (default) or cliff[:key=value,...]"
     )
-    parser.set_defaults(handler=run)
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    add_dry_run(parser, "no MJCF file")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
     robot = load_robot_or_body(robot_name(args, hardware=False, what="model"))
     check_writable(args.out, "model")
-    terrain = parse_terrain(args.terrain) if args.terrain else None
+    terrain = parse_terrain(args.terrain, "--terrain") if args.terrain else None
     if isinstance(robot, BodyConfig):
         from snakebot.cli.softbody_options import describe_body, softbody_spec
 
@@ -46,14 +56,21 @@ def run(args: argparse.Namespace) -> int:
         what = describe_body(robot)
         spec.compile()
     else:
-        friction = GroundFriction.parse(args.friction) if args.friction else None
+        friction = GroundFriction.parse(args.friction, "--friction") if args.friction else None
         spec = build_spec(robot, friction=friction, terrain=terrain)
         add_actuators(spec, robot)
         compile_spec(spec, robot)
         what = f"{robot.joint_count} joints"
+    xml = spec.to_xml()
+    if args.dry_run:
+        return report_dry_run(args, {"robot": robot.name, "model": what, "out": args.out,
+                                     "bytes": len(xml.encode())})
     try:
-        args.out.write_text(spec.to_xml())
+        args.out.write_text(xml)
     except OSError as exc:
         raise OutputError(args.out, f"cannot write the model: {os_reason(exc)}") from exc
-    print(f"wrote {args.out} ({robot.name}: {what})")
+    if args.json:
+        print_json({"robot": robot.name, "model": what, "out": str(args.out)})
+    else:
+        print(f"wrote {args.out} ({robot.name}: {what})")
     return 0

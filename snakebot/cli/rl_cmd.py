@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import positive_int, print_json
+from snakebot.cli.common import add_dry_run, positive_int, print_json, report_dry_run
 from snakebot.errors import ConfigError, UsageError
 
 ENV_CHOICES = ("snakebot/SnakeGoal-v0", "snakebot/SnakeVelocity-v0")
@@ -41,7 +41,8 @@ def add_parser(subparsers: Any) -> None:
                        help="env steps per PPO update, over all envs (default 2048)")
     train.add_argument("--out", type=Path, help="policy folder (default rl-runs/ENV-ENCODING)")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
-    train.set_defaults(handler=run_train)
+    add_dry_run(train, "no training, no policy folder")
+    train.set_defaults(handler=run_train, writes=True)
 
     evaluate = sub.add_parser("eval", help="evaluate a trained policy (and zero/random ones)")
     evaluate.add_argument("policy", type=Path, help="policy folder from `rl train`")
@@ -52,7 +53,8 @@ def add_parser(subparsers: Any) -> None:
                           help="also run a zero and a random policy on the same seeds")
     evaluate.add_argument("--video", type=Path, help="render the first episode to an MP4")
     evaluate.add_argument("--json", action="store_true", help="print the results as JSON")
-    evaluate.set_defaults(handler=run_eval)
+    add_dry_run(evaluate, "no episodes, no video")
+    evaluate.set_defaults(handler=run_eval, writes=True)  # --video
 
     compare = sub.add_parser("compare", help="train every encoding, plot the curves together")
     compare.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0])
@@ -68,7 +70,8 @@ def add_parser(subparsers: Any) -> None:
     compare.add_argument("--out", type=Path, default=Path("rl-runs/compare"),
                          help="folder: one policy folder per encoding and compare.png")
     compare.add_argument("--json", action="store_true", help="print the results as JSON")
-    compare.set_defaults(handler=run_compare)
+    add_dry_run(compare, "no training, no policy folders, no plot")
+    compare.set_defaults(handler=run_compare, writes=True)
 
 
 def _env_options(parser: argparse.ArgumentParser) -> None:
@@ -125,11 +128,32 @@ def env_kwargs(args: argparse.Namespace, encoding: str) -> dict[str, Any]:
     for key in ("robot", "encoding"):
         if key in given:
             raise UsageError(f"--set {key}=...: use --{key}")
+    _check_robot(args.robot)
     from snakebot.rl.settings import GoalSettings, VelocitySettings, settings_dict, split_kwargs
 
     task = GoalSettings if "Goal" in args.env else VelocitySettings
     kwargs = {"robot": args.robot, "encoding": encoding, **given}
     return settings_dict(*split_kwargs(kwargs, task))
+
+
+def _check_robot(name: str) -> None:
+    """ConfigError now (before any env starts) for a robot that cannot be loaded, or a
+    mass-spring body: the environments drive servo snakes."""
+    from snakebot.config import RobotConfig
+    from snakebot.session import load_robot
+
+    if not isinstance(load_robot(name), RobotConfig):
+        raise ConfigError("--robot", name, "the learning environments drive servo snakes (robot "
+                          "files), not mass-spring bodies")
+
+
+def _check_out(out: Path) -> None:
+    """OutputError for an output folder that is a file (a dry run creates nothing)."""
+    from snakebot.errors import OutputError
+
+    for folder in (out, *out.parents):
+        if folder.exists() and not folder.is_dir():
+            raise OutputError(folder, "is a file, not a folder: cannot write the policy there")
 
 
 def run_train(args: argparse.Namespace) -> int:
@@ -138,6 +162,11 @@ def run_train(args: argparse.Namespace) -> int:
 
     kwargs = env_kwargs(args, args.encoding)
     out = args.out or Path("rl-runs") / f"{args.env.split('/')[-1]}-{args.encoding}"
+    if args.dry_run:
+        _check_out(out)
+        return report_dry_run(args, {"env": args.env, "encoding": args.encoding,
+                                     "robot": args.robot, "steps": args.steps, "out": str(out),
+                                     "env_kwargs": kwargs})
     settings = TrainSettings(args.env, kwargs, args.steps, seed=args.seed, n_envs=args.n_envs,
                              vec=args.vec, algo=args.algo, rollout_steps=args.rollout)
     if not args.json:
@@ -160,6 +189,15 @@ def run_eval(args: argparse.Namespace) -> int:
     """Evaluate a policy folder against zero and random policies on the same seeds."""
     from snakebot.rl.evaluate import evaluate_folder, print_table
 
+    if args.dry_run:
+        from snakebot.rl.policy_file import load_policy
+
+        policy = load_policy(args.policy)
+        if args.video is not None:
+            _check_out(args.video.parent)
+        return report_dry_run(args, {"policy": str(args.policy), "env": policy.env_id,
+                                     "episodes": args.episodes, "seed": args.seed,
+                                     "video": None if args.video is None else str(args.video)})
     results = evaluate_folder(args.policy, episodes=args.episodes, seed=args.seed,
                               baselines=args.baselines == "on", video=args.video)
     if args.json:
@@ -179,6 +217,11 @@ def run_compare(args: argparse.Namespace) -> int:
     from snakebot.rl.compare import compare
 
     runs = {e: env_kwargs(args, e) for e in encodings}
+    if args.dry_run:
+        _check_out(args.out)
+        return report_dry_run(args, {"env": args.env, "encodings": encodings,
+                                     "robot": args.robot, "steps": args.steps,
+                                     "out": str(args.out)})
     summary = compare(args.env, runs, args.steps, args.out, seed=args.seed,
                       n_envs=args.n_envs, vec=args.vec)
     if args.json:

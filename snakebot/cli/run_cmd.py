@@ -4,40 +4,64 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import Any, cast
 
 from snakebot.backends.base import Backend
+from snakebot.cli.backend_options import (
+    add_backend_argument,
+    add_option_flags,
+    backend_spec,
+    flag_errors,
+    given_options,
+)
 from snakebot.cli.common import (
     RATE_HZ,
+    add_dry_run,
     add_robot_option,
     check_writable,
-    port_arg,
+    gait_arg,
     positive_float,
     print_json,
+    report_dry_run,
     robot_name,
 )
-from snakebot.config import RobotConfig
-from snakebot.config.body import BodyConfig
-from snakebot.config.body_loader import load_robot_or_body
-from snakebot.control.metrics import RunMetrics
-from snakebot.control.runner import RunPlan, RunResult, run_gait
-from snakebot.control.safety import SafetyLayer
+from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
 from snakebot.errors import ConfigError, OutputError, UsageError
-from snakebot.gaits import Gait, load_gait_file, make_gait, parse_set_options
-from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.gaits import Gait, load_gait_file, parse_set_options
+from snakebot.run_summary import RunSummary
+from snakebot.session import (
+    DEFAULT_DURATION_S,
+    DEFAULT_GAIT,
+    DEFAULT_RATE_HZ,
+    Robot,
+    Snake,
+    load_robot,
+    resolve_gait,
+    watched,
+)
+from snakebot.telemetry.sidecar import gait_facts
+
+BACKEND_OPTIONS = (
+    "friction", "directional", "terrain", "realtime", "port", "baud", "allow_extra_servos",
+)
+"""The backend option flags ``run`` offers; each one is refused with a backend without it."""
 
 
 def add_parser(subparsers: Any) -> None:
     """Register the ``run`` command."""
     parser = subparsers.add_parser("run", help="run a gait on the twin (default) or the robot")
     add_robot_option(parser, hardware="with --backend dynamixel")
-    parser.add_argument("--gait", help="gait name (see `snakebot gaits`; default serpenoid)")
+    parser.add_argument(
+        "--gait", type=gait_arg, help=f"gait name (see `snakebot gaits`; default {DEFAULT_GAIT})"
+    )
     parser.add_argument(
         "--set",
         action="append",
@@ -47,67 +71,71 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--gait-file", type=Path, help="replay a saved gait (TOML)")
     parser.add_argument("--policy", metavar="DIR", help="play a trained policy (`snakebot rl "
-                        "train`) as the gait; needs snakebot[rl]")
-    parser.add_argument("--command", metavar="A,B", help="with --policy: speed,turn_rate (m/s, "
-                        "rad/s) for a velocity policy; goal X,Y (m, X ahead) for a goal policy")
-    parser.add_argument(
-        "--backend",
-        choices=("sim", "dynamixel"),
-        default="sim",
-        help="sim: the MuJoCo twin (default); dynamixel: the servo chain",
-    )
+                        "train`) as the gait, on a servo snake; needs snakebot[rl]")
+    # dest: ``args.command`` is the subcommand's name (main.py's error messages use it)
+    parser.add_argument("--command", dest="policy_command", metavar="A,B", help="with --policy: "
+                        "speed,turn_rate (m/s, rad/s) for a velocity policy; goal X,Y (m, X "
+                        "ahead) for a goal policy")
+    add_backend_argument(parser)
     parser.add_argument(
         "--duration",
         type=positive_float,
-        default=10.0,
-        help="gait time in seconds, before the ramp-out (default 10)",
+        default=DEFAULT_DURATION_S,
+        help=f"gait time in seconds, before the ramp-out (default {DEFAULT_DURATION_S:g})",
     )
     parser.add_argument(
-        "--rate", type=RATE_HZ, default=100.0, help="control rate in Hz (default 100)"
+        "--rate",
+        type=RATE_HZ,
+        default=DEFAULT_RATE_HZ,
+        help=f"control rate in Hz (default {DEFAULT_RATE_HZ:g})",
     )
-    parser.add_argument(
-        "--friction",
-        metavar="AXIAL,LATERAL",
-        help="twin ground friction along and across each module; "
-        "equal values = isotropic (overrides the robot's ground model); "
-        "one number MU for a mass-spring body's floor",
+    add_option_flags(
+        parser,
+        BACKEND_OPTIONS,
+        helps={
+            "friction": "twin ground friction along and across each module; equal values = "
+            "isotropic (overrides the robot's ground model); one number MU for a mass-spring "
+            "body's floor",
+            "terrain": "twin terrain: flat (default) or cliff, e.g. cliff:edge_m=0.1,height_m=0.04",
+            "realtime": "pace the twin to the wall clock",
+            "port": "serial port for --backend dynamixel (default: robot config)",
+            "baud": "baud rate for --backend dynamixel",
+            "allow_extra_servos": "--backend dynamixel: servos on the bus that the robot file "
+            "does not name are expected (left alone); without it connect refuses, naming them",
+        },
     )
-    parser.add_argument(
-        "--directional",
-        choices=("on", "off"),
-        help="mass-spring bodies: Miller's directional friction on or off (default: the body file)",
-    )
-    parser.add_argument(
-        "--terrain",
-        metavar="NAME[:KEY=VALUE,...]",
-        help="twin terrain: flat (default) or cliff, e.g. cliff:edge_m=0.1,height_m=0.04",
-    )
-    parser.add_argument("--realtime", action="store_true", help="pace the twin to the wall clock")
     parser.add_argument(
         "--viewer", action="store_true", help="open MuJoCo's viewer (needs a display)"
     )
     parser.add_argument("--video", type=Path, help="render the twin to an MP4 file (offscreen)")
     parser.add_argument("--log", type=Path, help="per-cycle telemetry CSV")
-    parser.add_argument(
-        "--port", type=port_arg, help="serial port for --backend dynamixel (default: robot config)"
-    )
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
-    parser.add_argument(
-        "--allow-extra-servos",
-        action="store_true",
-        help="--backend dynamixel: servos on the bus that the robot file does not name are "
-        "expected (left alone); without it connect refuses, naming them",
-    )
+    add_telemetry_options(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run)
+    add_dry_run(parser, "no servo moves, no log or video")
+    parser.set_defaults(handler=run, writes=True)
 
 
-def build_gait(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> tuple[str, Gait]:
+def prepare(args: argparse.Namespace, options: tuple[str, ...]) -> tuple[Snake, Any]:
+    """The robot --robot names on the backend --backend names, not yet connected, and the
+    gait (name, Gait) from --gait/--gait-file/--set; usage and config errors name the flags."""
+    spec = backend_spec(args)
+    robot = load_robot(
+        robot_name(args, hardware=spec.hardware, what=f"{args.command} --backend {args.backend}")
+    )
+    given = given_options(args, spec, options)
+    # Someone watching (the viewer, Foxglove) sees the twin at the wall clock's pace.
+    if getattr(args, "viewer", False) or getattr(args, "foxglove", None) is not None:
+        given = watched(spec, given)
+    with flag_errors(options):
+        snake = Snake.prepare(robot, spec, **given)
+    return snake, spec
+
+
+def build_gait(robot: Robot, args: argparse.Namespace) -> tuple[str, Gait]:
     """The gait from --gait-file and/or --gait, with --set overrides on top."""
-    params: dict[str, object] = {}
-    name = args.gait or "serpenoid"
+    name = args.gait or DEFAULT_GAIT
     if args.gait_file is not None:
-        file_name, params, _meta = load_gait_file(args.gait_file)
+        file_name = load_gait_file(args.gait_file)[0]
         if args.gait and args.gait != file_name:
             raise ConfigError(
                 "--gait",
@@ -116,39 +144,9 @@ def build_gait(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> tup
                 f"not {args.gait!r}; drop --gait or pick the matching file",
             )
         name = file_name
-    params.update(parse_set_options(name, args.set))
-    gait = make_gait(
-        name, robot.joint_count, params, lower_rad=robot.lower_rad, upper_rad=robot.upper_rad
-    )
-    return name, gait
-
-
-def make_backend(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> Backend:
-    """The backend --backend names, configured from the options."""
-    if isinstance(robot, BodyConfig):
-        from snakebot.cli.softbody_options import make_softbody_backend
-
-        return make_softbody_backend(robot, args)
-    if args.directional is not None:
-        raise ConfigError("--directional", "", "applies to mass-spring bodies only")
-    if args.backend == "sim":
-        from snakebot.backends.twin import GroundFriction, TwinBackend
-        from snakebot.backends.twin.cliff import parse_terrain
-
-        friction = GroundFriction.parse(args.friction) if args.friction else None
-        terrain = parse_terrain(args.terrain) if args.terrain else None
-        return TwinBackend(
-            robot, friction=friction, realtime=args.realtime or args.viewer, terrain=terrain
-        )
-    if args.viewer or args.video or args.friction or args.terrain:
-        raise ConfigError(
-            "--backend", "", "--viewer, --video, --friction and --terrain need --backend sim"
-        )
-    from snakebot.backends.dynamixel import DynamixelBackend
-
-    return DynamixelBackend(
-        robot, port=args.port, baud=args.baud, allow_extra_servos=args.allow_extra_servos
-    )
+    params = parse_set_options(name, args.set)
+    gait = None if args.gait_file is not None else name
+    return resolve_gait(robot, gait, params=params, gait_file=args.gait_file)
 
 
 @contextlib.contextmanager
@@ -171,20 +169,21 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
-    hardware = args.backend == "dynamixel"
-    robot = load_robot_or_body(robot_name(args, hardware=hardware, what="run --backend dynamixel"))
+    if args.policy is None and args.policy_command is not None:
+        raise UsageError("--command goes with --policy (a trained policy's command)")
+    snake, spec = prepare(args, BACKEND_OPTIONS)
     if args.policy is None:
-        if args.command is not None:
-            raise UsageError("--command goes with --policy (a trained policy's command)")
-        gait_name, gait = build_gait(robot, args)
-    plan = RunPlan(duration_s=args.duration, rate_hz=args.rate)
-    backend = make_backend(robot, args)
-    if args.policy is not None:  # a closed-loop gait reads the backend it drives
+        gait_name, gait = build_gait(snake.robot, args)
+    else:  # a closed-loop gait: it reads the backend it drives
         from snakebot.rl.cli_policy import policy_gait
 
-        gait_name, gait = policy_gait(robot, backend, args)
-    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
-    safety = SafetyLayer.for_robot(robot)
+        gait_name, gait = policy_gait(snake.robot, snake.backend, args)
+    if (args.video or args.viewer) and spec.hardware:
+        raise ConfigError(
+            "--video" if args.video else "--viewer",
+            "",
+            f"renders the simulation: it needs a simulated backend, not {spec.name}",
+        )
     # Outputs open before the backend connects: one that cannot be written stops the run before
     # a servo moves. Written rows stay on disk whatever ends the run.
     if args.video:
@@ -192,48 +191,81 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("--video", str(args.video), "expected a video file name ending in "
                               f"{', '.join(VIDEO_SUFFIXES)}")
         check_writable(args.video, "video")
+        from snakebot.backends.twin.video import require_video_writer
+
+        require_video_writer()  # before --log opens, like every other check
+    if args.viewer:
+        from snakebot.backends.twin.viewer import check_display
+
+        check_display()  # before --log opens: a refused run leaves an existing log as it was
+    if args.dry_run:
+        if args.log:
+            check_writable(args.log, "log")
+        return report_dry_run(args, {
+            "robot": snake.robot.name, "gait": gait_name, "backend": spec.name,
+            "duration_s": args.duration, "rate_hz": args.rate, "log": args.log,
+            "video": args.video,
+        })
     with contextlib.ExitStack() as stack:
-        log = (
-            stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
-            if args.log
-            else None
+        telemetry = open_telemetry(
+            stack, args, command="run", robot=snake.robot, backend=snake.backend,
+            rate_hz=args.rate,
+            gait={"gait": gait_facts(gait_name, gait, {}), "duration_s": args.duration},
         )
+        log = telemetry.log
         stack.enter_context(sigterm_as_interrupt())
-        stack.enter_context(backend)
-        hooks = _cycle_hooks(stack, backend, args, plan)
-        result = run_gait(
-            backend, gait, safety, plan, metrics, log=log, on_cycle=_chain(hooks) if hooks else None
-        )
-    summary = {"robot": robot.name, "gait": gait_name, "backend": args.backend, **result.summary}
-    if isinstance(robot, BodyConfig):
-        summary.update(backend.stats.extra)
-    if args.log:
-        summary["log"] = str(args.log)
-    if args.video:
-        summary["video"] = str(args.video)
+        with flag_errors(BACKEND_OPTIONS):
+            stack.enter_context(snake)
+        hooks = _cycle_hooks(stack, snake.backend, args)
+        with flag_errors(BACKEND_OPTIONS, {"rate_hz": "--rate"}):
+            summary = snake.run(
+                gait,
+                duration_s=args.duration,
+                rate_hz=args.rate,
+                log=log,
+                on_cycle=_chain(hooks) if hooks else None,
+            )
+    summary = replace(
+        summary,
+        gait=gait_name,
+        video=str(args.video) if args.video else None,
+        log=str(args.log) if args.log else None,
+        extra={**summary.extra, **telemetry.summary},
+    )
     if args.json:
-        print_json(summary)
+        print_json(summary.to_dict())
     else:
-        print_summary(summary, result)
-    return 130 if result.interrupted else 0
+        print_summary(summary)
+    return 130 if summary.interrupted else 0
 
 
 def _cycle_hooks(
-    stack: contextlib.ExitStack, backend: Backend, args: argparse.Namespace, plan: RunPlan
+    stack: contextlib.ExitStack, backend: Backend, args: argparse.Namespace
 ) -> list[Any]:
     hooks: list[Any] = []
-    from snakebot.backends.softbody import SoftBodyBackend
-    from snakebot.backends.twin import TwinBackend
-
-    if isinstance(backend, TwinBackend | SoftBodyBackend) and args.video:
-        hooks.append(stack.enter_context(VideoOutput(backend, args.video, plan.rate_hz)))
-    if isinstance(backend, TwinBackend | SoftBodyBackend) and args.viewer:
+    if (args.video or args.viewer) and not _simulated(backend):
+        raise ConfigError(
+            "--video" if args.video else "--viewer",
+            "",
+            f"{type(backend).__name__} has no MuJoCo model to render",
+        )
+    if args.video:
+        hooks.append(stack.enter_context(VideoOutput(backend, args.video, args.rate)))
+    if args.viewer:
         from snakebot.backends.twin.viewer import PassiveViewer
 
-        hooks.append(stack.enter_context(PassiveViewer(backend)))
-    if not args.json and sys.stderr.isatty() and plan.duration_s >= 5:
-        hooks.append(ProgressLine(plan))
+        hooks.append(stack.enter_context(PassiveViewer(cast(Any, backend))))
+    if not args.json and sys.stderr.isatty() and (args.duration >= 5 or args.video):
+        hooks.append(ProgressLine(args.duration))
     return hooks
+
+
+def _simulated(backend: Backend) -> bool:
+    import mujoco
+
+    return isinstance(getattr(backend, "model", None), mujoco.MjModel) and isinstance(
+        getattr(backend, "data", None), mujoco.MjData
+    )
 
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".webm", ".avi")
@@ -247,6 +279,8 @@ class VideoOutput:
         from snakebot.backends.twin.video import VideoRecorder
 
         self.path = path
+        platform = os.environ.get("MUJOCO_GL") or "the default OpenGL platform"
+        print(f"snakebot: rendering {path} offscreen ({platform})", file=sys.stderr, flush=True)
         with self._failures("cannot record the video"):
             self._recorder = VideoRecorder(backend, path, rate_hz)
 
@@ -261,7 +295,8 @@ class VideoOutput:
         except mujoco.FatalError as exc:
             raise OutputError(
                 self.path, f"{what}: no offscreen rendering ({exc}); on a machine without a "
-                "display set MUJOCO_GL=egl (or osmesa)"
+                "display install Mesa's EGL (libegl1) or OSMesa (libosmesa6), or set "
+                "MUJOCO_GL=egl (or osmesa) before anything imports mujoco"
             ) from exc
 
     def __call__(self, cycle: int, gait_time_s: float) -> None:
@@ -275,6 +310,7 @@ class VideoOutput:
     def __exit__(self, *exc_info: object) -> None:
         with self._failures("cannot finish the video"):
             self._recorder.__exit__(None, None, None)
+        print(f"snakebot: wrote {self._recorder.frames} frames to {self.path}", file=sys.stderr)
 
 
 def _chain(hooks: list[Any]) -> Any:
@@ -288,8 +324,8 @@ def _chain(hooks: list[Any]) -> Any:
 class ProgressLine:
     """A one-line progress display on stderr, refreshed a few times a second."""
 
-    def __init__(self, plan: RunPlan) -> None:
-        self.plan = plan
+    def __init__(self, duration_s: float) -> None:
+        self.duration_s = duration_s
         self._next = 0.0
 
     def __call__(self, cycle: int, gait_time_s: float) -> None:
@@ -298,16 +334,17 @@ class ProgressLine:
         if now < self._next:
             return
         self._next = now + 0.25
-        fraction = min(gait_time_s / self.plan.duration_s, 1.0)
+        fraction = min(gait_time_s / self.duration_s, 1.0)
         bar = "#" * int(fraction * 30)
-        sys.stderr.write(f"\r  [{bar:<30}] {gait_time_s:6.1f}/{self.plan.duration_s:g} s")
+        sys.stderr.write(f"\r  [{bar:<30}] {gait_time_s:6.1f}/{self.duration_s:g} s")
         if fraction >= 1.0:
             sys.stderr.write("\n")
         sys.stderr.flush()
 
 
-def print_summary(summary: dict[str, object], result: RunResult) -> None:
+def print_summary(run: RunSummary) -> None:
     """A readable summary of a run."""
+    summary = run.to_dict()
 
     def fmt(key: str, unit: str = "", digits: int = 3) -> str:
         value = summary.get(key)
@@ -319,7 +356,7 @@ def print_summary(summary: dict[str, object], result: RunResult) -> None:
 
     lines = [
         f"{summary['robot']} / {summary['gait']} on {summary['backend']}"
-        + ("  (interrupted: ramped out early)" if result.interrupted else ""),
+        + ("  (interrupted: ramped out early)" if run.interrupted else ""),
         f"  time         {fmt('duration_s', ' s', 2)}, {fmt('control_cycles')} control cycles at "
         f"{fmt('achieved_rate_hz', ' Hz', 1)} ({fmt('overruns')} overruns)",
         f"  distance     {fmt('distance_m', ' m')} at heading {fmt('heading_deg', ' deg', 1)} "
@@ -330,8 +367,25 @@ def print_summary(summary: dict[str, object], result: RunResult) -> None:
         f"{fmt('max_abs_command_rad', ' rad')}",
         f"  efficiency   cost of transport {fmt('cost_of_transport')}",
     ]
+    physics = summary.get("physics")
+    if isinstance(physics, dict):
+        lines.append(physics_line(physics))
     if "log" in summary:
-        lines.append(f"  log          {summary['log']} ({result.log_rows} rows)")
+        lines.append(f"  log          {summary['log']} ({run.log_rows} rows)")
     if "video" in summary:
         lines.append(f"  video        {summary['video']}")
     print("\n".join(lines))
+    if isinstance(physics, dict):
+        for warning in physics.get("warnings", []):
+            print(f"warning: physics: {warning} (docs/physics.md)", file=sys.stderr)
+
+
+def physics_line(physics: dict[str, object]) -> str:
+    """One summary line of the twin's physics health."""
+    return (
+        f"  physics      penetration {physics['max_floor_penetration_mm']:.1f} mm floor, "
+        f"{physics['max_self_penetration_mm']:.1f} mm self; airborne "
+        f"{physics['airborne_fraction']:.0%}, upside down {physics['upside_down_fraction']:.0%}, "
+        f"chatter {physics['chatter']:.0%}, stall {physics['longest_stall_s']:.1f} s, "
+        f"{len(physics['warnings'])} warnings"  # type: ignore[arg-type]
+    )

@@ -12,23 +12,35 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from snakebot.cli.common import print_json
+from snakebot.cli.common import baud_arg, port_arg, print_json
 from snakebot.config.loader import BAUD_RATES
-from snakebot.errors import BusError, SnakebotError
+from snakebot.errors import BusError, SnakebotError, UsageError
 
 if TYPE_CHECKING:
     from snakebot.setup.scan import ScanEntry, ScanReport
 
 # The SDK's PortHandler accepts these (4.5 Mbps needs a custom handler).
 SCAN_BAUDS = tuple(b for b in BAUD_RATES if b <= 4_000_000)
+DEFAULT_BAUD = 1_000_000
 
 
 def add_parser(subparsers: Any) -> None:
     """Register the ``scan`` command."""
     parser = subparsers.add_parser("scan", help="list the servos that answer on a port")
-    parser.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    parser.add_argument(
+        "--robot",
+        help="a robot name or file whose bus.port and bus.baud fill in --port and --baud "
+        "(optional: scan reads, it moves and writes nothing)",
+    )
+    parser.add_argument(
+        "--port", type=port_arg,
+        help="serial port, e.g. /dev/ttyUSB0 or COM3 (default: the robot's bus.port)",
+    )
     bauds = parser.add_mutually_exclusive_group()
-    bauds.add_argument("--baud", type=int, default=1_000_000, help="baud rate (default 1000000)")
+    bauds.add_argument(
+        "--baud", type=baud_arg,
+        help=f"baud rate (default: the robot's bus.baud, else {DEFAULT_BAUD})",
+    )
     bauds.add_argument(
         "--all-bauds",
         action="store_true",
@@ -36,7 +48,7 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--protocol", type=float, default=2.0, choices=(2.0,), help="protocol")
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=False)
 
 
 def model_name(model_number: int) -> str:
@@ -54,6 +66,16 @@ def run(args: argparse.Namespace) -> int:
     from snakebot.setup.link import Link
     from snakebot.setup.scan import scan
 
+    if args.robot is not None:
+        from snakebot.config import load_robot
+
+        bus = load_robot(args.robot).bus
+        args.port = args.port or bus.port
+        args.baud = args.baud or bus.baud
+    if args.port is None:
+        raise UsageError("name the serial port with --port (`snakebot ports` lists them), or "
+                         "--robot NAME to use its bus.port")
+    args.baud = args.baud or DEFAULT_BAUD
     bauds = SCAN_BAUDS if args.all_bauds else (args.baud,)
     start = time.monotonic()
     with Link(args.port, bauds[0]) as link:

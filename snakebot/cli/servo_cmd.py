@@ -7,10 +7,18 @@ import sys
 from typing import Any
 
 from snakebot.backends.dynamixel.faults import decode_hardware_error
-from snakebot.cli.common import add_robot_option, port_arg, print_json, robot_name
+from snakebot.cli.common import (
+    add_bus_options,
+    add_dry_run,
+    add_robot_option,
+    print_json,
+    report_dry_run,
+    robot_name,
+)
 from snakebot.cli.config_cmd import servo_id_arg
 from snakebot.config import load_robot
-from snakebot.errors import BusError
+from snakebot.errors import BusError, UsageError
+from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
 from snakebot.setup.console import confirm
@@ -28,7 +36,9 @@ def add_parser(subparsers: Any) -> None:
     which.add_argument("--id", type=servo_id_arg, help="the servo to reboot")
     which.add_argument("--all", action="store_true", help="every servo that answers")
     boot.add_argument("--yes", action="store_true", help="do not ask when a servo holds torque")
-    boot.set_defaults(handler=run_reboot)
+    add_dry_run(boot, "no servo reboots")
+    boot.add_argument("--json", action="store_true", help="print one JSON object")
+    boot.set_defaults(handler=run_reboot, writes=True)
 
     reset = actions.add_parser("reset", help="factory-reset one servo (erases its settings)")
     _port(reset)
@@ -36,20 +46,20 @@ def add_parser(subparsers: Any) -> None:
     reset.add_argument("--keep-id", action="store_true", help="keep its ID")
     reset.add_argument("--keep-baud", action="store_true", help="keep its baud (needs --keep-id)")
     reset.add_argument("--yes", action="store_true", help="required: confirms the erase")
-    reset.set_defaults(handler=run_reset)
+    add_dry_run(reset, "the servo keeps its settings")
+    reset.add_argument("--json", action="store_true", help="print one JSON object")
+    reset.set_defaults(handler=run_reset, writes=True)
 
     info = actions.add_parser("info", help="model, firmware, errors and the whole control table")
     _port(info)
     info.add_argument("--id", type=servo_id_arg, required=True, help="the servo to read")
     info.add_argument("--json", action="store_true", help="print one JSON object")
-    info.set_defaults(handler=run_info)
+    info.set_defaults(handler=run_info, writes=False)
 
 
 def _port(parser: argparse.ArgumentParser) -> None:
     add_robot_option(parser, hardware="always")
-    parser.add_argument("--port", type=port_arg, help="serial port (default: the robot's bus.port)")
-    parser.add_argument("--baud", type=int,
-                        help="the rate the servo listens at (default: the robot's bus.baud)")
+    add_bus_options(parser)
 
 
 def _link(args: argparse.Namespace, what: str) -> Link:
@@ -70,11 +80,18 @@ def run_reboot(args: argparse.Namespace) -> int:
             raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
         before = {i: bus.read_block(i, ("torque_enable", "hardware_error_status")) for i in ids}
         holding = [i for i, v in before.items() if v["torque_enable"]]
+        if args.dry_run:
+            return report_dry_run(args, {
+                "port": args.port, "baud": args.baud, "reboot": ids, "holding_torque": holding,
+                "latched": {i: decode_hardware_error(v["hardware_error_status"])
+                            for i, v in before.items()},
+            })
         if holding:
             print(f"WARNING: servo(s) {', '.join(map(str, holding))} hold torque; a reboot turns "
                   "it off and the joints go limp", file=sys.stderr)
             confirm("Reboot anyway?", assume_yes=args.yes, what="servo reboot")
         stuck = []
+        rebooted = []
         for servo_id in ids:
             was = decode_hardware_error(before[servo_id]["hardware_error_status"])
             now = decode_hardware_error(reboot(link, servo_id, args.baud))
@@ -82,7 +99,11 @@ def run_reboot(args: argparse.Namespace) -> int:
             if now:
                 status = f"still latched: {', '.join(now)} (the cause persists)"
                 stuck.append(servo_id)
-            print(f"servo {servo_id}: rebooted; {status}")
+            rebooted.append({"id": servo_id, "was": list(was), "now": list(now)})
+            if not args.json:
+                print(f"servo {servo_id}: rebooted; {status}")
+    if args.json:
+        print_json({"port": args.port, "baud": args.baud, "servos": rebooted, "stuck": stuck})
     if stuck:
         print(f"snakebot: servo(s) {', '.join(map(str, stuck))} latch their error again: remove "
               "the cause (voltage, heat, a jammed joint) and reboot again", file=sys.stderr)
@@ -92,23 +113,36 @@ def run_reboot(args: argparse.Namespace) -> int:
 
 def run_reset(args: argparse.Namespace) -> int:
     """Factory-reset one servo after checking it will not collide with another."""
+    if args.keep_baud and not args.keep_id:
+        raise UsageError("the firmware keeps the baud rate only together with the ID (Factory "
+                         "Reset option 0x02): add --keep-id, or drop --keep-baud")
     link = _link(args, "reset")  # nothing opens before the with
-    if not args.yes:
+    if not args.yes and not args.dry_run:
         raise SetupError(f"servo reset erases every setting of servo {args.id}: add --yes")
     with link:
         if link.ping_clean(args.id, args.baud) is None:
             raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
                            f"scan --port {args.port} --all-bauds` shows where the servos are")
-        if not args.keep_id and (args.id, args.baud) != (1, 57600):
-            other = link.probe(1, 57600, tries=1)
+        if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, FACTORY_BAUD):
+            other = link.probe(FACTORY_ID, FACTORY_BAUD, tries=1)
             if other.models or other.corrupt:
                 raise SetupError(
-                    "after a reset without --keep-id the servo answers as ID 1 at 57600 baud, "
-                    "where another servo already answers: reset with --keep-id, or unplug it"
+                    f"after a reset without --keep-id the servo answers as ID {FACTORY_ID} at "
+                    f"{FACTORY_BAUD} baud, where another servo already answers: reset with "
+                    "--keep-id, or unplug it"
                 )
+        if args.dry_run:
+            return report_dry_run(args, {
+                "port": args.port, "id": args.id, "baud": args.baud,
+                "then_id": args.id if args.keep_id else FACTORY_ID,
+                "then_baud": args.baud if args.keep_baud else FACTORY_BAUD,
+            })
         new_id, new_baud = factory_reset(link, args.id, args.baud, keep_id=args.keep_id,
                                          keep_baud=args.keep_baud)
-    print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} baud")
+    if args.json:
+        print_json({"port": args.port, "id": args.id, "new_id": new_id, "new_baud": new_baud})
+    else:
+        print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} baud")
     return 0
 
 

@@ -3,33 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import math
 
 import mujoco
 
-from snakebot.backends.softbody import SoftBodyBackend, build_body_spec
+from snakebot.backends.softbody import build_body_spec
+from snakebot.backends.softbody.factory import parse_floor_friction as floor_friction
 from snakebot.backends.twin.cliff import Cliff, parse_terrain
 from snakebot.config.body import BodyConfig
-from snakebot.errors import ConfigError
 
 
 def parse_floor_friction(text: str, option: str = "--friction") -> float:
     """A body's floor friction: ``MU``, or ``MU,MU`` (the twin's AXIAL,LATERAL with both equal)."""
-    parts = [p.strip() for p in text.split(",")]
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        values = []
-    if not 1 <= len(values) <= 2 or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise ConfigError(option, "", f"expected one friction coefficient >= 0, got {text!r}")
-    if len(values) == 2 and values[0] != values[1]:
-        raise ConfigError(
-            option,
-            "",
-            f"a mass-spring body's floor is isotropic: give one number, got {text!r} "
-            "(forward/backward asymmetry is --directional on)",
-        )
-    return values[0]
+    return floor_friction(text, option)
 
 
 def softbody_options(
@@ -44,25 +29,7 @@ def softbody_options(
     return (
         friction,
         None if directional is None else directional == "on",
-        parse_terrain(terrain_text) if terrain_text else None,
-    )
-
-
-def make_softbody_backend(body: BodyConfig, args: argparse.Namespace) -> SoftBodyBackend:
-    """The soft-body twin of ``body`` as ``snakebot run`` options ask (sim backend only)."""
-    if getattr(args, "backend", "sim") != "sim":
-        raise ConfigError(
-            "--backend",
-            "",
-            f"{body.name} is a mass-spring body: it runs on the twin only (--backend sim)",
-        )
-    friction, directional, terrain = softbody_options(args)
-    return SoftBodyBackend(
-        body,
-        friction=friction,
-        directional=directional,
-        terrain=terrain,
-        realtime=bool(getattr(args, "realtime", False) or getattr(args, "viewer", False)),
+        parse_terrain(terrain_text, "--terrain") if terrain_text else None,
     )
 
 

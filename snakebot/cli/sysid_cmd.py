@@ -7,21 +7,34 @@ import contextlib
 from pathlib import Path
 from typing import Any
 
+from snakebot.cli.backend_options import (
+    add_backend_argument,
+    add_option_flags,
+    backend_spec,
+    flag_errors,
+    given_options,
+)
 from snakebot.cli.common import (
     add_robot_option,
+    add_write_back_options,
     check_folder,
     check_writable,
+    copy_for_write,
     finite_float,
-    port_arg,
+    not_written_note,
     positive_float,
     positive_int,
     print_json,
+    report_dry_run,
     robot_name,
+    robot_write_target,
     write_report,
 )
 from snakebot.config import load_robot
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
-from snakebot.errors import ConfigError
+from snakebot.errors import UsageError
+
+RECORD_BACKEND_OPTIONS = ("port", "baud")
 
 
 def add_parser(subparsers: Any) -> None:
@@ -30,29 +43,36 @@ def add_parser(subparsers: Any) -> None:
         "sysid",
         help="fit the twin's servo parameters (stiffness, damping, ...) to telemetry logs",
         description="Replays each log's commands on the twin and fits the servo parameters so "
-        "the twin's joints follow the log's, then writes them to the robot file's "
-        "[twin.servo]. With --record, first records a log: one joint held off the ground "
-        "(--hold) and chirped, the others still.",
+        "the twin's joints follow the log's, then writes them to [twin.servo] of "
+        "--robot FILE (or of a copy, --out FILE). With --record, first records a log: one "
+        "joint held off the ground (--hold) and chirped, the others still.",
     )
     add_robot_option(parser, hardware="with --record --backend dynamixel")
     parser.add_argument("logs", nargs="*", type=Path, metavar="LOG", help="telemetry CSV logs")
     parser.add_argument(
         "--params",
         default="stiffness,damping,armature",
-        help="parameters to fit, from stiffness,damping,armature,friction_loss,delay "
-        f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s)",
+        help="parameters to fit, from stiffness,damping,armature,friction_loss,delay,p_divisor "
+        f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s; p_divisor: "
+        "the P-gain divisor, 256 or 128, instead of stiffness)",
     )
     parser.add_argument("--workers", type=positive_int, default=2,
                         help="parallel replays (default 2)")
     parser.add_argument("--max-evaluations", type=positive_int, default=40, metavar="N")
-    parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
+    add_write_back_options(parser, "servo parameters")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     group = parser.add_argument_group("recording a log (--record)")
     group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
-    group.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    group.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
-    group.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_backend_argument(group)
+    add_option_flags(
+        group,
+        RECORD_BACKEND_OPTIONS,
+        helps={
+            "port": "serial port for --backend dynamixel",
+            "baud": "baud rate for --backend dynamixel",
+        },
+    )
     group.add_argument("--joint", type=int, default=1, help="joint to chirp (default 1)")
     group.add_argument(
         "--hold",
@@ -64,22 +84,31 @@ def add_parser(subparsers: Any) -> None:
     group.add_argument("--amplitude", type=positive_float, default=0.12, metavar="RAD")
     group.add_argument("--duration", type=positive_float, default=4.0, metavar="S")
     group.add_argument("--stop-hz", type=positive_float, default=6.0, metavar="HZ")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
     """Record a log, or fit the twin to logs and write the result."""
-    hardware = args.record is not None and args.backend == "dynamixel"
+    hardware = args.record is not None and backend_spec(args).hardware
     robot = load_robot(
-        robot_name(args, hardware=hardware, what="sysid --record --backend dynamixel")
+        robot_name(args, hardware=hardware, what=f"sysid --record --backend {args.backend}")
     )
     if args.record is not None:
         check_writable(args.record, "log")
+        if args.dry_run:
+            return report_dry_run(args, {
+                "robot": robot.name, "backend": args.backend, "record": args.record,
+                "joint": args.joint, "hold_rad": args.hold, "amplitude_rad": args.amplitude,
+                "duration_s": args.duration,
+            })
         return _record(robot, args)
     if args.report is not None:
         check_folder(args.report, "report")
+    if args.out is not None:
+        check_writable(args.out, "robot file")
+    target = robot_write_target(args, robot.source, "the servo parameters")
     if not args.logs:
-        raise ConfigError("LOG", "", "give one or more telemetry logs, or --record LOG")
+        raise UsageError("give one or more telemetry logs (LOG ...), or --record LOG")
     from snakebot.tuning.config_edit import set_table_values
     from snakebot.tuning.sysid import FIELDS, fit_servo, load_log
 
@@ -102,11 +131,15 @@ def run(args: argparse.Namespace) -> int:
         "tracking_rms_after_rad": result.rms_after_rad,
         "replays": result.simulations,
     }
-    if not args.no_write and result.rms_after_rad < result.rms_before_rad:
-        values = {FIELDS[n]: float(getattr(result.after, FIELDS[n])) for n in result.names}
-        set_table_values(robot.source, "twin.servo", values)
-        summary["written_to"] = f"{robot.source} [twin.servo]"
-    if args.report is not None:
+    if result.rms_after_rad < result.rms_before_rad:
+        if target is not None:
+            values = {FIELDS[n]: float(getattr(result.after, FIELDS[n])) for n in result.names}
+            copy_for_write(robot.source, target)
+            set_table_values(target, "twin.servo", values)
+            summary["written_to"] = f"{target} [twin.servo]"
+        else:
+            summary["not_written"] = not_written_note(args, "the servo parameters")
+    if args.report is not None and not args.dry_run:
         from snakebot.tuning.plots import sysid_plots
 
         write_report(args.report, summary, lambda directory: sysid_plots(result, logs, directory))
@@ -119,11 +152,11 @@ def run(args: argparse.Namespace) -> int:
     )
     for key, value in summary["after"].items():
         print(f"  {key:<22} {summary['before'][key]:.6g} -> {value:.6g}")
-    print(
-        f"  written to {summary['written_to']}"
-        if "written_to" in summary
-        else "  robot file unchanged"
-    )
+    if "written_to" in summary:
+        print(f"  written to {summary['written_to']}")
+    else:
+        note = summary.get("not_written")
+        print(f"  robot file unchanged: {note}" if note else "  robot file unchanged")
     return 0
 
 
@@ -131,14 +164,10 @@ def _record(robot: Any, args: argparse.Namespace) -> int:
     from snakebot.tuning.excitation import chirp_plan, record
 
     with contextlib.ExitStack() as stack:
-        if args.backend == "sim":
-            from snakebot.backends.twin import TwinBackend
-
-            backend: Any = stack.enter_context(TwinBackend(robot))
-        else:
-            from snakebot.backends.dynamixel import DynamixelBackend
-
-            backend = stack.enter_context(DynamixelBackend(robot, port=args.port, baud=args.baud))
+        spec = backend_spec(args)
+        with flag_errors(RECORD_BACKEND_OPTIONS):
+            options = given_options(args, spec, RECORD_BACKEND_OPTIONS)
+            backend: Any = stack.enter_context(spec.make(robot, **options))
         start = backend.read_state().position_rad
         commands = chirp_plan(
             robot,

@@ -9,18 +9,29 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from snakebot.cli.backend_options import (
+    add_backend_argument,
+    add_option_flags,
+    backend_spec,
+    flag_errors,
+    given_options,
+)
 from snakebot.cli.common import (
     RATE_HZ,
     add_robot_option,
+    add_write_back_options,
     bounded_float,
     check_folder,
     check_writable,
+    copy_for_write,
     finite_float,
-    port_arg,
+    gait_arg,
+    not_written_note,
     positive_float,
     positive_int,
     print_json,
     robot_name,
+    robot_write_target,
     write_report,
 )
 from snakebot.config import RobotConfig, load_robot
@@ -55,7 +66,9 @@ def _add_gait_parser(commands: Any) -> None:
         "ground are penalised so the best gait is playable on the robot.",
     )
     add_robot_option(parser)
-    parser.add_argument("--gait", default="serpenoid", help="gait to tune (default serpenoid)")
+    parser.add_argument(
+        "--gait", type=gait_arg, default="serpenoid", help="gait to tune (default serpenoid)"
+    )
     parser.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE", help="fix a gait parameter"
     )
@@ -117,6 +130,10 @@ def _add_gait_parser(commands: Any) -> None:
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    parser.add_argument(
+        "--dry-run", action="store_true", help="tune and report, but write no --out or --report"
+    )
+    parser.set_defaults(writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -173,10 +190,12 @@ def run_gait(args: argparse.Namespace) -> int:
     if bar is not None:
         bar.finish()
     summary = result.summary()
-    if args.out is not None and result.best.feasible:
+    if args.dry_run:
+        summary["not_written"] = "dry run: no gait file or report written"
+    elif args.out is not None and result.best.feasible:
         save_best_gait(result, args.out)
         summary["gait_file"] = str(args.out)
-    if args.report is not None:
+    if args.report is not None and not args.dry_run:
         from snakebot.tuning.plots import gait_plots
 
         write_report(args.report, summary, lambda directory: gait_plots(result, directory))
@@ -203,7 +222,10 @@ def _friction(robot: RobotConfig | BodyConfig, text: str | None) -> GroundFricti
 
         mu = parse_floor_friction(text)
         return GroundFriction(mu, mu)
-    return GroundFriction.parse(text)
+    return GroundFriction.parse(text, "--friction")
+
+
+GAIN_BACKEND_OPTIONS = ("port", "baud")
 
 
 def _add_gains_parser(commands: Any) -> None:
@@ -213,15 +235,24 @@ def _add_gains_parser(commands: Any) -> None:
         description="Each candidate: one small step per tested joint while the others hold, "
         "then the reference gait. Keeps the candidate with the lowest gait tracking error "
         "whose steps overshoot at most --max-overshoot and settle, and whose gait never holds "
-        "a joint at its torque limit for long; writes it to the robot file's [gains].",
+        "a joint at its torque limit for long; writes it to the robot file's [gains] when "
+        "--robot names a file (or to a copy with --out).",
     )
     add_robot_option(parser, hardware="with --backend dynamixel")
-    parser.add_argument("--backend", choices=("sim", "dynamixel"), default="sim")
-    parser.add_argument("--port", type=port_arg, help="serial port for --backend dynamixel")
-    parser.add_argument("--baud", type=int, help="baud rate for --backend dynamixel")
+    add_backend_argument(parser)
+    add_option_flags(
+        parser,
+        GAIN_BACKEND_OPTIONS,
+        helps={
+            "port": "serial port for --backend dynamixel",
+            "baud": "baud rate for --backend dynamixel",
+        },
+    )
     parser.add_argument("--joints", help="joint indices to step-test, e.g. 0,3 (default all)")
     parser.add_argument(
-        "--gait", help="reference gait (default: sidewinding with pitch joints, else serpenoid)"
+        "--gait",
+        type=gait_arg,
+        help="reference gait (default: sidewinding with pitch joints, else serpenoid)",
     )
     parser.add_argument("--gait-duration", type=positive_float, default=6.0, metavar="S")
     parser.add_argument(
@@ -240,9 +271,10 @@ def _add_gains_parser(commands: Any) -> None:
         "the current one; the twin has no I term)",
     )
     parser.add_argument("--no-chirp", action="store_true", help="skip the chirp measurements")
-    parser.add_argument("--no-write", action="store_true", help="do not edit the robot file")
+    add_write_back_options(parser, "gains")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.set_defaults(writes=True)
 
 
 def run_gains(args: argparse.Namespace) -> int:
@@ -251,9 +283,14 @@ def run_gains(args: argparse.Namespace) -> int:
     from snakebot.tuning.gains import GainTest
     from snakebot.tuning.progress import gain_line, gains_summary_text
 
-    hardware = args.backend == "dynamixel"
-    robot = load_robot(robot_name(args, hardware=hardware, what="tune gains --backend dynamixel"))
+    spec = backend_spec(args)
+    hardware = spec.hardware
+    robot = load_robot(
+        robot_name(args, hardware=hardware, what=f"tune gains --backend {args.backend}")
+    )
+    given_options(args, spec, GAIN_BACKEND_OPTIONS)
     _check_outputs(args)
+    target = robot_write_target(args, robot.source, "the gains")
     joints = tuple(range(robot.joint_count))
     if args.joints:
         joints = tuple(_indices("--joints", args.joints, robot.joint_count))
@@ -290,9 +327,12 @@ def run_gains(args: argparse.Namespace) -> int:
             listener=progress,
         )
     summary = result.summary(robot, test)
-    if result.improved and not args.no_write:
-        summary["written_to"] = str(write_gains(robot, result.best.gains))
-    if args.report is not None:
+    if result.improved and target is not None:
+        copy_for_write(robot.source, target)
+        summary["written_to"] = str(write_gains(robot, result.best.gains, path=target))
+    elif result.improved:
+        summary["not_written"] = not_written_note(args, "the gains")
+    if args.report is not None and not args.dry_run:
         from snakebot.tuning.plots import gain_plots
 
         write_report(args.report, summary, lambda directory: gain_plots(result, test, directory))
@@ -304,14 +344,17 @@ def run_gains(args: argparse.Namespace) -> int:
 
 
 def _gain_session(robot: Any, args: argparse.Namespace, stack: contextlib.ExitStack) -> Any:
-    if args.backend == "sim":
-        from snakebot.backends.twin import TwinBackend
-
-        return lambda: TwinBackend(robot)
-    from snakebot.backends.dynamixel import DynamixelBackend
+    """Fresh simulated backends per candidate; one connection held throughout on hardware."""
+    spec = backend_spec(args)
+    options = given_options(args, spec, GAIN_BACKEND_OPTIONS)
+    if not spec.hardware:
+        with flag_errors(GAIN_BACKEND_OPTIONS):
+            spec.make(robot, **options)  # a bad option fails now, not in the first candidate
+        return lambda: spec.make(robot, **options)
     from snakebot.tuning.gains import held
 
-    backend = stack.enter_context(DynamixelBackend(robot, port=args.port, baud=args.baud))
+    with flag_errors(GAIN_BACKEND_OPTIONS):
+        backend = stack.enter_context(spec.make(robot, **options))
     return lambda: held(backend)
 
 
@@ -329,6 +372,6 @@ def _indices(option: str, text: str, count: int) -> list[int]:
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse an unwritable --out or --report before any tuning (which takes minutes)."""
     if getattr(args, "out", None) is not None:
-        check_writable(args.out, "gait file")
+        check_writable(args.out, "gait file" if args.tune_command == "gait" else "robot file")
     if args.report is not None:
         check_folder(args.report, "report")

@@ -15,7 +15,7 @@ from typing import Literal
 
 import numpy as np
 
-from snakebot.backends.base import StopPolicy
+from snakebot.types import StopPolicy
 
 ChannelAxis = Literal["yaw", "pitch", "axial"]
 CHANNEL_AXES: tuple[ChannelAxis, ...] = ("yaw", "pitch", "axial")

@@ -41,19 +41,19 @@ def _number(value: float) -> str:
     return str(int(value)) if float(value).is_integer() else f"{value:g}"
 
 
-GAIN = Bounds(0, 16383, "", "the Position P/I/D Gain registers' range (servo units)")
 FRICTION = Bounds(0, 10, "", "Coulomb coefficient; rubber on rough ground is about 1 to 2")
 SERVO_DAMPING = Bounds(0, 10, "N·m·s/rad", "a desk servo's is 0.001 to 1")
 ARMATURE = Bounds(0, 1, "kg·m²", "reflected rotor inertia; an XM430's is 0.045")
 FRICTION_LOSS = Bounds(0, 10, "N·m", "dry friction at the joint; an XM430's is 0.03")
+# One range for the P divisor, in the servo file and in a robot's [twin.servo] override alike.
+P_GAIN_DIVISOR = Bounds(
+    1, 1e6, "", "Position P Gain units per unit of duty per tick (256 on X series)"
+)
 
 ROBOT: dict[str, Bounds] = {
     "link.length_m": Bounds(0.01, 1.0, "m", "joint-to-joint pitch of one module"),
     "link.radius_m": Bounds(0.001, 0.25, "m", "capsule radius; also 2 × radius_m < length_m"),
     "link.mass_kg": Bounds(0.001, 20, "kg", "one module: servo, bracket and screws"),
-    "gains.position_p": GAIN,
-    "gains.position_i": GAIN,
-    "gains.position_d": GAIN,
     "safety.ramp_s": Bounds(0, 30, "s", "amplitude ramp at start and stop; 0 switches it off"),
     "safety.max_speed_fraction": Bounds(
         0, 1, "", "of the servo's no-load speed at the supply voltage", low_open=True
@@ -68,6 +68,7 @@ ROBOT: dict[str, Bounds] = {
     "twin.servo.actuator_delay_s": Bounds(
         0, MAX_ACTUATOR_DELAY_S, "s", "command to action; a Dynamixel chain's is a few ms"
     ),
+    "twin.servo.p_gain_divisor": P_GAIN_DIVISOR,
     "joints[].servo_id": Bounds(0, 252, "", "Dynamixel IDs (253 and up are reserved)"),
     "joints[].zero_offset_rad": Bounds(-math.pi, math.pi, "rad", "calibration offset"),
     "joints[].lower_rad": Bounds(-math.pi, 0, "rad", "joint limit; also lower_rad < upper_rad"),
@@ -76,23 +77,17 @@ ROBOT: dict[str, Bounds] = {
 """Robot-file keys (``joints[]`` also covers ``[joint_defaults]``) and their ranges."""
 
 SERVO: dict[str, Bounds] = {
-    "model_number": Bounds(0, 65535, "", "the Model Number register; must match the model's"),
-    "physics.stall_torque_nm": Bounds(0.01, 100, "N·m", "0.5 (XL330) to 44 (PRO H54) N·m"),
-    "physics.no_load_speed_rad_s": Bounds(0.1, 100, "rad/s", "an X-series servo's is 3 to 11"),
-    "physics.nominal_voltage_v": Bounds(1, 60, "V", "the datasheet's supply voltage"),
     "physics.supply_voltage_v": Bounds(1, 60, "V", "what the power supply gives"),
     "physics.armature_kgm2": ARMATURE,
     "physics.friction_loss_nm": FRICTION_LOSS,
     "physics.viscous_damping_nms": SERVO_DAMPING,
-    "physics.ticks_per_rev": Bounds(
-        16, 2**21, "", "encoder ticks per turn; must match the control table's resolution"
-    ),
     "physics.pwm_limit": Bounds(1, 2009, "", "PWM full scale (885 on X series); at most the "
                                 "PWM Limit register's maximum"),
     "physics.d_gain_loop_period_s": Bounds(1e-5, 0.1, "s", "the firmware's D-term period"),
-    "default_gains.position_p": GAIN,
-    "default_gains.position_i": GAIN,
-    "default_gains.position_d": GAIN,
+    "physics.p_gain_divisor": P_GAIN_DIVISOR,
+    "physics.d_gain_divisor": Bounds(
+        1, 1e6, "", "Position D Gain units per unit of duty per tick per loop period (32)"
+    ),
 }
 """Servo-file (``servos/<model>.toml``) keys and their ranges."""
 

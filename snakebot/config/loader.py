@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from snakebot.config import bounds
+from snakebot.config import bounds, paths
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.ports import check_port
 from snakebot.config.schema import (
@@ -27,6 +26,7 @@ from snakebot.config.servo_file import (
     servo_table,
 )
 from snakebot.config.servo_settings import parse_settings
+from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable
 
@@ -38,17 +38,15 @@ BAUD_RATES = (9600, 57600, 115200, 1_000_000, 2_000_000, 3_000_000, 4_000_000, 4
 def config_search_path() -> list[Path]:
     """Folders searched for ``robots/<name>.toml``, first match wins.
 
-    ``$SNAKEBOT_CONFIG_PATH`` (os.pathsep-separated), then ``./firmware_configs``, then the
-    ``firmware_configs/`` of the source tree snakebot was installed from.
+    ``$SNAKEBOT_CONFIG_PATH`` (os.pathsep-separated), ``./firmware_configs``, the user's config
+    directory, then the robots shipped with snakebot (snakebot.config.paths says where).
     """
-    paths = [Path(p) for p in os.environ.get("SNAKEBOT_CONFIG_PATH", "").split(os.pathsep) if p]
-    paths.append(Path.cwd() / "firmware_configs")
-    paths.append(Path(__file__).resolve().parents[2] / "firmware_configs")
-    return paths
+    return [folder.path for folder in paths.config_search_path()]
 
 
 def robot_names() -> list[str]:
-    """Names of the robots found on the search path."""
+    """Names (file stems, sorted, each once) of the robots in ``robots/`` of every folder on the
+    search path; a name in two folders resolves to the first (``snakebot robots`` shows both)."""
     names: set[str] = set()
     for folder in config_search_path():
         names.update(p.stem for p in (folder / "robots").glob("*.toml"))
@@ -56,7 +54,9 @@ def robot_names() -> list[str]:
 
 
 def resolve_robot_path(name_or_path: str | Path) -> Path:
-    """A robot file from a path, or a name looked up on the search path."""
+    """A robot file from a path (``.toml`` or an existing path), or a name looked up on the
+    search path, first match wins. ConfigError naming the path ("robot file not found") or the
+    name (listing the known robots) when there is none."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
         if not candidate.is_file():
@@ -73,13 +73,19 @@ def resolve_robot_path(name_or_path: str | Path) -> Path:
 
 
 def load_servo_model(model: str, robot_path: Path) -> ServoModel:
-    """Read ``servos/<model>.toml`` beside the robot's folder (or on the search path)."""
+    """Read ``servos/<model>.toml`` beside the robot's folder, else the first on the search
+    path; ConfigError naming ``robot_path`` and its ``servo`` key if there is none, or naming the
+    servo file and key of its first invalid value."""
     folders = [robot_path.resolve().parent.parent, *config_search_path()]
     return parse_servo_file(find_servo_file(model, folders, robot_path))
 
 
 def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
-    """``[twin.servo]``: servo parameters fitted by ``snakebot sysid``; the twin uses them."""
+    """``[twin.servo]``: servo parameters fitted by ``snakebot sysid``; the twin uses them.
+
+    ``p_gain_divisor`` overrides the servo file's, so it changes the servo's gain mapping: the
+    robot's register gains mean other SI gains, on the twin and on the bus alike.
+    """
     physics = servo.physics
 
     def number(key: str, default: float | None) -> float:
@@ -94,6 +100,8 @@ def _with_servo_fit(servo: ServoModel, table: Table) -> ServoModel:
         actuator_delay_s=(
             number("actuator_delay_s", None) if table.has("actuator_delay_s") else None
         ),
+        p_gain_divisor=number("p_gain_divisor", physics.p_gain_divisor),
+        extras=read_servo_extras(table, physics.extras),
     )
     table.done()
     return replace(servo, physics=fitted)
@@ -144,7 +152,22 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     link_t.done()
 
     joints = _parse_joints(root, control_table)
-    gains = parse_gains(root.table("gains")) if root.has("gains") else servo.default_gains
+
+    twin_t = root.table("twin", required=False)
+    twin = TwinConfig(
+        timestep_s=number(twin_t, "timestep_s", 0.002),
+        ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
+        axial_friction=number(twin_t, "axial_friction", 1.0),
+        lateral_friction=number(twin_t, "lateral_friction", 1.0),
+    )
+    # Before [gains]: a fitted p_gain_divisor changes what the gain registers mean.
+    servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
+    twin_t.done()
+
+    if root.has("gains"):
+        gains, position_i = parse_gains(root.table("gains"), servo)
+    else:
+        gains, position_i = servo.gains_of(servo.default_gains), servo.default_gains.position_i
     root.mark_read("gains")
 
     safety_t = root.table("safety", required=False)
@@ -154,22 +177,12 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         stop_policy=safety_t.text("stop_policy", "hold", choices=("hold", "limp")),  # type: ignore[arg-type]
     )
     safety_t.done()
-
-    twin_t = root.table("twin", required=False)
-    twin = TwinConfig(
-        timestep_s=number(twin_t, "timestep_s", 0.002),
-        ground=twin_t.text("ground", "isotropic", choices=("anisotropic", "isotropic")),  # type: ignore[arg-type]
-        axial_friction=number(twin_t, "axial_friction", 1.0),
-        lateral_friction=number(twin_t, "lateral_friction", 1.0),
-    )
-    servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
-    twin_t.done()
     # Servo settings for the whole chain; merged per servo and checked against the backend's
     # connect checks by snakebot.setup (config diff/apply, calibrate).
     parse_settings(path, "settings", root.data.get("settings", {}), control_table)
     root.mark_read("settings")
     root.done()
-    return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin)
+    return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin, position_i)
 
 
 def _joint_fields(table: Table) -> dict[str, Any]:

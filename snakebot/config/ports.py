@@ -20,7 +20,7 @@ from pathlib import Path
 from snakebot.errors import ConfigError
 
 EMULATOR_SCHEME = "dxlemu"
-"""snakebot.emulation.registry.SCHEME (config sits below emulation and may not import it)."""
+"""The URL scheme of the in-process emulator; snakebot.emulation.registry takes it from here."""
 
 DEVICE_EXAMPLES = "a serial device such as /dev/ttyUSB0, /dev/tty.usbserial-XXXX or COM3"
 

@@ -8,7 +8,9 @@ from typing import Literal
 
 import numpy as np
 
-from snakebot.backends.base import ServoGains, StopPolicy
+from snakebot.config.servo_extras import NO_EXTRAS, ServoExtras
+from snakebot.servo import GainMapping
+from snakebot.types import PDGains, StopPolicy
 
 Axis = Literal["yaw", "pitch"]
 GroundModel = Literal["anisotropic", "isotropic"]
@@ -23,10 +25,16 @@ class ServoPhysics:
     """Electromechanical facts of one servo model (datasheet values, see the servo file).
 
     ``stall_torque_nm`` and ``no_load_speed_rad_s`` are at ``nominal_voltage_v``; the twin scales
-    them to ``supply_voltage_v``. ``stiffness_scale``, ``damping_nms`` (joint damping with
-    torque on, replacing back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command
-    leaving the controller to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no
-    delay model) come from a robot's ``[twin.servo]`` (sysid).
+    them to ``supply_voltage_v``. Those, ``ticks_per_rev`` and the model number come from the
+    control-table data; ``p_gain_divisor``/``d_gain_divisor`` (the Position P/D Gain registers'
+    meaning, snakebot.servo.gains) and the rest from the servo file. ``stiffness_scale`` (the
+    twin's factor on the SI stiffness), ``damping_nms`` (joint damping with torque on, replacing
+    back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command leaving the controller
+    to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no delay model) come from a
+    robot's ``[twin.servo]`` (sysid), which may also override ``p_gain_divisor`` (then the
+    robot's register gains are converted with the overridden divisor, for the twin and the bus
+    alike). ``extras`` (electrics, overload, encoder and IMU noise) come from the servo file's
+    ``[twin]``, overridden by the robot's ``[twin.servo]``.
     """
 
     stall_torque_nm: float
@@ -39,20 +47,61 @@ class ServoPhysics:
     ticks_per_rev: int
     pwm_limit: int
     d_gain_loop_period_s: float
+    p_gain_divisor: float
+    d_gain_divisor: float
     stiffness_scale: float = 1.0
     damping_nms: float | None = None
     actuator_delay_s: float | None = None
+    extras: ServoExtras = NO_EXTRAS
+
+
+@dataclass(frozen=True)
+class GainRegisters:
+    """Position P/I/D Gain register values (servo units): the robot file's ``[gains]`` as users
+    know them. Only the loader, the Dynamixel layer and the tools that write registers use them;
+    the Backend contract carries SI :class:`snakebot.types.PDGains`."""
+
+    position_p: int
+    position_i: int = 0
+    position_d: int = 0
 
 
 @dataclass(frozen=True)
 class ServoModel:
-    """A servo model: its name, model number, physics and default position gains."""
+    """A servo model: its name, model number, physics and its gain registers' factory values
+    and maxima (both from the control table)."""
 
     name: str
     model_number: int
     physics: ServoPhysics
-    default_gains: ServoGains
+    default_gains: GainRegisters
+    gain_max: GainRegisters
     source: Path
+
+    @property
+    def gain_mapping(self) -> GainMapping:
+        """Position P/D Gain registers <-> SI stiffness and damping at the supply voltage."""
+        physics = self.physics
+        voltage_ratio = physics.supply_voltage_v / physics.nominal_voltage_v
+        return GainMapping(
+            stall_torque_nm=physics.stall_torque_nm * voltage_ratio,
+            ticks_per_rev=physics.ticks_per_rev,
+            pwm_limit=physics.pwm_limit,
+            p_gain_divisor=physics.p_gain_divisor,
+            d_gain_divisor=physics.d_gain_divisor,
+            d_gain_loop_period_s=physics.d_gain_loop_period_s,
+            p_max=self.gain_max.position_p,
+            d_max=self.gain_max.position_d,
+        )
+
+    def gains_of(self, registers: GainRegisters) -> PDGains:
+        """SI gains of Position P/D Gain register values (the I gain has no SI counterpart)."""
+        return self.gain_mapping.pd_gains(registers.position_p, registers.position_d)
+
+    def registers_of(self, gains: PDGains, position_i: int = 0) -> GainRegisters:
+        """Register values for SI gains (rounded, clipped to the maxima) plus an I register."""
+        p, d = self.gain_mapping.registers(gains)
+        return GainRegisters(p, position_i, d)
 
 
 @dataclass(frozen=True)
@@ -114,9 +163,17 @@ class RobotConfig:
     bus: BusConfig
     joints: tuple[JointConfig, ...]
     link: LinkConfig
-    gains: ServoGains
+    gains: PDGains
     safety: SafetyConfig
     twin: TwinConfig
+    position_i_gain: int = 0
+    """The Position I Gain register: a Dynamixel-only setting (the twin's loop is PD), written by
+    the Dynamixel backend at connect and by ``config apply``; not part of the Backend contract."""
+
+    @property
+    def gain_registers(self) -> GainRegisters:
+        """The Position P/I/D Gain registers for :attr:`gains` and :attr:`position_i_gain`."""
+        return self.servo.registers_of(self.gains, self.position_i_gain)
 
     @property
     def joint_count(self) -> int:

@@ -1,4 +1,5 @@
-"""Servo files, ``servos/<model>.toml``: the model, its physics, default gains and settings.
+"""Servo files, ``servos/<model>.toml``: the model, its physics, the twin's optional servo-model
+parts (``[twin]``) and settings.
 
 Every key is checked: ranges from snakebot.config.bounds, the model against its control table
 (snakebot.servo_tables: the model number and the encoder resolution must agree with it), the
@@ -8,15 +9,17 @@ Every key is checked: ranges from snakebot.config.bounds, the model against its 
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
-from snakebot.backends.base import ServoGains
 from snakebot.config import bounds
 from snakebot.config.fields import Table, read_toml
-from snakebot.config.schema import ServoModel, ServoPhysics
+from snakebot.config.schema import GainRegisters, ServoModel, ServoPhysics
 from snakebot.config.servo_settings import parse_settings
+from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable, UnknownModelError, supported_models, table_for_model
+from snakebot.types import PDGains
 
 _MODEL_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 
@@ -52,19 +55,93 @@ def servo_table(model: str, path: Path) -> ServoTable:
         ) from None
 
 
-def parse_gains(table: Table) -> ServoGains:
-    """A ``[gains]`` or ``[default_gains]`` table: Position P/I/D Gain register values."""
-    gains = ServoGains(
-        position_p=table.integer("position_p", within=bounds.GAIN),
-        position_i=table.integer("position_i", 0, within=bounds.GAIN),
-        position_d=table.integer("position_d", 0, within=bounds.GAIN),
+def _register_bounds(servo: ServoModel, gain: str, maximum: int) -> bounds.Bounds:
+    return bounds.Bounds(0, maximum, "", f"{servo.name}'s Position {gain} Gain register range")
+
+
+def parse_gains(table: Table, servo: ServoModel) -> tuple[PDGains, int]:
+    """A robot file's ``[gains]``: (SI gains, Position I Gain register).
+
+    The gains are the Position P/D Gain registers (``position_p``, ``position_d``), converted
+    with the servo's mapping, or SI values (``kp_nm_per_rad``, ``kd_nms_per_rad``) up to what
+    the registers reach; ``position_i`` (Dynamixel only) goes with either. ConfigError naming
+    the key if both forms are given, a value is out of range, or a key is unknown.
+    """
+    maxima = servo.gain_max
+    si = [k for k in ("kp_nm_per_rad", "kd_nms_per_rad") if table.has(k)]
+    registers = [k for k in ("position_p", "position_d") if table.has(k)]
+    if si and registers:
+        raise table.error(
+            si[0], f"give the gains either as registers ({', '.join(registers)}) or in SI "
+            "(kp_nm_per_rad, kd_nms_per_rad), not both",
+        )
+    position_i = table.integer(
+        "position_i", 0, within=_register_bounds(servo, "I", maxima.position_i)
     )
+    if si:
+        reach = servo.gain_mapping.max_gains
+        why = f"what {servo.name}'s Position {{}} Gain reaches at the supply voltage"
+        gains = PDGains(
+            table.number(
+                "kp_nm_per_rad",
+                within=bounds.Bounds(0, reach.kp_nm_per_rad, "N·m/rad", why.format("P")),
+            ),
+            table.number(
+                "kd_nms_per_rad",
+                0.0,
+                within=bounds.Bounds(0, reach.kd_nms_per_rad, "N·m·s/rad", why.format("D")),
+            ),
+        )
+    else:
+        p = table.integer("position_p", within=_register_bounds(servo, "P", maxima.position_p))
+        d = table.integer("position_d", 0, within=_register_bounds(servo, "D", maxima.position_d))
+        gains = servo.gains_of(GainRegisters(p, position_i, d))
     table.done()
-    return gains
+    return gains, position_i
+
+
+# Keys older servo files had whose values now come, once, from the control-table data.
+_TABLE_FACTS = {
+    "model_number": "the model number",
+    "physics.stall_torque_nm": "the stall torque",
+    "physics.no_load_speed_rad_s": "the no-load speed",
+    "physics.nominal_voltage_v": "the voltage of the datasheet's torque and speed",
+    "physics.ticks_per_rev": "the encoder resolution",
+    "default_gains": "the factory Position P/I/D Gain",
+}
+
+
+def _refuse_table_facts(root: Table, table: ServoTable) -> None:
+    for key, what in _TABLE_FACTS.items():
+        section, _, name = key.rpartition(".")
+        holder = root.data.get(section) if section else root.data
+        if isinstance(holder, dict) and name in holder:
+            raise ConfigError(
+                root.source, key, f"{what} of {table.model} is kept once, in snakebot's "
+                "control-table data (snakebot/servo_tables/data); remove this key"
+                + ("; a robot's gains go in its robot file's [gains]" if key == "default_gains"
+                   else ""),
+            )
+
+
+def default_gains(table: ServoTable) -> GainRegisters:
+    """The factory Position P/I/D Gain register values of a model (its control table)."""
+    return GainRegisters(*(table[f"position_{g}_gain"].default for g in "pid"))
+
+
+def gain_maxima(table: ServoTable) -> GainRegisters:
+    """The largest Position P/I/D Gain register values a model takes (its control table)."""
+    return GainRegisters(*(table[f"position_{g}_gain"].maximum for g in "pid"))
 
 
 def parse_servo_file(path: Path) -> ServoModel:
-    """Read and validate one servo file; ConfigError naming the file and key of any problem."""
+    """Read and validate one servo file; ConfigError naming the file and key of any problem.
+
+    The datasheet facts (model number, stall torque, no-load speed and its voltage, resolution,
+    factory gains, register ranges) come from the model's control table; the file adds the
+    supply voltage, the twin's estimates, the gain mapping's divisors and the twin's optional
+    servo-model parts (``[twin]``, snakebot.config.servo_twin).
+    """
     root = Table(path, read_toml(path))
     name = root.text("model")
     table = servo_table(name, path)
@@ -72,42 +149,43 @@ def parse_servo_file(path: Path) -> ServoModel:
         raise root.error(
             "model", f"this file is servos/{path.stem}.toml but names model {name!r}"
         )
+    _refuse_table_facts(root, table)
     limits = bounds.SERVO
-    model_number = root.integer("model_number", within=limits["model_number"])
-    if model_number != table.model_number:
-        raise root.error(
-            "model_number",
-            f"{table.model} is model number {table.model_number}, got {model_number}",
-        )
     phys = root.table("physics")
 
     def number(key: str) -> float:
         return phys.number(key, within=limits[f"physics.{key}"])
 
+    specs = table.specs
     physics = ServoPhysics(
-        stall_torque_nm=number("stall_torque_nm"),
-        no_load_speed_rad_s=number("no_load_speed_rad_s"),
-        nominal_voltage_v=number("nominal_voltage_v"),
+        stall_torque_nm=specs.stall_torque_nm,
+        no_load_speed_rad_s=specs.no_load_speed_rad_s,
+        nominal_voltage_v=specs.nominal_voltage_v,
         supply_voltage_v=number("supply_voltage_v"),
         armature_kgm2=number("armature_kgm2"),
         friction_loss_nm=number("friction_loss_nm"),
         viscous_damping_nms=number("viscous_damping_nms"),
-        ticks_per_rev=phys.integer("ticks_per_rev", within=limits["physics.ticks_per_rev"]),
+        ticks_per_rev=specs.resolution,
         pwm_limit=phys.integer("pwm_limit", within=limits["physics.pwm_limit"]),
         d_gain_loop_period_s=number("d_gain_loop_period_s"),
+        p_gain_divisor=number("p_gain_divisor"),
+        d_gain_divisor=number("d_gain_divisor"),
     )
-    if physics.ticks_per_rev != table.specs.resolution:
-        raise phys.error(
-            "ticks_per_rev",
-            f"{table.model} turns once in {table.specs.resolution} ticks, got "
-            f"{physics.ticks_per_rev}",
-        )
     pwm_max = table["pwm_limit"].maximum
     if physics.pwm_limit > pwm_max:
         raise phys.error("pwm_limit", f"{table.model}'s PWM Limit is at most {pwm_max}")
     phys.done()
-    gains = parse_gains(root.table("default_gains"))
+    twin = root.table("twin", required=False)
+    if twin.has("p_gain_divisor"):
+        raise twin.error(
+            "p_gain_divisor", "the P-gain divisor is physics.p_gain_divisor (one key for the twin "
+            "and the bus); a robot's [twin.servo] may override it"
+        )
+    physics = replace(physics, extras=read_servo_extras(twin, physics.extras))
+    twin.done()
     parse_settings(path, "settings", root.data.get("settings", {}), table)
     root.mark_read("settings")
     root.done()
-    return ServoModel(name, model_number, physics, gains, path)
+    return ServoModel(
+        name, table.model_number, physics, default_gains(table), gain_maxima(table), path
+    )

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snakebot.backends.base import BodyState, JointState
+from snakebot.types import BodyState, JointState
 
 GRAVITY_M_S2 = 9.81
 

@@ -61,10 +61,6 @@ class SafetyLayer:
                                    "angles")
         self._last = measured.copy()
 
-    def ramp_in(self, elapsed_s: float) -> float:
-        """Amplitude factor ``elapsed_s`` into a run."""
-        return 1.0 if self.ramp_s <= 0 else smooth_ramp(elapsed_s / self.ramp_s)
-
     def filter(self, target_rad: np.ndarray, dt_s: float, amplitude: float = 1.0) -> np.ndarray:
         """The command to send this cycle: ramped towards rest, clipped, slew-limited."""
         target = np.asarray(target_rad, dtype=float)

@@ -104,7 +104,7 @@ class GamepadSource(InputSource):
         if pygame.joystick.get_count() <= self.index:
             self.close()
             raise ConfigError(
-                "--gamepad", "", "no gamepad found: plug one in (or drive from the keyboard "
+                "gamepad", "", "no gamepad found: plug one in (or drive from the keyboard "
                 "without --gamepad)"
             )
         pad = pygame.joystick.Joystick(self.index)

@@ -1,10 +1,11 @@
 """The drive loop: input -> live gait -> safety -> backend, at a fixed rate, until a stop.
 
-One cycle: poll the input (never blocks), apply its keys, advance the live gait to the robot's
-time, pass the targets through the safety layer, send, let ``dt`` pass (the twin steps, hardware
-sleeps to the deadline), read the state, then hand the cycle to the observers (display,
-telemetry). A stop (quit key, end of script, lost input, a signal) blends the live gait to the
-rest pose; the loop ends there and the caller's ``backend.close()`` applies the stop policy.
+One cycle: poll the input (never blocks), apply its keys, then the control cycle every loop
+shares (snakebot.control.loop): advance the live gait to the robot's time, pass the targets
+through the safety layer, send, let a period pass (the twin steps, hardware sleeps to the
+deadline), read the state; then hand the cycle's record to the observers (display, telemetry).
+A stop (quit key, end of script, lost input, a signal) blends the live gait to the rest pose;
+the loop ends there and the caller's ``backend.close()`` applies the stop policy.
 """
 
 from __future__ import annotations
@@ -12,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
-from snakebot.backends.base import Backend, BodyState, JointCommand, JointState
+from snakebot.backends.base import Backend
+from snakebot.control.cycle import CycleRecord, CycleSchedule, GaitCycle, StopCheck
+from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController
@@ -26,25 +27,21 @@ STOP_GRACE_S = 5.0
 
 
 @dataclass(frozen=True)
-class DriveCycle:
-    """What one drive cycle did, for observers (display, telemetry sinks).
+class DriveCycle(CycleRecord):
+    """What one drive cycle did, for observers (display, telemetry sinks): the control cycle's
+    record (snakebot.control.cycle.CycleRecord) plus the live gait's ``status`` after it and the
+    ``keys`` applied this cycle. ``drive_time_s`` is the record's gait time."""
 
-    ``target_rad`` is the live gait's output, ``command_rad`` what the safety layer sent (both
-    (N,) rad); ``state`` was read after the command; ``keys`` were applied this cycle.
-    """
-
-    cycle: int
-    drive_time_s: float
-    target_rad: np.ndarray
-    command_rad: np.ndarray
-    state: JointState
-    body: BodyState | None
     status: LiveStatus
     keys: tuple[str, ...]
 
+    @property
+    def drive_time_s(self) -> float:
+        """Robot seconds since the drive started, when the cycle's targets were made."""
+        return self.gait_time_s
+
 
 DriveObserver = Callable[[DriveCycle], None]
-StopCheck = Callable[[], str | None]
 
 
 @dataclass(frozen=True)
@@ -72,36 +69,27 @@ def run_drive(
 
     ``stop_check()`` returns a reason to stop (a signal) or None; it is asked every cycle.
     """
-    dt = 1.0 / rate_hz
-    state = backend.read_state()
-    safety.reset(state.position_rad)
-    live.reset()
-    live.start(state.position_rad)
+    schedule = CycleSchedule(rate_hz)  # open-ended; the live gait blends in and out itself
+    loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics, records=True)
+    loop.start()
+    live.start(loop.state.position_rad)
     controller.begin()
-    metrics.start(state.time_s, backend.body_state())
-    start_s = state.time_s
-    cycle = 0
     stop_deadline: float | None = None
     while True:
-        now = state.time_s - start_s
+        now = loop.elapsed_s
         keys = tuple(key for key in source.poll(now) if controller.apply(key, now))
         _check_stop(controller, source, stop_check)
-        target = live.command(state.time_s, state.position_rad)
-        command = safety.filter(target, dt)
-        backend.send_command(JointCommand(command))
-        backend.advance(dt)
-        state = backend.read_state()
-        body = backend.body_state()
-        metrics.add(command, state, body, dt)
-        cycle += 1
-        record = DriveCycle(cycle, now, target, command, state, body, live.status(), keys)
+        done = loop.step(now, 1.0, scored=True)
+        assert done is not None  # records=True
+        status = live.status()
+        record = DriveCycle(**vars(done), status=status, keys=keys)
         for observer in observers:
             observer(record)
         if controller.stop_reason is not None:
             if live.finished:
                 break
             if stop_deadline is None:
-                stop_deadline = now + record.status.blend_left_s + STOP_GRACE_S
+                stop_deadline = now + status.blend_left_s + STOP_GRACE_S
             elif now > stop_deadline:
                 break  # backend.close() still ramps to the safe pose
     summary = metrics.summary(None)
@@ -113,7 +101,10 @@ def run_drive(
     summary["keys"] = controller.events
     summary["governed_cycles"] = live.governed_cycles
     summary["interrupted"] = False
-    return DriveResult(summary, controller.stop_reason or "", cycle)
+    health = getattr(backend, "physics_health", None)  # the twin's physics checks
+    if callable(health) and (physics := health()) is not None:
+        summary["physics"] = physics
+    return DriveResult(summary, controller.stop_reason or "", loop.cycle)
 
 
 def _check_stop(controller: DriveController, source: InputSource, check: StopCheck | None) -> None:

@@ -17,8 +17,9 @@ def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
     def write(cycle: DriveCycle) -> None:
         state = cycle.state
         com = None if cycle.body is None else cycle.body.com_m
+        imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
         log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
-                  state.velocity_rad_s, state.effort_nm, com)
+                  state.velocity_rad_s, state.effort_nm, com, imu)
 
     return write
 
@@ -26,14 +27,11 @@ def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
 def backend_readings(
     backend: Backend,
 ) -> tuple[Callable[[], Mapping[str, np.ndarray]], Callable[[], tuple[str, ...]]]:
-    """(health, alerts) callables for the display: the backend's slow readings (the Dynamixel
-    backend's ``health``: ``temperature_c`` (N,), ...) and what went wrong so far (clipped
-    commands, Bus Watchdog re-arms, bus retries, servos raising the alert bit)."""
+    """(health, alerts) callables for the display: the backend's slow readings
+    (``Backend.health()``: the Dynamixel backend's ``temperature_c`` (N,), ...) and what went
+    wrong so far (clipped commands, Bus Watchdog re-arms, bus retries, servos raising the alert
+    bit)."""
     bus = getattr(backend, "bus", None)
-
-    def health() -> Mapping[str, np.ndarray]:
-        readings: Mapping[str, np.ndarray] = getattr(backend, "health", {})
-        return readings
 
     def alerts() -> tuple[str, ...]:
         extra = backend.stats.extra
@@ -48,4 +46,4 @@ def backend_readings(
             found += [f"alert bit: servo {i}" for i in sorted(bus.alerts)]
         return tuple(found)
 
-    return health, alerts
+    return backend.health, alerts

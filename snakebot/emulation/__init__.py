@@ -10,7 +10,7 @@ Those two import the SDK and termios respectively, so they are not imported here
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import Faults
-from snakebot.emulation.firmware import ZERO_TICKS, HardwareError
+from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.motion import (
     ChainPhysics,
     ExternalMotion,
@@ -32,7 +32,6 @@ from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.wire import BusReply
 
 __all__ = [
-    "ZERO_TICKS",
     "BusReply",
     "ChainPhysics",
     "EmulatedChain",

@@ -17,10 +17,8 @@ from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.state_file import SavedServo, load_state, restore, save_state
+from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
-
-FACTORY_ID = 1
-FACTORY_BAUD = 57600
 
 
 def new_servo(
@@ -149,6 +147,6 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
                 poke("startup_configuration", 1)
                 poke("torque_enable", 1)
         if len(servos) > 2:
-            servos[middle].poke("baud_rate", servos[middle].table.baud_index(57600))
+            servos[middle].poke("baud_rate", servos[middle].table.baud_index(FACTORY_BAUD))
         if len(servos) > 4:
             servos[middle + 2].poke("baud_rate", servos[middle + 2].table.baud_index(115200))

@@ -18,6 +18,7 @@ from snakebot.emulation.motion import ChainPhysics, MotionModel
 from snakebot.emulation.protocol import ParserStats, StreamParser
 from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
+from snakebot.servo import FACTORY_BAUD
 from snakebot.servo_tables import ServoTable, table_for_model
 
 Target = int | VirtualServo
@@ -37,7 +38,7 @@ class EmulatedChain:
         self,
         servos: Iterable[VirtualServo] = (),
         *,
-        baud: int = 57600,
+        baud: int = FACTORY_BAUD,
         seed: int = 0,
         stale_after_s: float = 0.02,
         physics: ChainPhysics | None = None,
@@ -201,7 +202,7 @@ class EmulatedChain:
 def make_chain_for_ids(
     model: str | int | ServoTable,
     ids: Iterable[int],
-    baud: int = 57600,
+    baud: int = FACTORY_BAUD,
     *,
     motion: MotionModel | None = None,
     seed: int = 0,

@@ -1,8 +1,9 @@
 """The firmware's register semantics: write rules, the SI motor command, and present values.
 
-Frames: the motor state is a joint angle with 0 rad at the centre tick (2048); the registers add
-the Drive Mode direction (bit 0 reverses position, velocity, load and current) and the Homing
-Offset (Present Position = actual + offset, not flipped by the direction; e-Manual homing offset).
+Frames: the motor state is a joint angle with 0 rad at the centre tick (snakebot.servo.ticks: 2048
+of 4096); the registers add the Drive Mode direction (bit 0 reverses position, velocity, load and
+current) and the Homing Offset (Present Position = actual + offset, not flipped by the direction;
+e-Manual homing offset).
 """
 
 from __future__ import annotations
@@ -14,12 +15,11 @@ from typing import TYPE_CHECKING
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
+from snakebot.servo.ticks import centre_tick
 
 if TYPE_CHECKING:
     from snakebot.emulation.servo import VirtualServo
 
-ZERO_TICKS = 2048
-PWM_FULL_SCALE = 885
 GOALS = ("goal_pwm", "goal_current", "goal_velocity", "goal_position")
 _MODE_RESETS = (
     "velocity_i_gain",
@@ -47,6 +47,11 @@ def wrap_turn(position_rad: float) -> float:
     return (position_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
+def pwm_full_scale(memory: ControlTableMemory) -> int:
+    """Goal/Present PWM of 100 % duty: the PWM Limit register's maximum (885 on the X series)."""
+    return memory.table["pwm_limit"].maximum
+
+
 def direction(memory: ControlTableMemory) -> int:
     """+1, or -1 when Drive Mode bit 0 (reverse) is set."""
     return -1 if memory.get("drive_mode") & 0x01 else 1
@@ -65,7 +70,7 @@ def position_ticks(memory: ControlTableMemory, state: MotorState) -> int:
     """Present Position for a motor state."""
     pulse = memory.by_key["present_position"].scale
     ticks = round(direction(memory) * state.position_rad / pulse)
-    return ZERO_TICKS + ticks + homing_offset(memory)
+    return centre_tick(memory.table.specs.resolution) + ticks + homing_offset(memory)
 
 
 def command(servo: VirtualServo) -> ServoCommand:
@@ -90,11 +95,11 @@ def command(servo: VirtualServo) -> ServoCommand:
         torque_enabled=get("torque_enable") == 1,
         operating_mode=mode,
         goal_position_rad=sign
-        * (get("goal_position") - offset - ZERO_TICKS)
+        * (get("goal_position") - offset - centre_tick(specs.resolution))
         * scale("goal_position"),
         goal_velocity_rad_s=sign * get("goal_velocity") * rpm,
         goal_current_a=sign * current,
-        goal_pwm=sign * get("goal_pwm") / PWM_FULL_SCALE,
+        goal_pwm=sign * get("goal_pwm") / pwm_full_scale(memory),
         max_velocity_rad_s=max_velocity,
         max_acceleration_rad_s2=acceleration if acceleration > 0 and not time_based else None,
         no_load_speed_rad_s=no_load,
@@ -182,7 +187,8 @@ def refresh_present(servo: VirtualServo) -> None:
         memory.set("present_current", round(sign * state.current_a / scale))
     no_load = max(servo.table.specs.no_load_speed_rad_s, 1e-9)
     pwm = max(-1.0, min(1.0, state.velocity_rad_s / no_load + state.effort))
-    memory.set("present_pwm", round(sign * pwm * PWM_FULL_SCALE) if servo.torque_enabled else 0)
+    full = pwm_full_scale(memory)
+    memory.set("present_pwm", round(sign * pwm * full) if servo.torque_enabled else 0)
     memory.set("present_input_voltage", round(state.input_voltage_v * 10.0))
     memory.set("present_temperature", round(state.temperature_c))
     moving = abs(velocity) > memory.get("moving_threshold")

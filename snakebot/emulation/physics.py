@@ -2,7 +2,8 @@
 
 Goal Position, Torque Enable and the Position P/D Gain registers, read from each virtual servo's
 control table, drive the MuJoCo twin of the same robot (its joint stiffness and damping follow
-the gains as `servo_dynamics` maps them; the twin has no I term, so Position I Gain is ignored);
+the registers through the servo's `GainMapping`, as on the real chain; the twin has no I term,
+so Position I Gain is ignored);
 Present Position/Velocity/Load come back from the twin. Time is the chain's: a pty server advances
 the chain by wall-clock time, so the twin runs in real time.
 """
@@ -13,11 +14,12 @@ import math
 
 import numpy as np
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.backend import TwinBackend
+from snakebot.backends.twin.health import HealthLimits
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
+from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.motion import MotorState, ServoCommand
 from snakebot.emulation.servo import VirtualServo
 
@@ -45,6 +47,7 @@ class TwinMotion:
         self._leader: VirtualServo | None = None
         self._servos: dict[int, VirtualServo] = {}
         self.steps = 0
+        self._latched: set[int] = set()  # joints whose servo latched the twin's overload
 
     def attach(self, chain: EmulatedChain) -> None:
         """Remember the chain's servos (by joint), make the twin follow their registers from the
@@ -74,9 +77,29 @@ class TwinMotion:
         self._pending_s -= steps * timestep
         self.twin.advance(steps * timestep)
         self.steps += 1
+        self._latch_overloads()
         state = self.twin.read_state()
         self.metrics.add(self._goal, state, self.twin.body_state(), steps * timestep)
         self._publish()
+
+    def _latch_overloads(self) -> None:
+        """A joint whose twin servo tripped its overload protection latches Overload in its
+        servo's Hardware Error Status; a servo rebooted since (no error latched) clears it."""
+        tripped = self.twin.overloaded
+        if not tripped.any():
+            return
+        cleared = np.zeros_like(tripped)
+        for index, servo in self._servos.items():
+            if not tripped[index]:
+                continue
+            if index in self._latched and not servo.hardware_error:
+                cleared[index] = True  # rebooted: the latch is gone
+                self._latched.discard(index)
+            elif index not in self._latched:
+                servo.latch_error(HardwareError.OVERLOAD)
+                self._latched.add(index)
+        if cleared.any():
+            self.twin.reset_overload(cleared)
 
     def _read_tables(self) -> None:
         """Apply the goals, torque flags and gains of every servo whose table changed."""
@@ -98,8 +121,9 @@ class TwinMotion:
             if command.position_gains != self._gains.get(index):
                 self._gains[index] = command.position_gains
                 new_gains.setdefault(command.position_gains, []).append(index)
-        for (p, i, d), joints in new_gains.items():
-            self.twin.set_joint_gains(joints, ServoGains(p, i, d))
+        mapping = self.robot.servo.gain_mapping
+        for (p, _i, d), joints in new_gains.items():
+            self.twin.set_joint_gains(joints, mapping.pd_gains(p, d))
         if torque_changed:
             self.twin.set_joint_torque(self._torque)
         if goals_changed:
@@ -130,12 +154,17 @@ class TwinMotion:
         out["achieved_rate_hz"] = self.steps / elapsed if elapsed > 0 else 0.0
         out["overruns"] = 0
         out["interrupted"] = False
+        physics = self.twin.physics_health()
+        if physics is not None:
+            out["physics"] = physics
         return out
 
 
 def make_twin_chain(robot: RobotConfig, baud: int) -> tuple[EmulatedChain, TwinMotion]:
     """The robot's servo chain at ``baud``, every servo backed by one connected twin."""
-    twin = TwinBackend(robot)
+    # The servo latches an overload instead; a bus keeps answering whatever the physics does,
+    # so physics health is reported in the summary, never raised.
+    twin = TwinBackend(robot, raise_on_overload=False, health=HealthLimits(hard=False))
     twin.connect()
     motion = TwinMotion(robot, twin)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud, motion=motion)

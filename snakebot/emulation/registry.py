@@ -9,10 +9,12 @@ from contextlib import contextmanager
 
 import serial
 
+from snakebot.backends.dynamixel.sdk import register_url_port_handler
+from snakebot.config.ports import EMULATOR_SCHEME
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
 
-SCHEME = "dxlemu"
+SCHEME = EMULATOR_SCHEME
 HANDLER_PACKAGE = "snakebot.emulation.urlhandler"
 TIME_MODES = ("virtual", "wall")
 
@@ -22,9 +24,13 @@ _lock = threading.Lock()
 
 
 def install_url_handler() -> None:
-    """Let `serial.serial_for_url` open `dxlemu://` URLs (idempotent)."""
+    """Let `serial.serial_for_url` open `dxlemu://` URLs and the Dynamixel bus open them with
+    `EmulatedPortHandler` (idempotent)."""
     if HANDLER_PACKAGE not in serial.protocol_handler_packages:
         serial.protocol_handler_packages.append(HANDLER_PACKAGE)
+    from snakebot.emulation.port import EmulatedPortHandler  # imports dynamixel_sdk
+
+    register_url_port_handler(SCHEME, EmulatedPortHandler)
 
 
 def chain_url(name: str, *, time: str = "virtual") -> str:

@@ -16,6 +16,7 @@ from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.memory import ControlTableMemory
 from snakebot.emulation.motion import MotionModel, MotorState, ProfileMotion, ServoCommand
 from snakebot.emulation.protocol import ALERT_BIT, MAX_ID, StatusError
+from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
@@ -35,9 +36,9 @@ class VirtualServo:
     def __init__(
         self,
         model: str | int | ServoTable = "XL430-W250",
-        servo_id: int = 1,
+        servo_id: int = FACTORY_ID,
         *,
-        baud: int = 57600,
+        baud: int = FACTORY_BAUD,
         motion: MotionModel | None = None,
         processing_time_s: float | None = None,
         temperature_c: float = 30.0,

@@ -12,6 +12,7 @@ from snakebot.gaits.registry import (
     GAITS,
     GaitSpec,
     ParamSpec,
+    check_joint_axes,
     gait_names,
     gait_origin,
     get_spec,
@@ -22,7 +23,7 @@ from snakebot.gaits.registry import (
 )
 from snakebot.gaits.serpenoid import SerpenoidGait
 from snakebot.gaits.simple import SimpleGait
-from snakebot.gaits.spec import LiveRoles, ParamValues
+from snakebot.gaits.spec import JointAxes, LiveRoles, ParamValues
 
 __all__ = [
     "GAITS",
@@ -31,6 +32,7 @@ __all__ = [
     "DftShiftGait",
     "Gait",
     "GaitSpec",
+    "JointAxes",
     "KeyframeGait",
     "LiveControls",
     "LiveGait",
@@ -41,6 +43,7 @@ __all__ = [
     "PhasedGait",
     "SerpenoidGait",
     "SimpleGait",
+    "check_joint_axes",
     "dft_coefficients_from_pose",
     "gait_names",
     "gait_origin",

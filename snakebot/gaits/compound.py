@@ -8,7 +8,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_finite, check_joint_count
-from snakebot.gaits.spec import FLAG_UNIT, GaitSpec, LiveRoles, ParamSpec, ParamValues
+from snakebot.gaits.spec import (
+    FLAG_UNIT,
+    GaitSpec,
+    JointAxes,
+    LiveRoles,
+    ParamSpec,
+    ParamValues,
+)
 
 
 @dataclass(frozen=True)
@@ -213,6 +220,22 @@ PRESETS: dict[str, tuple[str, dict[str, float]]] = {
 }
 
 
+# The joint axes each preset needs: the gait equation puts its two waves on even (yaw) and odd
+# (pitch) joints. Without the pitch wave nothing lifts, so sidewinding, rolling and turning in
+# place cannot happen; on an all-yaw snake they make planar waves that go somewhere else (the
+# audit: "turn_in_place" went straight 7.2 m on snake8 and "rolling" did not roll).
+_ALTERNATING = JointAxes("yaw", "pitch")
+AXES: dict[str, JointAxes] = {
+    "compound": _ALTERNATING,
+    "sidewinding": JointAxes("yaw", "pitch", True, "the pitch wave lifts the body off its tracks"),
+    "rolling": JointAxes("yaw", "pitch", True, "the body rolls about its axis only with both"),
+    "turn_in_place": JointAxes("yaw", "pitch", True, "each half sidewinds, which needs both"),
+    "linear_progression": JointAxes(
+        None, "pitch", True, "the body inches forward on a vertical wave"
+    ),
+    "lateral_undulation": JointAxes("yaw", None, False, "its wave bends the body sideways"),
+}
+
 # What `tune gait` searches by default per preset (the others have no default search).
 _SEARCH: dict[str, frozenset[str]] = {
     "compound": _SIDEWINDING_SEARCH,
@@ -248,6 +271,7 @@ def _factory(name: str) -> GaitSpec:
         ties=_TIES,
         rolls_over=name == "rolling",
         live=_LIVE,
+        axes=AXES[name],
     )
 
 

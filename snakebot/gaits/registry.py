@@ -8,12 +8,13 @@ failure rules are snakebot.plugins'.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.errors import GaitError
+from snakebot.errors import GaitAxesWarning, GaitError
 from snakebot.gaits import compound, dft, keyframes, miller, serpenoid, simple
 from snakebot.gaits.base import FloatArray, Gait, check_joint_count
 from snakebot.gaits.spec import (
@@ -124,6 +125,30 @@ def make_gait(
     if np.any(lower > upper):
         raise GaitError(f"{name}: expected lower_rad <= upper_rad for every joint")
     return spec.factory(n, values, lower, upper)
+
+
+def check_joint_axes(name: str, joint_axes: Sequence[str], robot: str = "the robot") -> str | None:
+    """Whether gait ``name`` fits a robot whose joints bend about ``joint_axes`` (head first).
+
+    Returns None when it fits; else warns (GaitAxesWarning) naming the joints that differ and
+    returns the text. Raises GaitError instead when the gait declares the axes required (it
+    cannot work there).
+    """
+    need = get_spec(name).axes
+    wrong = need.mismatched(joint_axes)
+    if not wrong:
+        return None
+    joints = ", ".join(f"{i} ({joint_axes[i]})" for i in wrong[:6])
+    joints += " ..." if len(wrong) > 6 else ""
+    text = (
+        f"gait {name!r} needs {need.describe()}{': ' + need.why if need.why else ''}; "
+        f"{robot} has other axes on joints {joints}"
+    )
+    if need.required:
+        raise GaitError(f"{text}. Pick a gait made for these axes (`snakebot gaits`)")
+    text += f", so it will not move as the name {name!r} says"
+    warnings.warn(text, GaitAxesWarning, stacklevel=2)
+    return text
 
 
 def parse_set_options(name: str, items: Sequence[str]) -> dict[str, object]:

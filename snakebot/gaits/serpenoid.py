@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.gaits.base import FloatArray, Gait, PhasedGait, check_finite, check_joint_count
-from snakebot.gaits.spec import GaitSpec, LiveRoles, ParamSpec, ParamValues
+from snakebot.gaits.spec import GaitSpec, JointAxes, LiveRoles, ParamSpec, ParamValues
 
 
 @dataclass(frozen=True)
@@ -114,4 +114,5 @@ SPEC = GaitSpec(
         amplitude=("amplitude",), frequency=("omega",), spatial_frequency=("phase_lag",),
         offset=("offset",),
     ),
+    axes=JointAxes("yaw", "yaw", False, "it is a planar wave (lateral undulation)"),
 )

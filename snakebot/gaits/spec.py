@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
@@ -103,6 +103,44 @@ class ParamValues:
 
 
 @dataclass(frozen=True)
+class JointAxes:
+    """The bending axis a gait needs on its even (0, 2, ...) and odd joints, counted from the
+    head: "yaw", "pitch" or None (either). ``required``: on other axes the gait cannot do what
+    its name says (rolling on an all-yaw snake), so it is refused rather than warned about.
+    ``why`` finishes the sentence "needs ... because/for ..."."""
+
+    even: str | None = None
+    odd: str | None = None
+    required: bool = False
+    why: str = ""
+
+    def mismatched(self, joint_axes: Sequence[str]) -> list[int]:
+        """Indices of the joints (0 = head) whose axis is not the one this gait needs."""
+        needs = (self.even, self.odd)
+        return [
+            i
+            for i, axis in enumerate(joint_axes)
+            if needs[i % 2] is not None and axis != needs[i % 2]
+        ]
+
+    def describe(self) -> str:
+        """The need in words: "yaw on every joint", "yaw on even joints and pitch on odd ones"."""
+        if self.even is None and self.odd is None:
+            return "any axes"
+        if self.even == self.odd:
+            return f"{self.even} on every joint"
+        parts = []
+        if self.even is not None:
+            parts.append(f"{self.even} on even joints (0, 2, ... from the head)")
+        if self.odd is not None:
+            parts.append(f"{self.odd} on odd joints")
+        return " and ".join(parts)
+
+
+ANY_AXES = JointAxes()
+
+
+@dataclass(frozen=True)
 class LiveRoles:
     """Which parameters a live driver (``snakebot drive``) moves for each of its controls.
 
@@ -146,6 +184,9 @@ class GaitSpec:
     parameters or ties do not fit together.
 
     ``live`` says which parameters the drive controls move (see LiveRoles).
+
+    ``axes`` says which bending axis the gait needs on each joint (see JointAxes); a robot whose
+    joints differ gets a warning, or a GaitError when ``axes.required`` (the gait cannot work).
     """
 
     name: str
@@ -157,6 +198,7 @@ class GaitSpec:
     tuning_start: TuningStart | None = field(default=None, repr=False, compare=False)
     rolls_over: bool = False
     live: LiveRoles = LiveRoles()
+    axes: JointAxes = field(default_factory=lambda: ANY_AXES)
 
     def __post_init__(self) -> None:
         names = self.param_names

@@ -29,11 +29,12 @@ def parse_command(text: str | None) -> tuple[float, float] | None:
 
 def policy_gait(robot: RobotConfig | BodyConfig, backend: Backend,
                 args: argparse.Namespace) -> tuple[str, Gait]:
-    """The --policy gait for ``backend``; UsageError when --gait/--gait-file/--set come too."""
+    """The --policy gait for ``backend`` (made, not yet connected); UsageError when --gait,
+    --gait-file or --set come too, or the robot is a mass-spring body (no servos to drive)."""
     if args.gait or args.gait_file or args.set:
         raise UsageError("--policy is the gait: drop --gait, --gait-file and --set")
     if isinstance(robot, BodyConfig):
-        raise ConfigError("--policy", args.policy, "policies drive servo snakes (robot files), "
-                          "not mass-spring bodies")
-    return policy_gait_for_backend(args.policy, robot, backend, parse_command(args.command),
-                                   args.rate)
+        raise UsageError(f"--policy drives servo snakes (robot files); {robot.name} is a "
+                         "mass-spring body")
+    return policy_gait_for_backend(args.policy, robot, backend,
+                                   parse_command(args.policy_command), args.rate)

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from snakebot.backends.base import BodyState, JointState
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.gaits.base import FloatArray
+from snakebot.types import BodyState, JointState
 
 OBS_BOUND = 10.0
 

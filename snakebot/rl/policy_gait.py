@@ -21,7 +21,7 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.backends.base import Backend, BodyState, JointState
+from snakebot.backends.base import Backend
 from snakebot.config import RobotConfig
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, GaitError
@@ -38,6 +38,7 @@ from snakebot.rl.settings import (
     VelocitySettings,
     split_kwargs,
 )
+from snakebot.types import BodyState, JointState
 
 StateReader = Callable[[], JointState]
 

@@ -1,8 +1,9 @@
 """The cycle every learning environment steps: encoding -> gait -> safety layer -> twin.
 
-It is ``snakebot run``'s cycle (``control/runner.py``): the gait's targets at the current
-phases go through the same ``SafetyLayer`` (ramp-in, joint limits, speed limit) into the same
-``TwinBackend``, ``cycles_per_action`` times per policy action.
+It is ``snakebot run``'s cycle (``control/cycle.py``): the gait's targets at the current
+phases go through the same ``SafetyLayer`` (joint limits, speed limit), ramped in as the run's
+``CycleSchedule`` ramps, into the same twin backend (made through the backend registry),
+``cycles_per_action`` times per policy action.
 """
 
 from __future__ import annotations
@@ -12,15 +13,17 @@ from dataclasses import dataclass
 
 import mujoco
 
-from snakebot.backends.base import BodyState, JointCommand, JointState
+from snakebot.backends.registry import make_backend
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.model_builder import hold_ctrl_history, link_name
 from snakebot.config import RobotConfig, load_robot
+from snakebot.control.cycle import CycleSchedule
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.control.safety import SafetyLayer
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.encodings import Encoding, GaitClock, make_encoding
 from snakebot.rl.settings import EnvSettings
+from snakebot.types import BodyState, JointCommand, JointState
 
 
 @dataclass(frozen=True)
@@ -44,11 +47,15 @@ class TwinLoop:
             self.robot.upper_rad, phase_hz=settings.phase_hz, dft_bins=settings.dft_bins,
         )
         self.clock = GaitClock(self.encoding)
-        self.backend = TwinBackend(self.robot, timestep_s=settings.timestep_s)
+        backend = make_backend(self.robot, "twin", timestep_s=settings.timestep_s)
+        assert isinstance(backend, TwinBackend)  # a robot file's twin (RobotConfig above)
+        self.backend = backend
         self.backend.connect()
         self.safety = SafetyLayer.for_robot(self.robot)
         self.dt_s = 1.0 / settings.control_hz
         self.backend.steps_for(self.dt_s)  # a rate that is no whole number of steps fails here
+        # The run's schedule: what ramps the amplitude in, as `snakebot run` ramps it.
+        self.schedule = CycleSchedule(settings.control_hz, ramp_s=self.safety.ramp_s)
         self._tail_id = self.backend.model.body(link_name(self.robot.link_count - 1)).id
         self._head_id = self.backend.model.body(link_name(0)).id
         self.state = self.backend.read_state()
@@ -78,7 +85,7 @@ class TwinLoop:
         work = 0.0
         for _ in range(self.settings.cycles_per_action):
             target = clock.targets(gait)
-            command = safety.filter(target, dt, safety.ramp_in(self.state.time_s))
+            command = safety.filter(target, dt, self.schedule.ramp_in(self.state.time_s))
             backend.send_command(JointCommand(command))
             backend.advance(dt)
             state = backend.read_state()

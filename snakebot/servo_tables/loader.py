@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import importlib.util
-import math
 import tomllib
 from pathlib import Path
 from types import MappingProxyType
@@ -44,7 +43,7 @@ _SPEC_FIELDS = {
     "baud_rates",
     "indirect_banks",
     "nominal_voltage_v",
-    "no_load_speed_rpm",
+    "no_load_speed_rad_s",
     "stall_torque_nm",
     "stall_current_a",
 }
@@ -138,7 +137,6 @@ def _bank(values: list[int]) -> tuple[int, int, int]:
 
 def _specs(model: dict[str, Any]) -> ServoSpecs:
     rates = {int(index): int(rate) for index, rate in model.get("baud_rates", {}).items()}
-    rpm = float(model.get("no_load_speed_rpm", 50.0))
     return ServoSpecs(
         firmware_version=int(model.get("firmware_version", 46)),
         eeprom_end=int(model.get("eeprom_end", 64)),
@@ -147,7 +145,7 @@ def _specs(model: dict[str, Any]) -> ServoSpecs:
         baud_rates=MappingProxyType(rates),
         indirect_banks=tuple(_bank(bank) for bank in model.get("indirect_banks", ())),
         nominal_voltage_v=float(model.get("nominal_voltage_v", 12.0)),
-        no_load_speed_rad_s=rpm * 2.0 * math.pi / 60.0,
+        no_load_speed_rad_s=float(model.get("no_load_speed_rad_s", 5.0)),
         stall_torque_nm=float(model.get("stall_torque_nm", 1.0)),
         stall_current_a=float(model.get("stall_current_a", 1.0)),
     )

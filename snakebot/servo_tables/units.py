@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from snakebot.servo.ticks import centre_tick
 from snakebot.servo_tables import Register, ServoTable
 
 CENTRED_KEYS = frozenset({"min_position_limit", "max_position_limit"})
@@ -71,7 +72,7 @@ def parse_key(table: ServoTable, key: str) -> tuple[Register, Unit | None]:
 
 
 def _centre(register: Register, table: ServoTable) -> int:
-    return table.specs.resolution // 2 if register.key in CENTRED_KEYS else 0
+    return centre_tick(table.specs.resolution) if register.key in CENTRED_KEYS else 0
 
 
 def to_raw(register: Register, unit: Unit | None, value: float, table: ServoTable) -> int:

@@ -12,12 +12,12 @@ a servo that stands outside the Min/Max Position Limit about to be written is wa
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
+from snakebot.servo.ticks import ticks_to_rad
 from snakebot.setup.diff import ChainDiff, Difference, survey
 from snakebot.setup.errors import SetupError, VerifyError
 from snakebot.setup.link import Link, unanswered_ok
@@ -201,8 +201,7 @@ def outside_new_limits(link: Link, chain: ChainSettings, plan: ApplyPlan, diff: 
         present = bus.read(wanted.servo_id, "present_position")
         if low.raw <= present <= high.raw:
             continue
-        resolution = bus.table.specs.resolution
-        angle = (present - resolution // 2) * 2 * math.pi / resolution
+        angle = ticks_to_rad(present, ticks_per_rev=bus.table.specs.resolution)
         lo_text, unit = low.show(low.raw)
         hi_text, _ = high.show(high.raw)
         notes.append(

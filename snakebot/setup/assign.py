@@ -11,13 +11,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from snakebot.servo import FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
 from snakebot.setup.duplicates import collision_reason
 from snakebot.setup.errors import DuplicateIdError, SetupError, VerifyError
 from snakebot.setup.link import SEARCH_BAUDS, Link, unanswered_ok
 from snakebot.setup.maintenance import wait_for_boot
-
-FACTORY_ID = 1
 
 
 @dataclass(frozen=True)
@@ -108,16 +107,22 @@ def _check_free(link: Link, servo: Found, to_id: int, bauds: set[int]) -> None:
 
 def assign_id(
     link: Link, *, to_id: int, baud: int, from_id: int | None = None,
-    bauds: Sequence[int] = SEARCH_BAUDS,
+    bauds: Sequence[int] = SEARCH_BAUDS, dry_run: bool = False,
 ) -> Assignment:
-    """Find the lone servo, then set its ID to ``to_id`` and its rate to ``baud`` (verified)."""
+    """Find the lone servo, then set its ID to ``to_id`` and its rate to ``baud`` (verified).
+
+    ``dry_run``: every check (one servo, a supported rate, the ID free) and no write; the
+    Assignment says what would be set. SetupError (or DuplicateIdError) says why not.
+    """
     servo = _lone(link, find_servos(link, from_id=from_id, bauds=bauds), from_id)
     table = _table(link, servo)
     try:
         index = table.baud_index(baud)
     except ValueError as exc:
-        raise SetupError(f"--baud {baud}: {exc}") from None
+        raise SetupError(f"baud rate {baud}: {exc}") from None
     _check_free(link, servo, to_id, {servo.baud, baud})
+    if dry_run:
+        return Assignment(servo, to_id, baud)
     link.bus.table = table
     bus = link.at(servo.baud)
     if (to_id, baud) != (servo.servo_id, servo.baud) and bus.read(servo.servo_id, "torque_enable"):

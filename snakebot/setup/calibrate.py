@@ -1,9 +1,10 @@
 """Zero offsets from a straight snake, written into the robot file (``joints[].zero_offset_rad``).
 
-The one calibration convention (the Dynamixel backend's, see backends/dynamixel/ticks.py): the
+The one calibration convention (snakebot.servo.ticks, the Dynamixel backend's): the
 offset lives in the robot config; the servo's Homing Offset stays 0 and its Drive Mode reverse bit
 clear (the settings say so and ``config diff`` checks it). With every joint straight (0 rad), a
-servo reading ``ticks`` gets ``zero_offset_rad = direction * (ticks - 2048) * 2 pi / 4096``.
+servo reading ``ticks`` gets ``zero_offset_rad = direction * (ticks - centre) * 2 pi /
+ticks_per_rev`` (centre 2048 of 4096 on the X series).
 """
 
 from __future__ import annotations
@@ -12,12 +13,14 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 from snakebot.backends.dynamixel.checks import check_settings
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, OutputError
+from snakebot.servo.ticks import ticks_to_rad
 from snakebot.setup.errors import SetupError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings
@@ -38,9 +41,10 @@ class JointZero:
     new_offset_rad: float
 
 
-def zero_offset_rad(ticks: int, direction: int, ticks_per_rev: int = 4096) -> float:
-    """The zero offset that makes a servo reading ``ticks`` report 0 rad (ticks.py convention)."""
-    return direction * (ticks - ticks_per_rev // 2) * 2.0 * math.pi / ticks_per_rev
+def zero_offset_rad(ticks: int, direction: int, ticks_per_rev: int) -> float:
+    """The zero offset that makes a servo reading ``ticks`` report 0 rad: the angle the tick
+    means with no offset (snakebot.servo.ticks)."""
+    return ticks_to_rad(ticks, ticks_per_rev=ticks_per_rev, direction=direction)
 
 
 def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
@@ -100,9 +104,13 @@ def refusals(
     return [f"{e}: widen the Position Limits in the settings" for e in errors]
 
 
-def write_offsets(robot: RobotConfig, zeros: Sequence[JointZero]) -> None:
-    """Write the new offsets into the robot file in place, then reload it to check."""
-    path = robot.source
+def write_offsets(
+    robot: RobotConfig, zeros: Sequence[JointZero], path: Path | None = None
+) -> None:
+    """Write the new offsets (rad) into robot file ``path`` (default the robot's own) in place,
+    then reload it to check. ConfigError if the joints table cannot be edited, OutputError if
+    the file cannot be written, SetupError (file restored) if the edit does not load back."""
+    path = robot.source if path is None else path
     original = path.read_text(encoding="utf-8")
     try:
         text = set_in_joints(original, "zero_offset_rad",

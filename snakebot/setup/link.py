@@ -16,20 +16,11 @@ from types import TracebackType
 from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError
-from snakebot.config.ports import url_scheme
 from snakebot.errors import BusError
+from snakebot.servo import FACTORY_BAUD
 
-SEARCH_BAUDS = (57600, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
+SEARCH_BAUDS = (FACTORY_BAUD, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 """Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
-
-
-def port_handler_factory(port: str) -> sdk.PortHandlerFactory:
-    """The SDK port handler class for ``port``: ``dxlemu://`` URLs via the emulator's handler."""
-    if url_scheme(port) is not None:
-        from snakebot.emulation.port import EmulatedPortHandler
-
-        return EmulatedPortHandler
-    return sdk.default_port_handler
 
 
 def search_order(first: int) -> tuple[int, ...]:
@@ -87,7 +78,7 @@ class Link:
         self._open = False
 
     def _make_handler(self, port: str) -> sdk.PortHandlerLike:
-        self.handler = port_handler_factory(port)(port)
+        self.handler = sdk.port_handler_for(port)
         return self.handler
 
     def __enter__(self) -> Link:

@@ -12,11 +12,11 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from snakebot.servo import FACTORY_ID
 from snakebot.setup.duplicates import Evidence, Kind, Verdict, gather, judge
 from snakebot.setup.link import Link
 
 MAX_ID = 252  # Protocol 2.0 device IDs are 0..252 (e-Manual protocol2, Packet ID)
-FACTORY_ID = 1
 LOOK_PAST = 2
 """IDs asked past the highest one that answered (a lost slot at the end of the chain)."""
 SWEEP_S_PER_ID = 0.035

@@ -65,7 +65,8 @@ def _derived(robot: RobotConfig, table: ServoTable, source: Path) -> dict[str, S
         raise ConfigError(source, "bus.baud", str(exc)) from None
     out = {"baud_rate": Setting(table["baud_rate"], baud_index, None, "[bus] baud", table)}
     for key, name in GAIN_KEYS.items():
-        out[key] = Setting(table[key], getattr(robot.gains, name), None, f"[gains] {name}", table)
+        value = getattr(robot.gain_registers, name)
+        out[key] = Setting(table[key], value, None, f"[gains] {name}", table)
     return out
 
 

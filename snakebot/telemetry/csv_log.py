@@ -24,11 +24,14 @@ from snakebot.errors import ConfigError, OutputError
 
 
 def column_names(joint_count: int) -> list[str]:
-    """CSV header: time, cycle, then per-joint command/position/velocity/effort, then the COM."""
+    """CSV header: time, cycle, then per-joint command/position/velocity/effort, then the COM,
+    then the head IMU (orientation quaternion w, x, y, z and the gyro's angular rate in the
+    head's frame)."""
     columns = ["time_s", "cycle"]
     for prefix in ("command_rad", "position_rad", "velocity_rad_s", "effort_nm"):
         columns += [f"{prefix}_{i}" for i in range(joint_count)]
-    return [*columns, "com_x_m", "com_y_m", "com_z_m"]
+    imu = ["imu_qw", "imu_qx", "imu_qy", "imu_qz", "gyro_x_rad_s", "gyro_y_rad_s", "gyro_z_rad_s"]
+    return [*columns, "com_x_m", "com_y_m", "com_z_m", *imu]
 
 
 class CsvTelemetryWriter:
@@ -51,7 +54,7 @@ class CsvTelemetryWriter:
         except OSError as exc:
             self._close_quietly()
             raise OutputError(self.path, f"cannot write log file: {_reason(exc)}") from exc
-        values = 4 * joint_count + 3
+        values = 4 * joint_count + 3 + 7
         self._format = "%.6f,%d," + ",".join(["%.6g"] * values) + "\n"
 
     def write(
@@ -63,12 +66,16 @@ class CsvTelemetryWriter:
         velocity: np.ndarray,
         effort: np.ndarray,
         com: np.ndarray | None,
+        imu: tuple[np.ndarray, np.ndarray | None] | None = None,
     ) -> None:
-        """Write one cycle; ``com`` None (hardware) is written as NaN."""
+        """Write one cycle; ``com`` None (hardware) is written as NaN, so is ``imu`` (head
+        quaternion (4,), gyro (3,) rad/s) where it or its gyro is None."""
         if self._fd is None:
             raise ValueError(f"telemetry log {self.path} is closed")
         com_values = _NAN3 if com is None else com
-        row = np.concatenate((command, position, velocity, effort, com_values)).tolist()
+        quat = _NAN4 if imu is None else imu[0]
+        gyro = _NAN3 if imu is None or imu[1] is None else imu[1]
+        row = np.concatenate((command, position, velocity, effort, com_values, quat, gyro)).tolist()
         try:
             _write_all(self._fd, (self._format % (time_s, cycle, *row)).encode())
         except OSError as exc:
@@ -110,6 +117,7 @@ class CsvTelemetryWriter:
         self.close()
 
 
+_NAN4 = np.full(4, np.nan)
 _NAN3 = np.full(3, np.nan)
 
 

@@ -9,16 +9,15 @@ import math
 from collections.abc import Sequence
 from typing import Protocol
 
-import numpy as np
-
 from snakebot.config.schema import RobotConfig
+from snakebot.control.cycle import CycleSchedule, GaitCycle
 from snakebot.control.safety import SafetyLayer
 from snakebot.gaits import Gait
 from snakebot.tuning.trace import FloatArray
 
 
 class BatchCommands(Protocol):
-    """A source of joint commands for B runs stepped together at a fixed control period."""
+    """A source of joint commands for B runs stepped together on one cycle schedule."""
 
     @property
     def size(self) -> int:
@@ -32,8 +31,8 @@ class BatchCommands(Protocol):
     def open_loop(self) -> bool:
         """True when the commands ignore the measured poses, so cycles can be batched."""
 
-    def reset(self, measured_rad: FloatArray) -> None:
-        """Start from the measured poses (B, N)."""
+    def reset(self, measured_rad: FloatArray, schedule: CycleSchedule) -> None:
+        """Start from the measured poses (B, N) on ``schedule``."""
 
     def __call__(
         self, cycle: int, time_s: float, measured_rad: FloatArray
@@ -42,35 +41,24 @@ class BatchCommands(Protocol):
         ``time_s`` (robot time since the start), given the measured poses (B, N)."""
 
 
-def is_open_loop(gait: Gait) -> bool:
-    """True when ``gait.command`` ignores the measured pose (as the gait declares)."""
-    return not gait.uses_measured_pose
-
-
 class GaitCommands:
-    """B gaits through one SafetyLayer tiled over (B*N,), exactly as ``run_gait`` sends them.
+    """B gaits through the runner's ``GaitCycle`` (one safety layer tiled over (B*N,)), on the
+    runner's schedule: exactly what ``run_gait`` sends, run by run."""
 
-    The safety layer works elementwise, so one layer over the flattened batch gives each run the
-    same clipping, slew limit and ramp-in as its own layer would. Targets come from
-    ``gait.command`` one cycle at a time, as in the runner: numpy's vectorised sin can differ
-    from the one-element path in the last bit, and a replay must match to the bit.
-    """
+    def __init__(self, gaits: Sequence[Gait], robot: RobotConfig) -> None:
+        self.cycle = GaitCycle.tiled(gaits, SafetyLayer.for_robot(robot))
+        self.schedule: CycleSchedule | None = None
+        self._last_time_s: float | None = None
 
-    def __init__(self, gaits: Sequence[Gait], robot: RobotConfig, dt_s: float) -> None:
-        self.gaits = list(gaits)
-        self.dt_s = dt_s
-        count = len(self.gaits)
-        self.safety = SafetyLayer(
-            np.tile(robot.lower_rad, count),
-            np.tile(robot.upper_rad, count),
-            robot.max_speed_rad_s,
-            robot.safety.ramp_s,
-        )
+    @property
+    def gaits(self) -> list[Gait]:
+        """The B gaits."""
+        return self.cycle.gaits
 
     @property
     def size(self) -> int:
         """B, the number of gaits."""
-        return len(self.gaits)
+        return self.cycle.size
 
     @property
     def length(self) -> float:
@@ -80,26 +68,26 @@ class GaitCommands:
     @property
     def open_loop(self) -> bool:
         """True unless a gait uses the measured pose (keyframes with error advance, say)."""
-        return all(is_open_loop(gait) for gait in self.gaits)
+        return self.cycle.open_loop
 
-    def reset(self, measured_rad: FloatArray) -> None:
+    def reset(self, measured_rad: FloatArray, schedule: CycleSchedule) -> None:
         """Reset every gait and start the safety layer from the measured poses (B, N)."""
-        for gait in self.gaits:
-            gait.reset()
-        self.safety.reset(measured_rad.ravel())
+        self.cycle.reset(measured_rad)
+        self.schedule = schedule
+        self._last_time_s = None
 
     def __call__(
         self, cycle: int, time_s: float, measured_rad: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
         """Gait targets at ``time_s`` and the safety layer's commands, each (B, N)."""
-        targets = np.stack(
-            [
-                gait.command(time_s, measured)
-                for gait, measured in zip(self.gaits, measured_rad, strict=True)
-            ]
-        )
-        commands = self.safety.filter(targets.ravel(), self.dt_s, self.safety.ramp_in(time_s))
-        return targets, commands.reshape(targets.shape)
+        schedule = self.schedule
+        if schedule is None:
+            raise RuntimeError("GaitCommands used before reset()")
+        last, self._last_time_s = self._last_time_s, time_s
+        slew_s = schedule.slew_period_s(cycle, None if last is None else time_s - last)
+        targets = self.cycle.targets(time_s, measured_rad)
+        commands = self.cycle.commands(targets, slew_s, schedule.ramp_in(time_s))
+        return targets, commands
 
 
 class ArrayCommands:
@@ -125,7 +113,7 @@ class ArrayCommands:
         """Always: the commands are fixed."""
         return True
 
-    def reset(self, measured_rad: FloatArray) -> None:
+    def reset(self, measured_rad: FloatArray, schedule: CycleSchedule) -> None:
         """Nothing to reset: the commands are fixed."""
 
     def __call__(

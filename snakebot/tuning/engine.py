@@ -1,7 +1,9 @@
 """Many runs side by side on one twin model with ``mujoco.batch``: the runner's cycle, batched.
 
-Each control cycle sets every run's command, steps all live runs by one control period on a
-thread pool, and samples what ``run_gait`` would read. The states are bit-identical to
+The cycle is the runner's own (snakebot.control.cycle): the same ``CycleSchedule`` gives the
+cycle times and the scored cycles, the same ``GaitCycle`` makes the commands. Each control cycle
+sets every run's command, steps all live runs by one control period on a thread pool, and
+samples what ``run_gait`` would read. The states are bit-identical to
 ``TwinBackend`` stepping one run at a time (mujoco.batch guarantees it at any thread count), so
 a tuned gait replays in ``snakebot run`` to the same metrics. Runs that fly, flip or diverge are
 stopped early and stop costing time.
@@ -9,9 +11,9 @@ stopped early and stop costing time.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import ClassVar
 
 import mujoco
 import numpy as np
@@ -20,9 +22,10 @@ from mujoco import batch as mj_batch
 from snakebot.backends.twin import GroundFriction, TwinBackend
 from snakebot.backends.twin.model_builder import hold_ctrl_history, joint_name, link_name
 from snakebot.config.schema import RobotConfig
+from snakebot.control.cycle import CycleSchedule
 from snakebot.tuning.commands import BatchCommands
 from snakebot.tuning.feasibility import Envelope
-from snakebot.tuning.trace import FloatArray, Trace
+from snakebot.tuning.trace import SAMPLES, FloatArray, Trace, make_trace
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _RECORD = ("qpos", "qvel", "actuator_force", "subtree_com", "xquat", "geom_xpos", "geom_xmat")
@@ -43,6 +46,14 @@ class TwinLayout:
     link_geoms: np.ndarray
     radius_m: np.ndarray
     half_length_m: np.ndarray
+
+    def clearance_m(self, geom_xpos: FloatArray, geom_xmat: FloatArray) -> FloatArray:
+        """Lowest point of the module capsules above z = 0 for MjData's ``geom_xpos`` (..., G, 3)
+        and ``geom_xmat`` (..., G, 9): shape (...)."""
+        axis_z = np.abs(geom_xmat[..., self.link_geoms, 8])
+        lowest = geom_xpos[..., self.link_geoms, 2] - self.radius_m
+        clearance: FloatArray = (lowest - self.half_length_m * axis_z).min(axis=-1)
+        return clearance
 
 
 def twin_layout(model: mujoco.MjModel, robot: RobotConfig) -> TwinLayout:
@@ -71,6 +82,14 @@ class TwinBatch:
     ) -> None:
         self.robot = robot
         self.workers = max(1, workers)
+        if robot.servo.physics.extras.changes_physics:
+            warnings.warn(
+                f"{robot.name}: battery sag and the overload protection (the servo model's "
+                "battery_resistance_ohm, overload_trip_s) act between control periods of "
+                "`snakebot run`; batched tuning and sysid replays leave them out, so a result "
+                "may replay differently there (docs/physics.md)",
+                stacklevel=2,
+            )
         self.twin = TwinBackend(robot, friction=friction)
         self.twin.connect()
         model, data = self.twin.model, self.twin.data
@@ -115,8 +134,12 @@ class TwinBatch:
         """
         count = commands.size
         dt = 1.0 / rate_hz
-        steps = self.twin.steps_for(dt)
-        times = _cycle_times(self.model.opt.timestep, steps, duration_s, dt, commands.length)
+        steps = self.twin.steps_for(dt)  # a ConfigError saying which rates fit
+        schedule = CycleSchedule(
+            rate_hz, duration_s, self.robot.safety.ramp_s, ramp_out=False,
+            timestep_s=float(self.model.opt.timestep),
+        )
+        times = schedule.cycle_times(commands.length)
         batch = mj_batch.Batch(self.model, count, nthread=min(self.workers, count))
         if models is not None:
             batch.set_models(list(models))
@@ -131,7 +154,7 @@ class TwinBatch:
         check_every = max(1, round((envelope.stop_after_s if envelope else 1.0) * rate_hz))
         chunk = check_every if commands.open_loop else 1
         measured = batch.bind("qpos")[:, lay.qpos_index].copy()
-        commands.reset(measured)
+        commands.reset(measured, schedule)
         k = 0
         while k < len(times) - 1 and live.any():
             span = range(k, min(k + chunk, len(times) - 1))
@@ -151,8 +174,6 @@ class TwinBatch:
             position = end["qpos"][..., lay.qpos_index]
             velocity = end["qvel"][..., lay.dof_index]
             force = end["actuator_force"]
-            axis_z = np.abs(end["geom_xmat"][..., lay.link_geoms, 8])
-            lowest = end["geom_xpos"][..., lay.link_geoms, 2] - lay.radius_m
             rec.store(
                 ids,
                 span,
@@ -165,7 +186,7 @@ class TwinBatch:
                 force=force,
                 com=end["subtree_com"][:, :, lay.head_id],
                 quat=end["xquat"][:, :, lay.head_id],
-                clearance=(lowest - lay.half_length_m * axis_z).min(axis=2),
+                clearance=lay.clearance_m(end["geom_xpos"], end["geom_xmat"]),
             )
             stopped_at[live] = span.stop
             measured[ids] = position[:, -1]
@@ -189,40 +210,12 @@ class TwinBatch:
                 why[b] = reason
 
 
-def _cycle_times(
-    timestep_s: float, steps: int, duration_s: float, dt_s: float, length: float
-) -> list[float]:
-    """Robot time before each cycle and after the last, summed step by step as MuJoCo does, so
-    the cycle count and gait times are run_gait's (which stops half a period before the end)."""
-    times = [0.0]
-    while times[-1] < duration_s - 0.5 * dt_s and len(times) <= length:
-        now = times[-1]
-        for _ in range(steps):
-            now += timestep_s
-        times.append(now)
-    return times
-
-
 class _Recorder:
     """Preallocated (B, K, ...) sample arrays, cut into one Trace per run at the end."""
 
-    # Trailing shape of each array: "" a scalar per cycle, "n" one value per joint, "3" a vector.
-    _FIELDS: ClassVar[dict[str, str]] = {
-        "time_s": "",
-        "target": "n",
-        "command": "n",
-        "position": "n",
-        "velocity": "n",
-        "effort": "n",
-        "force": "n",
-        "com": "3",
-        "quat": "4",
-        "clearance": "",
-    }
-
     def __init__(self, count: int, cycles: int, joints: int) -> None:
         self.arrays: dict[str, FloatArray] = {}
-        for name, kind in self._FIELDS.items():
+        for name, kind in SAMPLES.items():
             tail = () if not kind else (joints,) if kind == "n" else (int(kind),)
             self.arrays[name] = np.zeros((count, cycles, *tail))
 
@@ -236,11 +229,10 @@ class _Recorder:
     ) -> dict[str, np.ndarray]:
         """Live runs that spent the whole last ``window`` cycles in flight or upside down."""
         span = slice(cycle + 1 - window, cycle + 1)
-        com_z = self.arrays["com"][:, span, 2]
-        airborne = envelope.airborne(com_z, self.arrays["clearance"][:, span]).all(axis=1)
-        quat = self.arrays["quat"][:, span]
-        up_z = 1.0 - 2.0 * (quat[..., 1] ** 2 + quat[..., 2] ** 2)
-        flipped = envelope.flipped(up_z).all(axis=1)
+        airborne, flipped = envelope.hopeless(
+            self.arrays["com"][:, span], self.arrays["clearance"][:, span],
+            self.arrays["quat"][:, span],
+        )
         return {
             "airborne": np.flatnonzero(live & airborne),
             "flipped": np.flatnonzero(live & flipped & ~airborne),
@@ -250,19 +242,4 @@ class _Recorder:
         self, run: int, cycles: int, dt_s: float, reason: str, com: FloatArray, quat: FloatArray
     ) -> Trace:
         a = {name: values[run, :cycles].copy() for name, values in self.arrays.items()}
-        return Trace(
-            dt_s=dt_s,
-            time_s=a["time_s"],
-            target_rad=a["target"],
-            command_rad=a["command"],
-            position_rad=a["position"],
-            velocity_rad_s=a["velocity"],
-            effort_nm=a["effort"],
-            actuator_force_nm=a["force"],
-            com_m=a["com"],
-            head_quat=a["quat"],
-            clearance_m=a["clearance"],
-            start_com_m=com.copy(),
-            start_head_quat=quat.copy(),
-            stop_reason=reason,
-        )
+        return make_trace(a, dt_s, com, quat, reason)

@@ -13,13 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from snakebot.backends.base import Backend, JointCommand
+from snakebot.backends.base import Backend
 from snakebot.config.schema import RobotConfig
 from snakebot.control.safety import smooth_ramp
 from snakebot.errors import ConfigError
 from snakebot.telemetry import CsvTelemetryWriter
 from snakebot.tuning.responses import chirp_commands
 from snakebot.tuning.trace import FloatArray
+from snakebot.types import JointCommand
 
 
 def chirp_plan(

@@ -12,6 +12,11 @@ from snakebot.tuning.trace import FloatArray, Trace
 
 SATURATION_FRACTION = 0.95
 FLIPPED_UP_Z = -0.5
+# Physics health (docs/physics.md): the twin's warning thresholds, as the tuner applies them.
+MAX_UPSIDE_DOWN_FRACTION = 0.1
+MAX_PENETRATION_FRACTION = 0.25
+MAX_CHATTER = 0.25
+MOVING_FRACTION = 0.05
 
 
 @dataclass(frozen=True)
@@ -22,7 +27,10 @@ class Envelope:
     own. A run is airborne when no module is within ``contact_tolerance_m`` of the floor or the
     COM rose more than ``lift_limit_m`` above its resting height ``rest_com_z_m``. A joint may sit
     at its torque limit for ``max_saturation_s`` at a stretch. ``stop_after_s`` of continuous
-    flight (or of lying upside down, unless ``allow_roll``) ends a run early.
+    flight (or of lying upside down, unless ``allow_roll``) ends a run early. Lying upside down
+    for more than ``MAX_UPSIDE_DOWN_FRACTION`` of the run in all (unless ``allow_roll``), sinking
+    more than ``MAX_PENETRATION_FRACTION`` of ``radius_m`` into the floor (0: not checked) or
+    chattering (docs/physics.md) makes a gait infeasible.
     """
 
     lower_rad: FloatArray
@@ -36,6 +44,7 @@ class Envelope:
     max_saturation_s: float = 0.25
     stop_after_s: float = 0.25
     allow_roll: bool = False
+    radius_m: float = 0.0
 
     @classmethod
     def for_robot(
@@ -52,6 +61,7 @@ class Envelope:
             rest_com_z_m=rest_com_z_m,
             lift_limit_m=2.0 * robot.link.radius_m,
             allow_roll=allow_roll,
+            radius_m=robot.link.radius_m,
         )
 
     def airborne(self, com_z_m: FloatArray, clearance_m: FloatArray) -> np.ndarray:
@@ -65,6 +75,19 @@ class Envelope:
             return np.zeros(np.shape(up_z), dtype=bool)
         return np.asarray(up_z < FLIPPED_UP_Z)
 
+    def hopeless(
+        self, com_m: FloatArray, clearance_m: FloatArray, head_quat: FloatArray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(airborne, flipped): whether every sample of a window was in flight / upside down.
+
+        ``com_m`` (..., W, 3), ``clearance_m`` (..., W) and ``head_quat`` (..., W, 4) hold W
+        cycles; both results have the leading shape (...).
+        """
+        airborne = self.airborne(com_m[..., 2], clearance_m).all(axis=-1)
+        up_z = 1.0 - 2.0 * (head_quat[..., 1] ** 2 + head_quat[..., 2] ** 2)
+        flipped = self.flipped(up_z).all(axis=-1)
+        return np.asarray(airborne), np.asarray(flipped)
+
 
 @dataclass(frozen=True)
 class Violations:
@@ -74,6 +97,10 @@ class Violations:
     measured joint speed over the allowed one, as a fraction (0.2 = 20 % too fast).
     ``saturation_excess_s``: longest stretch at the torque limit beyond the allowed one.
     ``airborne_fraction``: share of cycles off the ground. ``stopped``: why the run was cut short.
+    Physics health (docs/physics.md): ``upside_down_fraction`` (share of cycles, counted over
+    ``MAX_UPSIDE_DOWN_FRACTION`` unless rolling is allowed), ``penetration_excess`` (deepest
+    floor penetration beyond ``MAX_PENETRATION_FRACTION``, in capsule radii), ``chatter_excess``
+    (the worst joint's share of cycles with a velocity reversal beyond ``MAX_CHATTER``).
     """
 
     joint_limit_rad: float = 0.0
@@ -81,6 +108,10 @@ class Violations:
     saturation_excess_s: float = 0.0
     airborne_fraction: float = 0.0
     stopped: str = ""
+    upside_down_fraction: float = 0.0
+    upside_down_excess: float = 0.0
+    penetration_excess: float = 0.0
+    chatter_excess: float = 0.0
 
     @property
     def feasible(self) -> bool:
@@ -95,6 +126,9 @@ class Violations:
             + self.speed_excess
             + self.saturation_excess_s
             + self.airborne_fraction
+            + self.upside_down_excess
+            + self.penetration_excess
+            + self.chatter_excess
             + (1.0 if self.stopped else 0.0)
         )
 
@@ -106,6 +140,9 @@ class Violations:
             "saturation_excess_s": self.saturation_excess_s,
             "airborne_fraction": self.airborne_fraction,
             "stopped": self.stopped,
+            "upside_down_fraction": self.upside_down_fraction,
+            "penetration_excess": self.penetration_excess,
+            "chatter_excess": self.chatter_excess,
             "feasible": self.feasible,
         }
 
@@ -127,13 +164,35 @@ def assess(trace: Trace, envelope: Envelope, duration_s: float) -> Violations:
     airborne = envelope.airborne(trace.com_m[:, 2], trace.clearance_m)
     planned = max(round(duration_s / trace.dt_s), trace.cycles, 1)
     missing = planned - trace.cycles
+    upside_down = float(np.mean(trace.up_z < FLIPPED_UP_Z)) if trace.cycles else 0.0
+    upside_down_excess = 0.0 if envelope.allow_roll else upside_down - MAX_UPSIDE_DOWN_FRACTION
+    reversals = chatter(trace.velocity_rad_s, envelope.no_load_speed_rad_s)
+    penetration = 0.0
+    if envelope.radius_m > 0 and trace.cycles:
+        depth = -float(trace.clearance_m.min()) / envelope.radius_m
+        penetration = depth - MAX_PENETRATION_FRACTION
     return Violations(
         joint_limit_rad=limit,
         speed_excess=float(speed),
         saturation_excess_s=max(longest - envelope.max_saturation_s, 0.0),
         airborne_fraction=(int(airborne.sum()) + missing) / planned,
         stopped=trace.stop_reason,
+        upside_down_fraction=upside_down,
+        upside_down_excess=max(upside_down_excess, 0.0),
+        penetration_excess=max(penetration, 0.0),
+        chatter_excess=max(reversals - MAX_CHATTER, 0.0),
     )
+
+
+def chatter(velocity_rad_s: FloatArray, no_load_speed_rad_s: float) -> float:
+    """The worst joint's share of cycles (K, N) with a velocity reversal, both sides moving
+    faster than ``MOVING_FRACTION`` of the no-load speed (1.0: reversing every cycle)."""
+    if len(velocity_rad_s) < 2:
+        return 0.0
+    moving = np.abs(velocity_rad_s) > MOVING_FRACTION * no_load_speed_rad_s
+    sign = np.where(moving, np.sign(velocity_rad_s), 0.0)
+    reversals = (sign[1:] * sign[:-1]) < 0
+    return float(reversals.sum(axis=0).max(initial=0)) / len(velocity_rad_s)
 
 
 def _longest_run(flags: np.ndarray) -> int:

@@ -1,4 +1,8 @@
-"""`tune gains` without the command line: search the Position gains, report, write the config."""
+"""`tune gains` without the command line: search the Position gains, report, write the config.
+
+The search runs over the Position P/I/D Gain registers (what the robot file holds); the report
+gives each candidate in registers and in SI (kp N·m/rad, kd N·m·s/rad).
+"""
 
 from __future__ import annotations
 
@@ -7,8 +11,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.base import ServoGains
-from snakebot.config.schema import RobotConfig
+from snakebot.config.fields import read_toml
+from snakebot.config.schema import GainRegisters, RobotConfig
 from snakebot.tuning.config_edit import set_table_values
 from snakebot.tuning.gains import (
     BackendSession,
@@ -75,16 +79,18 @@ def search_gains(
 ) -> GainSearch:
     """A coarse grid around the current gains, then a finer pattern around the best; at most
     ``budget`` candidates (the current gains count as the first)."""
-    current = robot.gains
+    current = robot.gain_registers
+    maxima = robot.servo.gain_max
     grid = candidate_grid(
         current,
+        maxima,
         p_values=4 if budget >= 16 else 3,
         d_values=3 if budget >= 10 else 2,
         i_values=i_values,
     )
     scores: list[GainScore] = []
 
-    def run(candidates: Sequence[ServoGains]) -> None:
+    def run(candidates: Sequence[GainRegisters]) -> None:
         for gains in candidates:
             if len(scores) >= budget:
                 return
@@ -93,7 +99,7 @@ def search_gains(
                 listener(len(scores), budget, scores[-1], min(scores, key=_key))
 
     run(grid)
-    run(refine(min(scores, key=_key).gains, grid))
+    run(refine(min(scores, key=_key).gains, grid, maxima))
     best = min(scores, key=_key)
     before: dict[int, Chirp] = {}
     after: dict[int, Chirp] = {}
@@ -103,18 +109,26 @@ def search_gains(
     return GainSearch(scores[0], best, tuple(scores), before, after)
 
 
-def write_gains(robot: RobotConfig, gains: ServoGains) -> Path:
-    """Set ``[gains]`` of the robot file in place (comments and layout kept)."""
-    set_table_values(
-        robot.source,
-        "gains",
-        {
-            "position_p": gains.position_p,
+def write_gains(robot: RobotConfig, gains: GainRegisters, path: Path | None = None) -> Path:
+    """Set ``[gains]`` of robot file ``path`` (default the robot's own file) in place, comments
+    and layout kept; returns the path written: the Position P/I/D Gain registers, or, where the
+    file gives its gains in SI, kp/kd in SI and the I register (a file holds one form, never
+    both). ConfigError naming the file if it cannot be read, or if the edit would not parse back."""
+    target = robot.source if path is None else path
+    values: dict[str, object] = {
+        "position_p": gains.position_p,
+        "position_i": gains.position_i,
+        "position_d": gains.position_d,
+    }
+    if "kp_nm_per_rad" in read_toml(target).get("gains", {}):
+        pd = robot.servo.gains_of(gains)
+        values = {
+            "kp_nm_per_rad": pd.kp_nm_per_rad,
+            "kd_nms_per_rad": pd.kd_nms_per_rad,
             "position_i": gains.position_i,
-            "position_d": gains.position_d,
-        },
-    )
-    return robot.source
+        }
+    set_table_values(target, "gains", values)
+    return target
 
 
 def _key(score: GainScore) -> tuple[float, float]:

@@ -1,7 +1,10 @@
 """Servo gain tuning on any Backend: step tests one joint at a time, then a reference gait.
 
-The same code drives the twin and the servo chain. Each candidate's Position P/I/D registers go
-to every servo; each tested joint then steps by a small angle while the others hold; then the
+The same code drives the twin and the servo chain. Candidates are Position P/I/D Gain register
+values (what the robot file's ``[gains]`` holds and users know); each goes to the backend as SI
+gains (``robot.servo.gains_of``), plus the I register where the backend has one (the Dynamixel
+chain; the twin's loop is PD). Each tested joint then steps by a small angle while the others
+hold; then the
 reference gait runs through the normal runner (ramp-in and ramp-out included). The loss is the
 gait's tracking error; a candidate is rejected when a step overshoots more than allowed, never
 settles, or the gait holds a joint at its torque (current) limit too long.
@@ -13,12 +16,13 @@ import contextlib
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from snakebot.backends.base import Backend, JointCommand, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.twin.servo_model import servo_dynamics
-from snakebot.config.schema import RobotConfig
+from snakebot.config.schema import GainRegisters, RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
@@ -26,9 +30,27 @@ from snakebot.gaits import make_gait
 from snakebot.tuning.feasibility import SATURATION_FRACTION
 from snakebot.tuning.responses import StepMetrics, chirp_commands, rms, step_commands, step_metrics
 from snakebot.tuning.trace import FloatArray
+from snakebot.types import JointCommand, PDGains
 
-REGISTER_MAX = 16383
 BackendSession = Callable[[], contextlib.AbstractContextManager[Backend]]
+
+
+@runtime_checkable
+class IntegralGain(Protocol):
+    """A backend with a Position I Gain register beside the contract's PD (the Dynamixel chain)."""
+
+    def set_position_i_gain(self, position_i: int) -> None:
+        """Write the Position I Gain register of every servo."""
+
+
+def apply_gains(backend: Backend, robot: RobotConfig, registers: GainRegisters) -> PDGains:
+    """Set a candidate's gains on ``backend``: SI P/D through the contract, and the I register
+    where the backend has one. Returns the SI gains sent."""
+    gains = robot.servo.gains_of(registers)
+    if isinstance(backend, IntegralGain):
+        backend.set_position_i_gain(registers.position_i)
+    backend.set_gains(gains)
+    return gains
 
 
 @dataclass(frozen=True)
@@ -49,9 +71,13 @@ class GainTest:
 
 @dataclass(frozen=True)
 class GainScore:
-    """One candidate's results; ``loss`` is the gait tracking RMS (rad), inf when rejected."""
+    """One candidate's results; ``loss`` is the gait tracking RMS (rad), inf when rejected.
 
-    gains: ServoGains
+    ``gains`` are the candidate's registers, ``pd`` the SI gains they mean for this servo.
+    """
+
+    gains: GainRegisters
+    pd: PDGains
     steps: tuple[StepMetrics, ...]
     tracking_rms_rad: float
     saturation_s: float
@@ -76,6 +102,8 @@ class GainScore:
             "position_p": self.gains.position_p,
             "position_i": self.gains.position_i,
             "position_d": self.gains.position_d,
+            "kp_nm_per_rad": self.pd.kp_nm_per_rad,
+            "kd_nms_per_rad": self.pd.kd_nms_per_rad,
             "tracking_rms_rad": self.tracking_rms_rad,
             "saturation_s": self.saturation_s,
             "feasible": self.feasible,
@@ -85,11 +113,11 @@ class GainScore:
 
 
 def evaluate_gains(
-    session: BackendSession, robot: RobotConfig, gains: ServoGains, test: GainTest
+    session: BackendSession, robot: RobotConfig, gains: GainRegisters, test: GainTest
 ) -> GainScore:
     """Apply ``gains``, run the step tests and the reference gait, and score them."""
     with session() as backend:
-        backend.set_gains(gains)
+        pd = apply_gains(backend, robot, gains)
         steps, traces = [], []
         for joint in test.joints:
             hold = backend.read_state().position_rad
@@ -115,13 +143,13 @@ def evaluate_gains(
             play(backend, np.tile(hold, (max(lead, 1), 1)), test.rate_hz)
         tracking, saturation = _gait_tracking(backend, robot, test)
     reason = _rejection(steps, saturation, test)
-    return GainScore(gains, tuple(steps), tracking, saturation, reason, tuple(traces))
+    return GainScore(gains, pd, tuple(steps), tracking, saturation, reason, tuple(traces))
 
 
 def measure_chirps(
     session: BackendSession,
     robot: RobotConfig,
-    gains: ServoGains,
+    gains: GainRegisters,
     test: GainTest,
     amplitude_rad: float = 0.1,
     duration_s: float = 4.0,
@@ -129,7 +157,7 @@ def measure_chirps(
     """Per tested joint: chirp tracking RMS (rad) and (time, command, position)."""
     out = {}
     with session() as backend:
-        backend.set_gains(gains)
+        apply_gains(backend, robot, gains)
         for joint in test.joints:
             hold = backend.read_state().position_rad
             commands = chirp_commands(
@@ -158,25 +186,33 @@ def play(
 
 
 def candidate_grid(
-    current: ServoGains, p_values: int = 4, d_values: int = 3, i_values: Sequence[int] = ()
-) -> list[ServoGains]:
-    """Stage one: P log-spaced over [P/4, 4P], D over [0, 2D] (at least 0..1000), I as given.
-    The current gains come first."""
+    current: GainRegisters,
+    maxima: GainRegisters,
+    p_values: int = 4,
+    d_values: int = 3,
+    i_values: Sequence[int] = (),
+) -> list[GainRegisters]:
+    """Stage one: P log-spaced over [P/4, 4P], D over [0, 2D] (at least 0..1000), I as given,
+    within the registers' ``maxima``. The current gains come first."""
     p_axis = np.geomspace(
-        max(1, current.position_p // 4), min(REGISTER_MAX, 4 * max(current.position_p, 1)), p_values
+        max(1, current.position_p // 4),
+        min(maxima.position_p, 4 * max(current.position_p, 1)),
+        p_values,
     )
-    d_axis = np.linspace(0, min(REGISTER_MAX, max(2 * current.position_d, 1000)), d_values)
+    d_axis = np.linspace(0, min(maxima.position_d, max(2 * current.position_d, 1000)), d_values)
     out = [current]
     for i in i_values or (current.position_i,):
         for p in p_axis:
             for d in d_axis:
-                gains = ServoGains(round(float(p)), int(i), round(float(d)))
+                gains = GainRegisters(round(float(p)), int(i), round(float(d)))
                 if gains not in out:
                     out.append(gains)
     return out
 
 
-def refine(best: ServoGains, grid: Sequence[ServoGains]) -> list[ServoGains]:
+def refine(
+    best: GainRegisters, grid: Sequence[GainRegisters], maxima: GainRegisters
+) -> list[GainRegisters]:
     """Stage two: a 3 x 3 pattern around ``best`` at half the stage-one spacing."""
     ps = sorted({g.position_p for g in grid})
     ds = sorted({g.position_d for g in grid})
@@ -189,10 +225,10 @@ def refine(best: ServoGains, grid: Sequence[ServoGains]) -> list[ServoGains]:
         best.position_p * math.sqrt(p_ratio),
     ):
         for d in (best.position_d - d_step, best.position_d, best.position_d + d_step):
-            gains = ServoGains(
-                int(np.clip(round(p), 1, REGISTER_MAX)),
+            gains = GainRegisters(
+                int(np.clip(round(p), 1, maxima.position_p)),
                 best.position_i,
-                int(np.clip(round(d), 0, REGISTER_MAX)),
+                int(np.clip(round(d), 0, maxima.position_d)),
             )
             if gains not in out and gains not in grid:
                 out.append(gains)

@@ -177,7 +177,7 @@ class GaitProblem:
             ]
             return self._pool.run(jobs)
         gaits = [self.gait(p) for p in params]
-        commands = GaitCommands(gaits, robot, 1.0 / plan.rate_hz)
+        commands = GaitCommands(gaits, robot)
         return self._twin.run(commands, plan.duration_s, plan.rate_hz, envelope=self.envelope)
 
     def gait(self, params: Mapping[str, ParamValue]) -> Gait:

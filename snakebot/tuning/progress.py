@@ -87,10 +87,11 @@ def gait_summary_text(summary: dict[str, Any]) -> str:
 
 def gain_line(done: int, total: int, score: Any) -> str:
     """One progress line of `tune gains`: the candidate and how it did."""
-    gains = score.gains
+    gains, pd = score.gains, score.pd
     status = "ok" if score.feasible else score.reason
     return (
-        f"  [{done}/{total}] P={gains.position_p} I={gains.position_i} D={gains.position_d}: "
+        f"  [{done}/{total}] P={gains.position_p} I={gains.position_i} D={gains.position_d} "
+        f"(kp {pd.kp_nm_per_rad:.3g} N·m/rad, kd {pd.kd_nms_per_rad:.3g} N·m·s/rad): "
         f"gait tracking {score.tracking_rms_rad:.4f} rad ({status})"
     )
 
@@ -103,9 +104,12 @@ def gains_summary_text(summary: dict[str, Any]) -> str:
         f"{now['position_p']}/{now['position_i']}/{now['position_d']} -> "
         f"{best['tracking_rms_rad']:.4f} rad at "
         f"{best['position_p']}/{best['position_i']}/{best['position_d']}",
+        f"  in SI: kp {now['kp_nm_per_rad']:.4g} -> {best['kp_nm_per_rad']:.4g} N·m/rad, "
+        f"kd {now['kd_nms_per_rad']:.4g} -> {best['kd_nms_per_rad']:.4g} N·m·s/rad",
         f"  written to {summary['written_to']}"
         if "written_to" in summary
-        else "  robot file unchanged",
+        else "  robot file unchanged"
+        + (f": {summary['not_written']}" if "not_written" in summary else ""),
     ]
     return "\n".join(lines)
 

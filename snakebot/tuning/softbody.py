@@ -15,15 +15,15 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-import numpy.typing as npt
 
 from snakebot.backends.softbody import SoftBodyBackend
 from snakebot.config.body import BodyConfig
+from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.errors import SimulationDivergedError
-from snakebot.gaits import Gait, make_gait
+from snakebot.gaits import make_gait
 from snakebot.gaits.spec import ParamValue
 from snakebot.tuning.feasibility import Violations
 from snakebot.tuning.objectives import Objective
@@ -52,60 +52,37 @@ class SoftOutcome:
     violations: Violations
 
 
-class _Recording(Gait):
-    """Delegates to a gait and keeps every target it returned (before the safety layer)."""
-
-    def __init__(self, gait: Gait) -> None:
-        self.gait = gait
-        self.joint_count = gait.joint_count
-        self.targets_seen: list[FloatArray] = []
-
-    @property
-    def period_s(self) -> float | None:
-        return self.gait.period_s
-
-    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        return self.gait.targets(time_s)
-
-    def command(self, time_s: float, measured_rad: FloatArray | None = None) -> FloatArray:
-        target = self.gait.command(time_s, measured_rad)
-        self.targets_seen.append(target)
-        return target
-
-    def reset(self) -> None:
-        self.gait.reset()
-
-
 def run_soft_job(job: SoftJob) -> SoftOutcome:
     """Run one candidate like `snakebot run --robot BODY --json` and assess it."""
     body = job.body
-    gait = _Recording(
-        make_gait(job.gait, body.joint_count, job.params, lower_rad=body.lower_rad,
-                  upper_rad=body.upper_rad)
-    )
+    gait = make_gait(job.gait, body.joint_count, job.params, lower_rad=body.lower_rad,
+                     upper_rad=body.upper_rad)
     metrics = RunMetrics(body.joint_count, body.body_length_m, body.total_mass_kg)
     plan = RunPlan(job.duration_s, job.rate_hz, ramp_out=False)
     backend = SoftBodyBackend(body, friction=job.friction)
+    targets_seen: list[FloatArray] = []
     touching: list[bool] = []
 
-    def sample(cycle: int, gait_time_s: float) -> None:
+    def sample(record: CycleRecord) -> None:
+        targets_seen.append(record.target_rad)
         touching.append(backend.data.ncon > 0)
 
     stopped = ""
     with backend:
+        schedule = plan.schedule(body.safety.ramp_s, float(backend.model.opt.timestep))
         try:
             result = run_gait(
-                backend, gait, SafetyLayer.for_robot(body), plan, metrics, on_cycle=sample
+                backend, gait, SafetyLayer.for_robot(body), plan, metrics, observers=[sample]
             )
             summary = result.summary
         except SimulationDivergedError:
             stopped = "diverged"
             summary = metrics.summary(gait.period_s)
     summary.update(backend.stats.extra)
-    targets = np.array(gait.targets_seen) if gait.targets_seen else np.zeros((1, body.joint_count))
+    targets = np.array(targets_seen) if targets_seen else np.zeros((1, body.joint_count))
     beyond = np.maximum(targets - body.upper_rad, body.lower_rad - targets)
     rate = float(np.abs(np.diff(targets, axis=0)).max(initial=0.0)) * job.rate_hz
-    planned = max(round(job.duration_s * job.rate_hz), 1)
+    planned = max(schedule.planned_cycles, 1)
     airborne = planned - sum(touching)
     violations = Violations(
         joint_limit_rad=max(float(beyond.max(initial=0.0)), 0.0),

@@ -34,7 +34,7 @@ from snakebot.tuning.commands import ArrayCommands
 from snakebot.tuning.engine import TwinBatch
 from snakebot.tuning.trace import FloatArray
 
-PARAMS = ("stiffness", "damping", "armature", "friction_loss", "delay")
+PARAMS = ("stiffness", "damping", "armature", "friction_loss", "delay", "p_divisor")
 DEFAULT_PARAMS = ("stiffness", "damping", "armature")
 # Where each parameter lives in ServoFit and in the robot file's [twin.servo].
 FIELDS = {
@@ -43,6 +43,7 @@ FIELDS = {
     "armature": "armature_kgm2",
     "friction_loss": "friction_loss_nm",
     "delay": "actuator_delay_s",
+    "p_divisor": "p_gain_divisor",
 }
 VELOCITY_WEIGHT_S = 0.05
 SEARCH_FACTOR = 5.0  # each parameter is searched within [current / 5, current * 5]
@@ -58,12 +59,16 @@ class ServoFit:
     """The fitted servo parameters as the robot file's ``[twin.servo]`` holds them.
 
     ``actuator_delay_s`` None: the twin has no delay model (and no command history).
+    ``p_gain_divisor``: the servo's gain mapping's P divisor (snakebot.servo.GainMapping; 256
+    bam's XL330, 128 the e-Manual); fitting it alone says which holds for your servo, fitting it
+    with ``stiffness`` is degenerate (both scale the same stiffness).
     """
 
     stiffness_scale: float
     damping_nms: float
     armature_kgm2: float
     friction_loss_nm: float
+    p_gain_divisor: float
     actuator_delay_s: float | None = None
 
     @classmethod
@@ -76,11 +81,16 @@ class ServoFit:
             servo.joint_damping_nms,
             servo.armature_kgm2,
             servo.friction_loss_nm,
+            physics.p_gain_divisor,
             physics.actuator_delay_s,
         )
 
     def apply(self, robot: RobotConfig) -> RobotConfig:
-        """``robot`` with these servo parameters, as if written to its ``[twin.servo]``."""
+        """``robot`` with these servo parameters, as if written to its ``[twin.servo]``.
+
+        Another ``p_gain_divisor`` keeps the gain registers the robot's servos hold (those the
+        log was recorded with) and gives the SI gains they mean under the new mapping.
+        """
         physics = dataclasses.replace(
             robot.servo.physics,
             stiffness_scale=self.stiffness_scale,
@@ -88,8 +98,13 @@ class ServoFit:
             armature_kgm2=self.armature_kgm2,
             friction_loss_nm=self.friction_loss_nm,
             actuator_delay_s=self.actuator_delay_s,
+            p_gain_divisor=self.p_gain_divisor,
         )
-        return dataclasses.replace(robot, servo=dataclasses.replace(robot.servo, physics=physics))
+        servo = dataclasses.replace(robot.servo, physics=physics)
+        gains = robot.gains
+        if physics.p_gain_divisor != robot.servo.physics.p_gain_divisor:
+            gains = servo.gains_of(robot.gain_registers)
+        return dataclasses.replace(robot, servo=servo, gains=gains)
 
     def scaled(self, names: Sequence[str], factors: Sequence[float]) -> ServoFit:
         """These values with parameter ``names[i]`` multiplied by ``factors[i]``; ``delay`` is
@@ -100,6 +115,7 @@ class ServoFit:
             self.damping_nms * fields.get("damping", 1.0),
             self.armature_kgm2 * fields.get("armature", 1.0),
             self.friction_loss_nm * fields.get("friction_loss", 1.0),
+            self.p_gain_divisor * fields.get("p_divisor", 1.0),
             fields.get("delay", self.actuator_delay_s),
         )
 
@@ -110,7 +126,8 @@ class ServoFit:
 
     def report(self, robot: RobotConfig) -> dict[str, float]:
         """JSON-ready values, with the stiffness also in N·m/rad at the robot's gains."""
-        servo = servo_dynamics(self.apply(robot).servo.physics, robot.gains)
+        fitted = self.apply(robot)
+        servo = servo_dynamics(fitted.servo.physics, fitted.gains)
         return {
             "stiffness_scale": self.stiffness_scale,
             "stiffness_nm_per_rad": servo.stiffness_nm_per_rad,
@@ -118,6 +135,7 @@ class ServoFit:
             "armature_kgm2": self.armature_kgm2,
             "friction_loss_nm": self.friction_loss_nm,
             "actuator_delay_s": self.actuator_delay_s or 0.0,
+            "p_gain_divisor": self.p_gain_divisor,
         }
 
 

@@ -7,11 +7,27 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.backends.base import BodyState, JointState
 from snakebot.config.schema import RobotConfig
+from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
+from snakebot.types import BodyState, JointState
 
 FloatArray = npt.NDArray[np.float64]
+
+SAMPLES: dict[str, str] = {
+    "time_s": "",
+    "target": "n",
+    "command": "n",
+    "position": "n",
+    "velocity": "n",
+    "effort": "n",
+    "force": "n",
+    "com": "3",
+    "quat": "4",
+    "clearance": "",
+}
+"""What a Trace samples every cycle, and each sample's trailing shape: "" a scalar, "n" one value
+per joint, "3"/"4" a vector. The batch engine's arrays and ``TraceRows`` share this layout."""
 
 
 @dataclass(frozen=True)
@@ -50,6 +66,76 @@ class Trace:
         x, y = self.head_quat[:, 1], self.head_quat[:, 2]
         up: FloatArray = 1.0 - 2.0 * (x * x + y * y)
         return up
+
+
+def make_trace(
+    samples: dict[str, FloatArray],
+    dt_s: float,
+    start_com_m: FloatArray,
+    start_head_quat: FloatArray,
+    stop_reason: str,
+) -> Trace:
+    """A Trace from ``SAMPLES`` arrays of K cycles each ((K,) or (K, ...))."""
+    a = samples
+    return Trace(
+        dt_s=dt_s,
+        time_s=a["time_s"],
+        target_rad=a["target"],
+        command_rad=a["command"],
+        position_rad=a["position"],
+        velocity_rad_s=a["velocity"],
+        effort_nm=a["effort"],
+        actuator_force_nm=a["force"],
+        com_m=a["com"],
+        head_quat=a["quat"],
+        clearance_m=a["clearance"],
+        start_com_m=start_com_m.copy(),
+        start_head_quat=start_head_quat.copy(),
+        stop_reason=stop_reason,
+    )
+
+
+class TraceRows:
+    """Trace samples taken from ``run_gait``'s cycle records, one cycle at a time.
+
+    ``add`` takes a record with a body (a twin) and what only the twin's MjData has: the
+    actuator forces (N,) and the clearance (m).
+    """
+
+    def __init__(self, joint_count: int) -> None:
+        self.joint_count = joint_count
+        self.rows: dict[str, list[FloatArray | float]] = {name: [] for name in SAMPLES}
+
+    @property
+    def cycles(self) -> int:
+        """Cycles sampled so far."""
+        return len(self.rows["time_s"])
+
+    def add(self, record: CycleRecord, force_nm: FloatArray, clearance_m: float) -> None:
+        """Sample one cycle."""
+        if record.body is None:
+            raise ValueError("a trace needs the body state (a simulated backend)")
+        state, rows = record.state, self.rows
+        rows["time_s"].append(state.time_s)
+        rows["target"].append(record.target_rad.copy())
+        rows["command"].append(record.command_rad.copy())
+        rows["position"].append(state.position_rad)
+        rows["velocity"].append(state.velocity_rad_s)
+        rows["effort"].append(state.effort_nm)
+        rows["force"].append(force_nm)
+        rows["com"].append(record.body.com_m)
+        rows["quat"].append(record.body.head_quat)
+        rows["clearance"].append(clearance_m)
+
+    def arrays(self, last: int | None = None) -> dict[str, FloatArray]:
+        """The samples (of the ``last`` cycles only, when given) as (K, ...) arrays."""
+        start = 0 if last is None else max(self.cycles - last, 0)
+        out = {}
+        for name, kind in SAMPLES.items():
+            tail = () if not kind else (self.joint_count,) if kind == "n" else (int(kind),)
+            values = self.rows[name][start:]
+            out[name] = np.array(values, dtype=float).reshape(len(values), *tail)
+        return out
 
 
 def summarise(trace: Trace, robot: RobotConfig, period_s: float | None) -> dict[str, object]:

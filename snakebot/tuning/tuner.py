@@ -11,7 +11,7 @@ from snakebot.config.body import BodyConfig
 from snakebot.config.loader import resolve_robot_path
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
-from snakebot.gaits import save_gait_file
+from snakebot.gaits import check_joint_axes, save_gait_file
 from snakebot.tuning.genetic import Generation, genetic_search
 from snakebot.tuning.grid import GridResult, grid_search
 from snakebot.tuning.objectives import Objective
@@ -112,6 +112,7 @@ def tune_gait(
         plan = replace(plan, engine="processes")
         problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
     else:
+        check_joint_axes(space.gait, [joint.axis for joint in robot.joints], robot.name)
         problem = GaitProblem(robot, space, objective, plan, listener=listener)
     try:
         grid: GridResult | None = None

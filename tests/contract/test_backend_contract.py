@@ -1,87 +1,54 @@
-"""The conformance suite every backend passes (DESIGN.md, "The backend contract")."""
+"""The conformance suite every backend passes (snakebot.testing.BackendContract, DESIGN.md "The
+backend contract"), run here on the built-in backends, each made through the backend registry."""
 
 from __future__ import annotations
 
-import numpy as np
-import pytest
+import contextlib
+from collections.abc import Iterator
+from dataclasses import replace
 
-from snakebot.backends.base import JointCommand, ServoGains
-from snakebot.errors import BackendStateError
-from tests.contract.conftest import BackendFactory
-
-
-def test_calls_before_connect_fail_clearly(make_backend: BackendFactory) -> None:
-    backend = make_backend("snake8")
-    with pytest.raises(BackendStateError, match="not connected"):
-        backend.read_state()
-    with pytest.raises(BackendStateError, match="call connect"):
-        backend.send_command(JointCommand(np.zeros(8)))
-    with pytest.raises(BackendStateError):
-        backend.advance(0.01)
+from snakebot.backends.base import Backend
+from snakebot.backends.registry import make_backend
+from snakebot.config import RobotConfig
+from snakebot.config.body_loader import load_body
+from snakebot.emulation import make_chain_for_ids, registered
+from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.testing import BackendContract, RobotFactory
 
 
-def test_connect_twice_fails_clearly(make_backend: BackendFactory) -> None:
-    with make_backend("snake8") as backend, pytest.raises(BackendStateError, match="already"):
-        backend.connect()
+class TestTwin(BackendContract):
+    def make(self, robot: RobotConfig) -> Backend:
+        # Frictionless ground: the contract checks the servo loop, not locomotion.
+        return make_backend(robot, "twin", friction="0,0")
 
 
-def test_close_is_idempotent_and_final(make_backend: BackendFactory) -> None:
-    backend = make_backend("snake8")
-    backend.connect()
-    backend.close()
-    backend.close()
-    with pytest.raises(BackendStateError, match="closed"):
-        backend.read_state()
-    with pytest.raises(BackendStateError, match="closed"):
-        backend.connect()
+class TestSoftBody(BackendContract):
+    def make(self, robot: RobotConfig) -> Backend:
+        """Miller's snake lattice with one yaw muscle channel per joint of ``robot``."""
+        body = load_body("snake")
+        body = replace(
+            body,
+            lattice=replace(body.lattice, segments=robot.joint_count),
+            muscles=replace(body.muscles, channels=("yaw",)),
+        )
+        return make_backend(body, "softbody", friction=0.0)
 
 
-def test_close_leaves_torque_as_configured(make_backend: BackendFactory) -> None:
-    backend = make_backend("snake8")
-    with backend:
-        assert backend.torque_enabled
-    assert backend.torque_enabled == (backend.stop_policy == "hold")
+class TestDynamixel(BackendContract):
+    """The real dynamixel_sdk over the in-process emulator; the bus clock is the backend's."""
 
+    @contextlib.contextmanager
+    def backends(self) -> Iterator[RobotFactory]:
+        with contextlib.ExitStack() as stack:
 
-def test_advance_moves_time_by_dt(make_backend: BackendFactory) -> None:
-    with make_backend("snake8") as backend:
-        start = backend.read_state().time_s
-        for _ in range(10):
-            backend.advance(0.02)
-        elapsed = backend.read_state().time_s - start
-    assert elapsed == pytest.approx(0.2, abs=0.03)
+            def make(robot: RobotConfig) -> Backend:
+                chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud)
+                for servo in chain.servos:
+                    servo.poke("return_delay_time", 0)
+                url = stack.enter_context(registered(chain))
+                return make_backend(
+                    robot, "dynamixel", port=url, port_handler_factory=EmulatedPortHandler,
+                    clock=lambda: chain.now_s, sleep=chain.advance,
+                )  # fmt: skip
 
-
-def test_state_has_one_value_per_joint(make_backend: BackendFactory) -> None:
-    with make_backend("snake12") as backend:
-        state = backend.read_state()
-    for array in (state.position_rad, state.velocity_rad_s, state.effort_nm):
-        assert array.shape == (12,)
-        assert np.isfinite(array).all()
-
-
-def test_wrong_command_shape_is_refused(make_backend: BackendFactory) -> None:
-    with make_backend("snake8") as backend, pytest.raises(ValueError, match=r"expected \(8,\)"):
-        backend.send_command(JointCommand(np.zeros(7)))
-
-
-def test_commanded_step_converges(make_backend: BackendFactory) -> None:
-    goal = np.array([0.3, -0.3, 0.2, -0.2, 0.1, -0.1, 0.25, -0.25])
-    with make_backend("snake8") as backend:
-        backend.send_command(JointCommand(goal))
-        for _ in range(150):
-            backend.advance(0.01)
-        state = backend.read_state()
-    np.testing.assert_allclose(state.position_rad, goal, atol=0.03)
-
-
-def test_torque_off_then_gains_on_again(make_backend: BackendFactory) -> None:
-    with make_backend("snake8") as backend:
-        backend.set_torque(False)
-        assert not backend.torque_enabled
-        backend.set_gains(ServoGains(position_p=800, position_d=0))
-        backend.set_torque(True)
-        backend.send_command(JointCommand(np.full(8, 0.2)))
-        for _ in range(150):
-            backend.advance(0.01)
-        assert np.all(np.abs(backend.read_state().position_rad - 0.2) < 0.03)
+            yield make

@@ -2,9 +2,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
+from snakebot.types import JointCommand
 
 
 def _trace() -> np.ndarray:

@@ -17,6 +17,7 @@ import tomllib
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
+from snakebot.backends.registry import BACKENDS
 from snakebot.gaits import GAITS
 
 EXAMPLE = Path(__file__).resolve().parent / "example"
@@ -65,11 +66,12 @@ def environment(site: Path) -> dict[str, str]:
 
 @contextlib.contextmanager
 def on_path(site: Path) -> Iterator[None]:
-    """Make the plugins in ``site`` visible to this process (the gait registry re-reads its
-    entry points), then remove them and every module imported from ``site``."""
+    """Make the plugins in ``site`` visible to this process (the gait and backend registries
+    re-read their entry points), then remove them and every module imported from ``site``."""
     sys.path.insert(0, str(site))
     importlib.invalidate_caches()
     GAITS.refresh()
+    BACKENDS.refresh()
     try:
         yield
     finally:
@@ -80,3 +82,4 @@ def on_path(site: Path) -> Iterator[None]:
                 del sys.modules[name]
         importlib.invalidate_caches()
         GAITS.refresh()
+        BACKENDS.refresh()

@@ -1,18 +1,34 @@
 """The example plugin installed beside snakebot: its gait is listed, runs on the twin and tunes,
-all through the `snakebot` command line in a subprocess, as a user would meet it."""
+its backend is a `--backend` choice that runs gaits and passes snakebot.testing's contract, all
+through the `snakebot` command line in a subprocess (and snakebot.connect), as a user meets it."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import subprocess
 import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+import snakebot as api
+from snakebot.backends.base import Backend
+from snakebot.backends.registry import make_backend
+from snakebot.config import RobotConfig
+from snakebot.errors import BackendError
 from snakebot.telemetry.csv_log import read_log
-from tests.plugins.install import environment, install_project, write_dist_info, write_module
+from snakebot.testing import BackendContract, RobotFactory
+from tests.plugins.install import (
+    environment,
+    install_project,
+    on_path,
+    write_dist_info,
+    write_module,
+)
 
 ORIGIN = "plugin snakebot-example-plugin 0.1.0"
 
@@ -131,3 +147,72 @@ def test_clashing_plugins_are_named_and_a_builtin_name_stays_builtin(site: Path)
     assert clash.returncode == 1
     error = clash.stderr.splitlines()[-1]
     assert "snakebot-rival-plugin 2.0" in error and "snakebot-example-plugin 0.1.0" in error
+
+
+def test_the_plugin_backend_is_a_backend_choice_and_follows_the_gait(
+    site: Path, tmp_path: Path
+) -> None:
+    usage = snakebot(site, "run", "--help")
+    assert usage.returncode == 0 and "kinematic" in usage.stdout
+    log = tmp_path / "kinematic.csv"
+    run = snakebot(
+        site, "run", "--backend", "kinematic", "--gait", "standing_wave", "--duration", "2",
+        "--log", str(log), "--json",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    summary = json.loads(run.stdout)
+    assert summary["backend"] == "kinematic" and summary["gait"] == "standing_wave"
+    assert summary["distance_m"] is None  # no body to measure: no COM, like hardware
+    assert summary["tracking_rms_rad"] < 0.01  # it reaches each command within the cycle
+    telemetry = read_log(log)
+    np.testing.assert_allclose(
+        telemetry.joints("position_rad"), telemetry.joints("command_rad"), atol=1e-12
+    )
+    assert np.ptp(telemetry.joints("position_rad")[:, 0]) > 0.5  # the wave really played
+
+
+def test_options_the_plugin_backend_does_not_take_are_refused(site: Path) -> None:
+    run = snakebot(
+        site, "run", "--backend", "kinematic", "--port", "/dev/ttyUSB0", "--duration", "0.2"
+    )
+    assert run.returncode == 2
+    assert "--port does nothing with the kinematic backend" in run.stderr
+
+
+def test_the_plugin_backend_drives_live_from_a_script(site: Path, tmp_path: Path) -> None:
+    script = tmp_path / "keys.txt"
+    script.write_text("0 w\n0 w\n1.5 q\n")
+    drive = snakebot(site, "drive", "--backend", "kinematic", "--script", str(script), "--json")
+    assert drive.returncode == 0, drive.stderr
+    summary = json.loads(drive.stdout)
+    assert summary["backend"] == "kinematic" and summary["max_abs_command_rad"] > 0.1
+
+
+def test_the_plugin_backend_through_snakebot_connect(site: Path) -> None:
+    with on_path(site):
+        assert "kinematic" in api.backend_names()
+        with api.connect("snake8", backend="kinematic", max_speed_rad_s=2.0) as snake:
+            summary = snake.run("standing_wave", duration_s=3.0, params={"amplitude": 0.3})
+            state = snake.read_state()
+        assert summary.backend == "kinematic" and summary.gait == "standing_wave"
+        assert summary.max_abs_command_rad == pytest.approx(0.3, abs=0.01)
+        np.testing.assert_allclose(state.position_rad, 0.0, atol=1e-9)  # ramped out to rest
+        unknown = r"unknown backend 'kinematc' \(did you mean 'kinematic'\?\)"
+        with pytest.raises(BackendError, match=unknown):
+            api.connect("snake8", backend="kinematc")
+
+
+class TestKinematicContract(BackendContract):
+    """The plugin's backend, found through its entry point, passes snakebot's own suite."""
+
+    @contextlib.contextmanager
+    def backends(self) -> Iterator[RobotFactory]:
+        with tempfile.TemporaryDirectory() as folder:
+            site = Path(folder)
+            install_project(site)
+            with on_path(site):
+
+                def make(robot: RobotConfig) -> Backend:
+                    return make_backend(robot, "kinematic")
+
+                yield make

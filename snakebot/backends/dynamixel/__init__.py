@@ -21,7 +21,7 @@ from snakebot.backends.dynamixel.faults import (
     decode_hardware_error,
 )
 from snakebot.backends.dynamixel.supervision import TrackingLimits
-from snakebot.backends.dynamixel.ticks import TickConverter, rad_to_ticks, ticks_to_rad
+from snakebot.backends.dynamixel.ticks import TickConverter
 
 __all__ = [
     "ChainMismatchError",
@@ -40,6 +40,4 @@ __all__ = [
     "TrackingLimits",
     "WatchdogTripError",
     "decode_hardware_error",
-    "rad_to_ticks",
-    "ticks_to_rad",
 ]

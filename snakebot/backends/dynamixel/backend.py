@@ -10,6 +10,7 @@ Stopping (``close``, a failed ``connect``) is in ``stopping.py``, connect-time c
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 import warnings
@@ -17,7 +18,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from snakebot.backends.base import Backend, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.checks import (
     LIMIT_KEYS,
@@ -43,9 +44,10 @@ from snakebot.backends.dynamixel.stopping import StopSequence
 from snakebot.backends.dynamixel.supervision import CatchUp, TrackingLimits, TrackingMonitor
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.backends.pacing import Pacer
-from snakebot.config.schema import RobotConfig
+from snakebot.config.schema import GainRegisters, RobotConfig
 from snakebot.errors import BackendError, BusError
 from snakebot.servo_tables import supported_models, table_for_model
+from snakebot.types import JointState, PDGains
 
 log = logging.getLogger(__name__)
 
@@ -115,7 +117,7 @@ class DynamixelBackend(Backend):
         self.torque_may_be_on = False
         """Whether any servo may have torque on: from just before Torque Enable goes out until
         the stop policy has been applied. While it is set, every way out applies the policy."""
-        self.health: dict[str, np.ndarray] = {}
+        self._health: dict[str, np.ndarray] = {}
         """Latest slow-rate readings, shape (N,): ``input_voltage_v``, ``temperature_c``."""
         self.clock, self.sleep = clock, sleep
         self.max_ticks_per_s = robot.max_speed_rad_s / self.converter.rad_per_tick
@@ -125,6 +127,11 @@ class DynamixelBackend(Backend):
         self.goal_terms: GoalTerms = self.converter.goal_terms
         """Goal bounds in use: the joint limits, widened for a joint found outside them."""
         self.catch_up: CatchUp | None = None
+        self.position_i_gain = robot.position_i_gain
+        """The Position I Gain register written with every ``set_gains`` (Dynamixel only)."""
+        self.gain_registers: GainRegisters | None = None
+        """The Position P/I/D Gain registers last written: ``set_gains``'s SI gains rounded and
+        clipped to the control table's maxima."""
         self._pacer: Pacer | None = None
         self._cycle = 0
         self._fed_s = 0.0  # clock() at the start of the last transaction to every servo
@@ -296,10 +303,16 @@ class DynamixelBackend(Backend):
         table = self.bus.table
         volts = np.array([values[i]["present_input_voltage"] for i in self.ids], dtype=float)
         temps = np.array([values[i]["present_temperature"] for i in self.ids], dtype=float)
-        self.health["input_voltage_v"] = volts * table["present_input_voltage"].scale
-        self.health["temperature_c"] = temps * table["present_temperature"].scale
-        self.stats.extra["max_temperature_c"] = float(self.health["temperature_c"].max())
-        self.stats.extra["min_input_voltage_v"] = float(self.health["input_voltage_v"].min())
+        self._health["input_voltage_v"] = volts * table["present_input_voltage"].scale
+        self._health["temperature_c"] = temps * table["present_temperature"].scale
+        self.stats.extra["max_temperature_c"] = float(self._health["temperature_c"].max())
+        self.stats.extra["min_input_voltage_v"] = float(self._health["input_voltage_v"].min())
+
+    def health(self) -> dict[str, np.ndarray]:
+        """The servos' slow readings, head to tail, as of the last slow read (every
+        ``slow_every`` cycles): ``input_voltage_v`` (N,) and ``temperature_c`` (N,); empty
+        before the first."""
+        return dict(self._health)
 
     def _send_command(self, position_rad: np.ndarray) -> None:
         ticks, clipped = self.converter.goal_ticks(position_rad, self.goal_terms)
@@ -342,10 +355,27 @@ class DynamixelBackend(Backend):
         self.last_rows = rows
         return [row[-1] for row in rows]
 
-    def _set_gains(self, gains: ServoGains) -> None:
-        pid = (gains.position_d, gains.position_i, gains.position_p)
+    def _set_gains(self, gains: PDGains) -> None:
+        registers = self.robot.servo.registers_of(gains, self.position_i_gain)
+        pid = (registers.position_d, registers.position_i, registers.position_p)
         keys = ("position_d_gain", "position_i_gain", "position_p_gain")
         self.bus.sync_write(keys, dict.fromkeys(self.ids, pid))
+        self.gain_registers = registers
+        log.debug("%s: Position P/I/D Gain %d/%d/%d for kp %.4g N·m/rad, kd %.4g N·m·s/rad",
+                  self.port, registers.position_p, registers.position_i, registers.position_d,
+                  gains.kp_nm_per_rad, gains.kd_nms_per_rad)
+
+    def set_position_i_gain(self, position_i: int) -> None:
+        """Write the Position I Gain register of every servo (a Dynamixel-only setting: the
+        Backend contract's gains are PD); ValueError beyond the control table's range."""
+        self._require_connected()
+        maximum = self.robot.servo.gain_max.position_i
+        if not 0 <= position_i <= maximum:
+            raise ValueError(f"Position I Gain must be 0..{maximum}, got {position_i}")
+        self.bus.sync_write("position_i_gain", dict.fromkeys(self.ids, position_i))
+        self.position_i_gain = position_i
+        if self.gain_registers is not None:
+            self.gain_registers = dataclasses.replace(self.gain_registers, position_i=position_i)
 
     def _set_torque(self, enabled: bool) -> None:
         if not enabled:

@@ -53,7 +53,7 @@ class DynamixelBus:
         self.protocol = protocol
         self.table: ServoTable = table_for_model(model)
         check_port(port)  # device paths and dxlemu:// only: no socket://, spy://?file=, ...
-        factory = port_handler_factory or sdk.default_port_handler
+        factory = port_handler_factory or sdk.port_handler_for
         self._link = sdk.SdkLink(factory(port), protocol)
         self.transport = Transport(port, self._link, retries, clock)
         self._sync_plans: dict[tuple[Block, tuple[int, ...]], SyncReadPlan] = {}

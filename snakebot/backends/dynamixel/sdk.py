@@ -15,6 +15,9 @@ from typing import Any, Protocol
 
 import dynamixel_sdk as _sdk
 
+from snakebot.config.ports import url_scheme
+from snakebot.errors import BusError
+
 try:
     import termios
 except ImportError:  # Windows: pyserial reports everything as OSError (SerialException)
@@ -196,6 +199,38 @@ def default_port_handler(port: str) -> PortHandlerLike:
     reads that wait on the port instead of spinning (:class:`WaitingPortHandler`)."""
     handler: PortHandlerLike = WaitingPortHandler(port)
     return handler
+
+
+_URL_PORT_HANDLERS: dict[str, PortHandlerFactory] = {}
+
+
+def register_url_port_handler(scheme: str, factory: PortHandlerFactory) -> None:
+    """Open ``scheme://...`` ports with ``factory`` from now on (idempotent).
+
+    The emulator registers its ``dxlemu`` handler when it registers a chain, so production code
+    opens emulator URLs without importing the emulator. snakebot.config.ports still decides which
+    schemes may be opened at all.
+    """
+    _URL_PORT_HANDLERS[scheme.lower()] = factory
+
+
+def port_handler_for(port: str) -> PortHandlerLike:
+    """The port handler for ``port``: a registered URL scheme's, else the SDK's for a device path.
+
+    Raises BusError for a URL whose scheme nothing in this process registered (an emulator URL
+    addresses a chain inside the same program).
+    """
+    scheme = url_scheme(port)
+    if scheme is None:
+        return default_port_handler(port)
+    factory = _URL_PORT_HANDLERS.get(scheme)
+    if factory is None:
+        raise BusError(
+            port, (), f"nothing in this program serves {scheme}:// ports: an emulator URL names "
+            "a chain started in the same process (from another process, run `snakebot emulate "
+            "--pty` and use the device path it prints)",
+        )
+    return factory(port)
 
 
 class SdkLink:

@@ -1,13 +1,8 @@
-"""Joint radians <-> servo position ticks, the one calibration convention of the Dynamixel backend.
+"""Joint radians <-> servo position ticks for a whole chain, vectorised for the control loop.
 
-Convention (software only; the servo's Drive Mode reverse bit must stay 0 and Homing Offset is not
-used for calibration):
-
-    ticks = centre + direction * (angle_rad + zero_offset_rad) * ticks_per_rev / (2 pi)
-    angle_rad = direction * (ticks - centre) * 2 pi / ticks_per_rev - zero_offset_rad
-
-with ``centre = ticks_per_rev // 2`` (2048 on a 4096-tick X-series servo) and ``direction`` +1 or
--1. So a joint at 0 rad sits at servo tick ``centre + direction * zero_offset_rad * k``, and the
+The formula and the calibration convention are snakebot.servo.ticks' (software only: the servo's
+Drive Mode reverse bit must stay 0 and Homing Offset is not used for calibration). A joint at 0 rad
+sits at the servo's centre tick plus ``direction * zero_offset_rad`` worth of ticks, and the
 servo's own centre reads as ``-zero_offset_rad``. Velocities follow the direction only.
 """
 
@@ -20,22 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.config.schema import RobotConfig
-
-
-def rad_to_ticks(
-    angle_rad: float, *, zero_offset_rad: float = 0.0, direction: int = 1, ticks_per_rev: int = 4096
-) -> int:
-    """One joint angle (rad) to the nearest servo position tick."""
-    k = ticks_per_rev / (2.0 * math.pi)
-    return round(ticks_per_rev // 2 + direction * (angle_rad + zero_offset_rad) * k)
-
-
-def ticks_to_rad(
-    ticks: int, *, zero_offset_rad: float = 0.0, direction: int = 1, ticks_per_rev: int = 4096
-) -> float:
-    """One servo position tick to the joint angle (rad)."""
-    rad_per_tick = 2.0 * math.pi / ticks_per_rev
-    return direction * (ticks - ticks_per_rev // 2) * rad_per_tick - zero_offset_rad
+from snakebot.servo.ticks import centre_tick, rad_per_tick, ticks_per_rad
 
 
 @dataclass(frozen=True)
@@ -63,8 +43,8 @@ class TickConverter:
     )
 
     def __post_init__(self) -> None:
-        k = self.ticks_per_rev / (2.0 * math.pi)
-        centre = self.ticks_per_rev // 2
+        k = ticks_per_rad(self.ticks_per_rev)
+        centre = centre_tick(self.ticks_per_rev)
         derived = {
             "_tick_gain": self.direction * k,
             "_tick_bias": centre + self.direction * self.zero_offset_rad * k,
@@ -84,9 +64,9 @@ class TickConverter:
         offset = np.array([j.zero_offset_rad for j in robot.joints], dtype=float)
         direction = np.array([j.direction for j in robot.joints], dtype=float)
         lower, upper = robot.lower_rad.astype(float), robot.upper_rad.astype(float)
-        k = tpr / (2.0 * math.pi)
-        a = tpr // 2 + direction * (lower + offset) * k
-        b = tpr // 2 + direction * (upper + offset) * k
+        k = ticks_per_rad(tpr)
+        a = centre_tick(tpr) + direction * (lower + offset) * k
+        b = centre_tick(tpr) + direction * (upper + offset) * k
         # Limits round inwards so a clipped goal never lands outside the configured range.
         lo = np.ceil(np.minimum(a, b) - 1e-9).astype(np.int64)
         hi = np.floor(np.maximum(a, b) + 1e-9).astype(np.int64)
@@ -100,7 +80,7 @@ class TickConverter:
     @property
     def rad_per_tick(self) -> float:
         """Resolution: 2 pi / ticks_per_rev."""
-        return 2.0 * math.pi / self.ticks_per_rev
+        return rad_per_tick(self.ticks_per_rev)
 
     def to_ticks(self, angle_rad: np.ndarray) -> np.ndarray:
         """Joint angles (rad, (N,)) to goal ticks (int64, (N,)), unclipped."""

@@ -16,14 +16,16 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.health import divergence_time_s
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.types import BodyState, JointState, PDGains
 
 _BAD_WARNINGS = np.array(
     [
@@ -75,7 +77,7 @@ class SoftBodyBackend(Backend):
         self.directional = body.ground.directional if directional is None else directional
         self.friction = body.ground.friction if friction is None else friction
         self.terrain = terrain
-        self.gains: ServoGains | None = None
+        self.gains: PDGains | None = None
         self._realtime = realtime
         self._pacer: Pacer | None = None
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
@@ -86,7 +88,7 @@ class SoftBodyBackend(Backend):
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
         if not (math.isfinite(self.friction) and self.friction >= 0):
-            raise ConfigError("--friction", "", f"expected a number >= 0, got {self.friction}")
+            raise ConfigError("friction", "", f"expected a number >= 0, got {self.friction}")
         built = build_body_model(self.body, friction=self.friction, terrain=self.terrain)
         self.model, self.lattice = built.model, built.lattice
         self.data = mujoco.MjData(self.model)
@@ -169,7 +171,7 @@ class SoftBodyBackend(Backend):
         self._command = position_rad.copy()
         self._apply_muscles()
 
-    def _set_gains(self, gains: ServoGains) -> None:
+    def _set_gains(self, gains: PDGains) -> None:
         self.gains = gains
 
     def _set_torque(self, enabled: bool) -> None:
@@ -182,7 +184,7 @@ class SoftBodyBackend(Backend):
         steps = round(dt_s / timestep)
         if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
             raise ConfigError(
-                "--rate",
+                "rate_hz",
                 "",
                 f"control period {dt_s:g} s is not a whole number of {timestep:g} s physics "
                 f"steps; pick a rate that divides {1 / timestep:g} Hz (e.g. 50, 100, 250)",
@@ -197,6 +199,7 @@ class SoftBodyBackend(Backend):
             self._apply_muscles()
         warnings = data.warning.number
         before = int(warnings[_BAD_WARNINGS].sum())
+        time_before = float(data.time)
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
         for step in range(steps):
@@ -208,7 +211,8 @@ class SoftBodyBackend(Backend):
                 rule.apply(displacement, velocity, data.contact.geom)
         if int(warnings[_BAD_WARNINGS].sum()) != before or not np.isfinite(data.qpos).all():
             raise SimulationDivergedError(
-                float(data.time), "MuJoCo reported bad accelerations (state was reset)"
+                divergence_time_s(time_before, steps, float(model.opt.timestep), float(data.time)),
+                "MuJoCo reported bad accelerations (state was reset)"
             )
         self._track()
         if self._pacer is not None:

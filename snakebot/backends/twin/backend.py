@@ -9,9 +9,16 @@ from typing import Protocol
 import mujoco
 import numpy as np
 
-from snakebot.backends.base import Backend, BodyState, JointState, ServoGains
+from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.health import (
+    DEFAULT_LIMITS,
+    HealthLimits,
+    HealthMonitor,
+    divergence_time_s,
+)
+from snakebot.backends.twin.imu import TwinSensors
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
     build_model,
@@ -19,9 +26,11 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
+from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
-from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.errors import ConfigError, ServoFaultError, SimulationDivergedError
+from snakebot.types import BodyState, JointState, PDGains
 
 JointSelection = int | slice | Sequence[int] | np.ndarray
 """Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""
@@ -50,7 +59,12 @@ class TwinBackend(Backend):
 
     ``friction`` overrides the robot's ground model (``--friction``); ``timestep_s`` overrides
     ``twin.timestep_s``; ``terrain`` adds Miller's cliff (the snake starts on its plateau).
-    Control periods passed to ``advance`` must be whole numbers of steps.
+    Control periods passed to ``advance`` must be whole numbers of steps. ``health`` sets the
+    physics checks (``twin.health.HealthLimits``; None: no checks), reported by
+    ``physics_health``. The servo file's ``[twin]`` parts (docs/physics.md) add current draw,
+    supply sag, overload protection (a trip raises ServoFaultError unless
+    ``raise_on_overload`` is False, e.g. under the emulator, which latches it) and encoder and
+    IMU noise drawn from ``seed``.
     """
 
     def __init__(
@@ -61,8 +75,16 @@ class TwinBackend(Backend):
         timestep_s: float | None = None,
         realtime: bool = False,
         terrain: Cliff | None = None,
+        health: HealthLimits | None = DEFAULT_LIMITS,
+        seed: int = 0,
+        raise_on_overload: bool = True,
     ) -> None:
         super().__init__()
+        self._health_limits = health
+        self.physics_monitor: HealthMonitor | None = None
+        self.electrics: ServoElectrics | None = None
+        self._seed = seed
+        self.raise_on_overload = raise_on_overload
         self.robot = robot
         self.terrain = terrain
         self.joint_count = robot.joint_count
@@ -98,18 +120,48 @@ class TwinBackend(Backend):
         mujoco.mj_forward(self.model, self.data)
         self.torque_enabled = True
         self._pacer = Pacer(self.stats) if self._realtime else None
+        physics = self.robot.servo.physics
+        servo = servo_dynamics(physics, self.robot.gains)
+        self._sensors = TwinSensors(
+            self.model, self._head_id, physics.extras, physics.ticks_per_rev, self._seed
+        )
+        extras = physics.extras
+        if extras.stall_current_a is not None or extras.overload_trip_s is not None:
+            self.electrics = ServoElectrics(
+                physics, self.joint_count, servo.torque_limit_nm, servo.no_load_speed_rad_s
+            )
+            self._force_limit = self.model.actuator_forcerange.copy()
+        self._start_com = self.data.subtree_com[self._head_id].copy()
+        if self._health_limits is not None:
+            links = np.array([self.model.geom(f"{link_name(i)}_geom").id
+                              for i in range(self.robot.link_count)])
+            self.physics_monitor = HealthMonitor(
+                self.model, links, self.robot.link.radius_m, self._dof_index, self._head_id,
+                no_load_speed_rad_s=servo.no_load_speed_rad_s,
+                torque_limit_nm=servo.torque_limit_nm, limits=self._health_limits,
+            )
 
     def _close(self) -> None:
         self.set_torque(self.stop_policy == "hold")
 
     # -- the cycle ---------------------------------------------------------------------------
+    def _servo_torque(self) -> np.ndarray:
+        """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
+        velocity = self.data.qvel[self._dof_index]
+        damping = self.model.dof_damping[self._dof_index]
+        torque: np.ndarray = self.data.actuator_force - damping * velocity
+        return torque
+
     def _read_state(self) -> JointState:
         data = self.data
         velocity = data.qvel[self._dof_index].copy()
-        effort = data.actuator_force.copy() - self.model.dof_damping[self._dof_index] * velocity
+        effort = self._servo_torque()
+        position = data.qpos[self._qpos_index].copy()
+        if self._sensors.alters_positions:
+            position = self._sensors.encoder_rad(position)
         return JointState(
             time_s=float(data.time),
-            position_rad=data.qpos[self._qpos_index].copy(),
+            position_rad=position,
             velocity_rad_s=velocity,
             effort_nm=effort,
         )
@@ -117,7 +169,7 @@ class TwinBackend(Backend):
     def _send_command(self, position_rad: np.ndarray) -> None:
         self.data.ctrl[:] = position_rad
 
-    def _set_gains(self, gains: ServoGains) -> None:
+    def _set_gains(self, gains: PDGains) -> None:
         self._store_gains(slice(None), gains)
         self._apply_gains()
 
@@ -125,12 +177,12 @@ class TwinBackend(Backend):
         self._torque_mask[:] = enabled
         self._apply_gains()
 
-    def set_joint_gains(self, joints: JointSelection, gains: ServoGains) -> None:
-        """Apply position-loop gains (servo register units) to some joints only.
+    def set_joint_gains(self, joints: JointSelection, gains: PDGains) -> None:
+        """Apply SI position-loop gains to some joints only.
 
         ``joints`` is a joint index, a slice, indices, or a (N,) bool mask (numpy indexing; an
         index out of range raises IndexError). Joints with torque off stay limp and take the
-        gains when torque comes on. The I gain is ignored: the twin's loop is PD.
+        gains when torque comes on.
         """
         self._require_connected()
         self._store_gains(joints, gains)
@@ -143,7 +195,7 @@ class TwinBackend(Backend):
         self._apply_gains()
         self.torque_enabled = bool(np.all(enabled))
 
-    def _store_gains(self, joints: JointSelection, gains: ServoGains) -> None:
+    def _store_gains(self, joints: JointSelection, gains: PDGains) -> None:
         servo = servo_dynamics(self.robot.servo.physics, gains)
         self._kp[joints] = servo.stiffness_nm_per_rad
         self._kv[joints] = servo.actuator_kv(float(self.model.opt.timestep))
@@ -152,10 +204,18 @@ class TwinBackend(Backend):
     def _apply_gains(self) -> None:
         """Write each joint's kp/kv and damping, or none where its torque is off."""
         mask = self._torque_mask
-        kp = np.where(mask, self._kp, 0.0)
+        kp, kv = self._kp, self._kv
+        electrics = self.electrics
+        if electrics is not None:
+            mask = mask & ~electrics.tripped
+            if electrics.battery_resistance_ohm is not None:  # the voltage sags with current
+                ratio = electrics.voltage_ratio
+                kp, kv = kp * ratio, kv * ratio
+                self.model.actuator_forcerange[:] = self._force_limit * ratio
+        kp = np.where(mask, kp, 0.0)
         self.model.actuator_gainprm[:, 0] = kp
         self.model.actuator_biasprm[:, 1] = -kp
-        self.model.actuator_biasprm[:, 2] = -np.where(mask, self._kv, 0.0)
+        self.model.actuator_biasprm[:, 2] = -np.where(mask, kv, 0.0)
         # With torque off the H-bridge is open: no back-EMF braking, only gear friction remains.
         limp = self.robot.servo.physics.viscous_damping_nms
         self.model.dof_damping[self._dof_index] = np.where(mask, self._damping, limp)
@@ -168,11 +228,18 @@ class TwinBackend(Backend):
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
         warnings = self.data.warning.number
         before = int(warnings[_BAD_WARNINGS].sum())
+        time_before = float(self.data.time)
         mujoco.mj_step(self.model, self.data, steps)
         if int(warnings[_BAD_WARNINGS].sum()) != before:
+            timestep = float(self.model.opt.timestep)
             raise SimulationDivergedError(
-                float(self.data.time), "MuJoCo reported bad accelerations (state was reset)"
+                divergence_time_s(time_before, steps, timestep, float(self.data.time)),
+                "MuJoCo reported bad accelerations (state was reset)",
             )
+        if self.physics_monitor is not None:
+            self.physics_monitor.sample(self.data, dt_s, self._servo_torque())
+        if self.electrics is not None:
+            self._update_electrics(dt_s)
         if self._pacer is not None:
             self._pacer.wait(dt_s)
 
@@ -182,7 +249,7 @@ class TwinBackend(Backend):
         steps = round(dt_s / timestep)
         if steps < 1 or not math.isclose(steps * timestep, dt_s, rel_tol=1e-6):
             raise ConfigError(
-                "--rate",
+                "rate_hz",
                 "",
                 f"control period {dt_s:g} s is not a whole number of {timestep:g} s physics "
                 f"steps; pick a rate that divides {1 / timestep:g} Hz (e.g. 50, 100, 250)",
@@ -190,10 +257,53 @@ class TwinBackend(Backend):
         self._steps_per_period[dt_s] = steps
         return steps
 
+    def _update_electrics(self, dt_s: float) -> None:
+        """Currents, supply sag and overload after a period; a trip limps the joint."""
+        assert self.electrics is not None
+        velocity = self.data.qvel[self._dof_index]
+        trips = self.electrics.update(
+            self._servo_torque(), self.data.actuator_force, velocity, dt_s
+        )
+        if trips.any() or self.electrics.battery_resistance_ohm is not None:
+            self._apply_gains()
+        if trips.any() and self.raise_on_overload:
+            joint = int(np.flatnonzero(trips)[0])
+            raise ServoFaultError(
+                self.robot.joints[joint].servo_id, ["Overload"],
+                f"the twin's overload protection tripped at t={float(self.data.time):.4f} s "
+                f"after {self.electrics.trip_s:g} s at the torque limit; torque is off",
+            )
+
+    def reset_overload(self, joints: np.ndarray) -> None:
+        """Clear the overload of ``joints`` (bool (N,)), as rebooting those servos does."""
+        self._require_connected()
+        if self.electrics is not None:
+            self.electrics.reset(np.asarray(joints, dtype=bool))
+            self._apply_gains()
+
+    @property
+    def overloaded(self) -> np.ndarray:
+        """Joints (bool (N,)) whose overload protection has tripped."""
+        if self.electrics is None:
+            return np.zeros(self.joint_count, dtype=bool)
+        return self.electrics.tripped.copy()
+
+    def physics_health(self) -> dict[str, object] | None:
+        """The run's physics health so far (docs/physics.md), with the servos' electrical
+        figures when the servo model has them; None with the checks off."""
+        out = None if self.physics_monitor is None else self.physics_monitor.summary()
+        if self.electrics is not None:
+            com = self.data.subtree_com[self._head_id]
+            distance = float(np.hypot(*(com[:2] - self._start_com[:2])))
+            electrical = self.electrics.summary(self.robot.total_mass_kg, distance)
+            out = {**(out or {}), **electrical}
+        return out
+
     def body_state(self) -> BodyState:
         """Centre of mass of the whole snake and the head's orientation."""
         self._require_connected()
         return BodyState(
             com_m=self.data.subtree_com[self._head_id].copy(),
             head_quat=self.data.xquat[self._head_id].copy(),
+            head_gyro_rad_s=self._sensors.gyro_rad_s(self.data),
         )

@@ -34,17 +34,17 @@ class Cliff:
             value = getattr(self, item.name)
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(
-                    "--terrain", item.name, f"expected a positive number, got {value}"
+                    "terrain", item.name, f"expected a positive number, got {value}"
                 )
         if self.radius_m > self.height_m:
             raise ConfigError(
-                "--terrain",
+                "terrain",
                 "radius_m",
                 f"the edge radius {self.radius_m} m exceeds the height {self.height_m} m",
             )
         if self.radius_m >= self.edge_m or self.depth_m <= self.edge_m:
             raise ConfigError(
-                "--terrain",
+                "terrain",
                 "edge_m",
                 "the head must start on the flat top: need radius_m < "
                 f"edge_m < depth_m, got {self.radius_m}, {self.edge_m}, {self.depth_m}",
@@ -92,7 +92,7 @@ class Cliff:
 TERRAINS = ("flat", "cliff")
 
 
-def parse_terrain(text: str, option: str = "--terrain") -> Cliff | None:
+def parse_terrain(text: str, option: str = "terrain") -> Cliff | None:
     """``flat`` (None) or ``cliff[:key=value,...]`` with Cliff's fields, e.g.
     ``cliff:edge_m=0.1,height_m=0.05``; ConfigError naming what was expected otherwise."""
     name, _, rest = text.partition(":")
@@ -118,4 +118,7 @@ def parse_terrain(text: str, option: str = "--terrain") -> Cliff | None:
             values[key] = float(raw)
         except ValueError:
             raise ConfigError(option, key, f"expected a number in m, got {raw!r}") from None
-    return Cliff(**values)
+    try:
+        return Cliff(**values)
+    except ConfigError as exc:
+        raise ConfigError(option, exc.key, exc.reason) from None

@@ -17,10 +17,12 @@ import numpy as np
 
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.servo_model import ServoDynamics, history_samples, servo_dynamics
+from snakebot.config.paths import scene_path
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
 
-SCENE_PATH = Path(__file__).resolve().parents[3] / "sim" / "scene.xml"
+SCENE_PATH = scene_path()
+"""The twin's scene (floor, light, tracking camera), shipped as package data."""
 # Links collide with each other (bit 2) but reach the floor only through explicit pairs: a second,
 # isotropic floor contact would cancel the anisotropy (locomotion.md §4.4, gotcha 3).
 _LINK_CONTYPE = 2
@@ -55,7 +57,7 @@ class GroundFriction:
         return [self.axial, self.lateral, _SPIN_ROLL_FRICTION[0], roll, roll]
 
     @classmethod
-    def parse(cls, text: str, option: str = "--friction") -> GroundFriction:
+    def parse(cls, text: str, option: str = "friction") -> GroundFriction:
         """Parse ``AXIAL,LATERAL`` (two non-negative numbers)."""
         parts = text.split(",")
         try:
@@ -70,7 +72,7 @@ class GroundFriction:
 
 
 def ground_friction(robot: RobotConfig, override: GroundFriction | None = None) -> GroundFriction:
-    """The robot's own ground model, unless ``override`` (``--friction``) replaces it."""
+    """The robot's own ground model, unless ``override`` (the ``friction`` option) replaces it."""
     if override is not None:
         return override
     twin = robot.twin

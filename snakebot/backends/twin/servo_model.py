@@ -3,9 +3,10 @@ and the delay from a command leaving the controller to the servo acting on it.
 
 A Dynamixel position loop is a voltage P(I)D controller (Rhoban/bam, ``bam/actuator.py``):
 duty = clip(error_gain * P * err, ±1), torque = (kt/R) * (duty * V - kt * qdot) - friction.
-For small errors that is a PD with stiffness K = tau_stall(V) * error_gain * P, a torque clip
-at tau_stall(V), and back-EMF damping tau_stall / omega_no_load (the torque-speed line), so the
-datasheet's stall torque and no-load speed are both honoured. See docs/twin.md.
+For small errors that is a PD (the SI gains the Backend contract carries; snakebot.servo.gains
+maps the registers to them), a torque clip at tau_stall(V), and back-EMF damping
+tau_stall / omega_no_load (the torque-speed line), so the datasheet's stall torque and no-load
+speed are both honoured. See docs/twin.md.
 """
 
 from __future__ import annotations
@@ -13,14 +14,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from snakebot.backends.base import ServoGains
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, ServoPhysics
-
-# X-series firmware: KPP = P/128 and the output is in PWM units out of 2 * PWM Limit, which is
-# bam's error_gain = (ticks/rad) / (256 * pwm_limit) per unit of P (arXiv 2410.08650, bam).
-_P_DIVISOR = 256.0
-# KPD = D/16 against KPP = P/128: the D register weighs 8x a P unit, per tick per loop period.
-_D_TO_P_WEIGHT = 128.0 / 16.0
+from snakebot.types import PDGains
 
 
 @dataclass(frozen=True)
@@ -52,19 +47,18 @@ class ServoDynamics:
         return self.gain_damping_nms + timestep_s * self.stiffness_nm_per_rad
 
 
-def servo_dynamics(physics: ServoPhysics, gains: ServoGains) -> ServoDynamics:
-    """Derive the twin's joint parameters from datasheet physics and the servo's gain registers.
+def servo_dynamics(physics: ServoPhysics, gains: PDGains) -> ServoDynamics:
+    """Derive the twin's joint parameters from datasheet physics and SI position gains.
 
-    The I gain has no counterpart here; the twin's loop is PD (docs/twin.md says why).
+    The stiffness is ``gains.kp_nm_per_rad`` times sysid's ``stiffness_scale`` (1 unless fitted),
+    the gain damping ``gains.kd_nms_per_rad``. There is no I term: the twin's loop is PD
+    (docs/twin.md says why).
     """
     voltage_ratio = physics.supply_voltage_v / physics.nominal_voltage_v
     stall_torque = physics.stall_torque_nm * voltage_ratio
     no_load_speed = physics.no_load_speed_rad_s * voltage_ratio
-    error_gain = (physics.ticks_per_rev / (2 * math.pi)) / (_P_DIVISOR * physics.pwm_limit)
-    stiffness = stall_torque * error_gain * gains.position_p * physics.stiffness_scale
-    gain_damping = (
-        stall_torque * error_gain * _D_TO_P_WEIGHT * gains.position_d * physics.d_gain_loop_period_s
-    )
+    stiffness = gains.kp_nm_per_rad * physics.stiffness_scale
+    gain_damping = gains.kd_nms_per_rad
     back_emf = physics.stall_torque_nm / physics.no_load_speed_rad_s + physics.viscous_damping_nms
     if physics.damping_nms is not None:  # fitted by sysid ([twin.servo] in the robot file)
         back_emf = physics.damping_nms

@@ -1,8 +1,12 @@
-"""Offscreen video of the twin with ``mujoco.Renderer`` (works headless with MUJOCO_GL=egl)."""
+"""Offscreen video of the twin with ``mujoco.Renderer``.
+
+Headless Linux needs ``MUJOCO_GL=egl`` or ``osmesa`` before ``mujoco`` is imported;
+snakebot.backends.offscreen_gl sets it when nothing else did (the twin package and the CLI call it
+first).
+"""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -13,14 +17,27 @@ from snakebot.backends.twin.backend import Simulated
 from snakebot.errors import MissingDependencyError
 
 
-def _default_gl() -> None:
-    # On a headless Linux box GLFW has no display to open; EGL (Mesa) renders offscreen.
-    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY") and os.name == "posix":
-        os.environ["MUJOCO_GL"] = "egl"
+def require_video_writer() -> Any:
+    """The ``imageio.v2`` module; MissingDependencyError with the install command without it.
+    Cheap to call before any output opens."""
+    try:
+        import imageio.v2 as imageio
+    except ImportError as exc:
+        raise MissingDependencyError(
+            "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
+        ) from exc
+    return imageio
 
 
 class VideoRecorder:
-    """Renders every k-th control cycle from the tracking camera and encodes an MP4."""
+    """Renders every k-th control cycle from the tracking camera and encodes a video.
+
+    ``rate_hz`` is the control rate; frames (``height`` x ``width`` RGB, uint8) are taken every
+    ``round(rate_hz / fps)`` cycles, so the file plays in real time. The file's folder is created.
+    Raises MissingDependencyError without imageio; imageio/ffmpeg's OSError or ValueError for a
+    file it cannot write; ``mujoco.FatalError`` when no OpenGL context can be made (no offscreen
+    platform: see snakebot.backends.offscreen_gl). ``frames`` counts the frames written.
+    """
 
     def __init__(
         self,
@@ -32,13 +49,7 @@ class VideoRecorder:
         width: int = 640,
         height: int = 480,
     ) -> None:
-        try:
-            import imageio.v2 as imageio
-        except ImportError as exc:
-            raise MissingDependencyError(
-                "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
-            ) from exc
-        _default_gl()
+        imageio = require_video_writer()
         self.backend = backend
         self.path = path
         self.every = max(1, round(rate_hz / fps))

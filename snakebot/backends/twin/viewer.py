@@ -10,20 +10,26 @@ from snakebot.backends.twin.backend import Simulated
 from snakebot.errors import BackendError
 
 
+def check_display() -> None:
+    """BackendError unless a window can open (a display on Linux/BSD; always on macOS and
+    Windows). Cheap: callers run it before opening any output file."""
+    if (
+        os.name == "posix"
+        and not os.environ.get("DISPLAY")
+        and not os.environ.get("WAYLAND_DISPLAY")
+        and os.uname().sysname != "Darwin"
+    ):
+        raise BackendError(
+            "--viewer needs a display (DISPLAY is not set); use --video out.mp4 to render "
+            "offscreen instead"
+        )
+
+
 class PassiveViewer:
     """Opens ``mujoco.viewer.launch_passive``; closing the window stops nothing but the view."""
 
     def __init__(self, backend: Simulated) -> None:
-        if (
-            os.name == "posix"
-            and not os.environ.get("DISPLAY")
-            and not os.environ.get("WAYLAND_DISPLAY")
-            and os.uname().sysname != "Darwin"
-        ):
-            raise BackendError(
-                "--viewer needs a display (DISPLAY is not set); use --video out.mp4 to render "
-                "offscreen instead"
-            )
+        check_display()
         import mujoco.viewer
 
         self._handle: Any = mujoco.viewer.launch_passive(backend.model, backend.data)

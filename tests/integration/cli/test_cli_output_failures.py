@@ -97,7 +97,7 @@ def test_a_log_outgrowing_the_file_size_limit_on_the_twin(tmp_path: Path) -> Non
     run = snakebot("run", "--duration", "60", "--log", str(log), limit=LOG_LIMIT_BYTES)
     assert run.returncode == 1, run.stderr
     assert f"snakebot: error: {log}: cannot write telemetry row" in run.stderr
-    assert read_log(log).values.shape[0] > 50
+    assert read_log(log).values.shape[0] > 30  # rows of ~0.7 kB with the head IMU's columns
 
 
 def test_calibrate_that_cannot_write_leaves_the_robot_file_as_it_was(config_dir: Path) -> None:

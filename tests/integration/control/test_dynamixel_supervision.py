@@ -14,7 +14,6 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.dynamixel import DynamixelBackend
 from snakebot.backends.dynamixel.faults import TrackingError, WatchdogTripError
 from snakebot.config import RobotConfig, load_robot
@@ -24,6 +23,7 @@ from snakebot.control.safety import SafetyLayer
 from snakebot.emulation import EmulatedChain, ExternalMotion, make_chain_for_ids, registered
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.gaits import make_gait
+from snakebot.types import JointCommand
 
 Hook = Callable[[int, EmulatedChain, "SkewedClock"], None]
 

@@ -140,5 +140,5 @@ def test_without_a_terminal_it_asks_for_a_script() -> None:
         stdin=subprocess.DEVNULL, capture_output=True, text=True, start_new_session=True,
         timeout=60,
     )
-    assert proc.returncode == 1
+    assert proc.returncode == 2  # usage: without a terminal, drive needs --script
     assert "no terminal to read keys from" in proc.stderr and "--script" in proc.stderr

@@ -63,9 +63,14 @@ def test_the_scripted_tour_drives_the_twin_through_the_bus_and_ends_holding(
     assert torque == [1] * 12  # hold: torque on...
     assert max(abs(g - 2048) for g in goals) <= 2  # ...at the straight pose
     assert twin["distance_m"] > 0.5  # the twin behind the bus sidewound and rolled
-    commands = read_log(log).joints("command_rad")
-    slew = load_robot("snake12").max_speed_rad_s / 100.0
-    assert np.abs(np.diff(commands, axis=0)).max() <= slew + 1e-5  # CSV keeps 6 digits
+    rows = read_log(log)
+    commands, times = rows.joints("command_rad"), rows.column("time_s")
+    # The slew limit allows the joint speed over the time the last cycle really took (a loaded
+    # machine runs late), up to two periods: command k moves at most that far from k - 1.
+    allowed = np.clip(np.diff(times)[:-1], 0.01, 0.02) * load_robot("snake12").max_speed_rad_s
+    steps = np.abs(np.diff(commands, axis=0)).max(axis=1)
+    assert np.all(steps[1:] <= allowed + 1e-5)  # CSV keeps 6 digits
+    assert steps.max() <= 0.02 * load_robot("snake12").max_speed_rad_s + 1e-5
     assert np.abs(commands[-1]).max() < 1e-6
 
 

@@ -9,15 +9,16 @@ import dynamixel_sdk as dxl
 import numpy as np
 import pytest
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
+from snakebot.config.schema import GainRegisters
 from snakebot.emulation import EmulatedChain, registered
 from snakebot.emulation.physics import TwinMotion, make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.types import PDGains
 
 BAUD = 1_000_000
-XL430_FACTORY = ServoGains(position_p=640, position_i=0, position_d=4000)
+XL430_FACTORY = GainRegisters(position_p=640, position_i=0, position_d=4000)
 
 
 class Bus:
@@ -49,7 +50,7 @@ class Bus:
 @pytest.fixture
 def robot() -> RobotConfig:
     # Config gains unlike the factory's: the twin must follow the registers, not the file.
-    return dataclasses.replace(load_robot("snake8"), gains=ServoGains(1500, 0, 0))
+    return dataclasses.replace(load_robot("snake8"), gains=PDGains(5.6, 0.0))
 
 
 @pytest.fixture
@@ -68,8 +69,11 @@ def actuator_gains(motion: TwinMotion) -> tuple[np.ndarray, np.ndarray]:
     return model.actuator_gainprm[:, 0].copy(), -model.actuator_biasprm[:, 2].copy()
 
 
-def expected(robot: RobotConfig, gains: ServoGains, timestep_s: float) -> tuple[float, float]:
-    servo = servo_dynamics(robot.servo.physics, gains)
+def expected(
+    robot: RobotConfig, registers: GainRegisters, timestep_s: float
+) -> tuple[float, float]:
+    """The twin's kp and kv for gain registers, through the servo's register -> SI mapping."""
+    servo = servo_dynamics(robot.servo.physics, robot.servo.gains_of(registers))
     return servo.stiffness_nm_per_rad, servo.actuator_kv(timestep_s)
 
 
@@ -126,7 +130,7 @@ def test_gains_written_with_torque_off_wait_and_position_i_is_ignored(
     assert kp[2] == 0.0 and kv[2] == 0.0  # the joint stays limp until its torque comes on
     bus.write(3, "torque_enable", 1)
     kp, kv = actuator_gains(motion)
-    assert (kp[2], kv[2]) == pytest.approx(expected(robot, ServoGains(1200, 0, 100), timestep))
+    assert (kp[2], kv[2]) == pytest.approx(expected(robot, GainRegisters(1200, 0, 100), timestep))
     assert kp[1] == 0.0  # torque still off there
     bus.write(3, "position_i_gain", 500)  # the twin's loop is PD: no I term
     assert actuator_gains(motion)[0][2] == kp[2] and actuator_gains(motion)[1][2] == kv[2]

@@ -95,5 +95,22 @@ def test_bad_rl_options_are_named(tmp_path: Path) -> None:
     bad = cli("rl", "train", "--set", "goal_radius=1", "--out", str(tmp_path / "x"))
     assert bad.returncode == 1 and "goal_radius" in bad.stderr and "goal_radius_bl" in bad.stderr
     assert cli("rl", "train", "--encoding", "rotating").returncode == 2
-    assert cli("rl", "compare", "--encodings", "dft,nope").returncode == 1
+    assert cli("rl", "compare", "--encodings", "dft,nope").returncode == 2  # a flag's value
     assert cli("rl", "eval", str(tmp_path / "none")).returncode == 1
+
+
+def test_dry_runs_check_the_settings_and_write_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    train = cli("rl", "train", "--out", str(out / "policy"), "--dry-run", "--json", *FAST)
+    assert train.returncode == 0, train.stderr
+    plan = json.loads(train.stdout)
+    assert plan["dry_run"] is True and plan["env_kwargs"]["action_hz"] == 25
+    compare = cli("rl", "compare", "--encodings", "sinusoid,dft", "--out", str(out), "--dry-run",
+                  "--json")
+    assert compare.returncode == 0, compare.stderr
+    assert json.loads(compare.stdout)["encodings"] == ["sinusoid", "dft"]
+    bad = cli("rl", "train", "--set", "goal_radius=1", "--dry-run", "--out", str(out))
+    assert bad.returncode == 1 and "goal_radius_bl" in bad.stderr  # checked, not just skipped
+    body = cli("rl", "train", "--robot", "worm", "--dry-run", "--out", str(out))
+    assert body.returncode == 2 and "mass-spring" in body.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 import snakebot.rl
-from snakebot.backends.base import BodyState
 from snakebot.backends.dynamixel import DynamixelBackend
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
@@ -23,6 +22,7 @@ from snakebot.control.safety import SafetyLayer
 from snakebot.errors import ConfigError, GaitError
 from snakebot.rl.policy_file import load_policy
 from snakebot.rl.policy_gait import PolicyGait, policy_gait_for_backend
+from snakebot.types import BodyState
 from tests.integration.rl.policies import constant_policy, random_policy
 
 GOAL, VELOCITY = snakebot.rl.GOAL_ENV_ID, snakebot.rl.VELOCITY_ENV_ID
@@ -133,7 +133,9 @@ def test_run_policy_usage_and_config_errors(tmp_path: Path) -> None:
     assert snakebot("run", "--command", "1,0").returncode == 2
     assert snakebot("run", "--policy", str(goal), "--gait", "serpenoid", "--command",
                     "1,0").returncode == 2
-    missing = snakebot("run", "--policy", str(goal))
-    assert missing.returncode == 1 and "--command" in missing.stderr
+    missing = snakebot("run", "--policy", str(goal))  # a missing option: usage
+    assert missing.returncode == 2 and "--command" in missing.stderr
+    body = snakebot("run", "--robot", "worm", "--policy", str(goal), "--command", "1,0")
+    assert body.returncode == 2 and "mass-spring body" in body.stderr
     nothing = snakebot("run", "--policy", str(tmp_path / "nope"), "--command", "1,0")
     assert nothing.returncode == 1 and "no such policy folder" in nothing.stderr

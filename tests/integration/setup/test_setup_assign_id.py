@@ -65,8 +65,9 @@ def test_two_servos_with_their_own_ids_need_from(fresh: Fresh, cli: Cli) -> None
 def test_an_unsupported_baud_is_refused(fresh: Fresh, cli: Cli) -> None:
     bus, bench = fresh
     bench.plug()
-    code, _, err = assign(cli, "--port", bus.url, "--to", "3", "--baud", "250000")
-    assert code == 1 and "--baud 250000" in err and "supported" in err
+    code, _, err = assign(cli, "--port", bus.url, "--to", "3", "--new-baud", "250000")
+    assert code == 2 and "--new-baud" in err and "'250000'" in err
+    assert sorted(s.servo_id for s in bus.chain.servos) == [1]  # refused before any write
 
 
 def test_twelve_fresh_servos_become_the_snake12_chain(tmp_path: Path, cli: Cli) -> None:

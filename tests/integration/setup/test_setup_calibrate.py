@@ -119,3 +119,23 @@ def test_a_linked_robot_file_stays_a_link(snake: Bus, cli: Cli, robot_file: Path
     assert code == 0, err
     assert link.is_symlink()
     assert load_robot(robot_file).joints[3].zero_offset_rad == pytest.approx(0.2, abs=2e-3)
+
+
+def test_a_robot_named_by_name_is_never_written_out_writes_a_copy(
+    snake: Bus, cli: Cli, tmp_path: Path
+) -> None:
+    from snakebot.config.paths import shipped_configs
+
+    shipped = shipped_configs() / "robots" / "snake12.toml"
+    original = shipped.read_bytes()
+    lay_straight(snake)
+    code, out, err = cli("calibrate", "--robot", "snake12", "--port", snake.url, "--yes")
+    assert code == 2 and out == ""
+    assert "--robot FILE.toml" in err and "--out FILE" in err
+    copy = tmp_path / "mine" / "snake12.toml"
+    code, out, err = cli("calibrate", "--robot", "snake12", "--port", snake.url, "--yes",
+                         "--out", str(copy))
+    assert code == 0, err
+    assert f"wrote 12 zero offsets into {copy}" in out
+    assert shipped.read_bytes() == original
+    assert load_robot(copy).joints[1].zero_offset_rad == pytest.approx(SHAFTS[1], abs=2e-3)

@@ -44,7 +44,7 @@ def test_reset_needs_yes_and_a_consistent_keep(snake: Bus, cli: Cli) -> None:
     assert code == 1 and "erases every setting of servo 4: add --yes" in err
     code, _, err = cli("servo", "reset", *SNAKE12, "--port", snake.url, "--id", "4", "--keep-baud",
                        "--yes")
-    assert code == 1 and "add --keep-id" in err
+    assert code == 2 and "add --keep-id" in err  # bad usage: refused before the port opens
 
 
 def test_reset_keeping_id_and_baud_restores_factory_settings(snake: Bus, cli: Cli) -> None:

@@ -8,10 +8,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand, ServoGains
 from snakebot.backends.softbody import SoftBodyBackend, build_body_spec
 from snakebot.config.body_loader import body_names, load_body
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.types import JointCommand, PDGains
 
 
 @pytest.mark.parametrize("name", ["worm", "snake", "caterpillar", "snake_yawpitch"])
@@ -68,7 +68,7 @@ def test_gains_change_nothing_in_a_mass_spring_muscle() -> None:
     body = load_body("worm")
     goal = np.tile([0.2, 0.0, 0.1], body.lattice.segments)
 
-    def settle(gains: ServoGains | None) -> np.ndarray:
+    def settle(gains: PDGains | None) -> np.ndarray:
         with SoftBodyBackend(body) as backend:
             if gains is not None:
                 backend.set_gains(gains)
@@ -78,7 +78,7 @@ def test_gains_change_nothing_in_a_mass_spring_muscle() -> None:
                 backend.advance(0.01)
             return backend.read_state().position_rad
 
-    np.testing.assert_array_equal(settle(None), settle(ServoGains(position_p=50)))
+    np.testing.assert_array_equal(settle(None), settle(PDGains(kp_nm_per_rad=0.2)))
 
 
 def test_efforts_times_velocities_are_the_muscles_power() -> None:

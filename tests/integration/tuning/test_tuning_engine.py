@@ -8,6 +8,7 @@ import numpy as np
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
+from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
@@ -41,7 +42,7 @@ def test_batched_and_pooled_runs_match_the_runner_bit_for_bit() -> None:
     robot = load_robot("snake8")
     gaits = [make_gait("serpenoid", 8, p) for p in PARAMS]
     batch = TwinBatch(robot)
-    traces = batch.run(GaitCommands(gaits, robot, 0.01), 1.5, 100.0)
+    traces = batch.run(GaitCommands(gaits, robot), 1.5, 100.0)
     envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
     with ProcessPool(2) as pool:
         pooled = pool.run([PoolJob(robot, "serpenoid", p, 1.5, 100.0, envelope) for p in PARAMS])
@@ -52,18 +53,41 @@ def test_batched_and_pooled_runs_match_the_runner_bit_for_bit() -> None:
         assert np.array_equal(trace.position_rad, other.position_rad)
 
 
+def test_the_engine_samples_every_cycle_of_the_runner_to_the_bit() -> None:
+    """Open loop (chunks of cycles per rollout) and closed loop (keyframes that wait for the
+    measured pose, one cycle per rollout): the batch trace is the runner's cycle records."""
+    robot = load_robot("snake8")
+    waiting = {"advance": "error", "durations": (0.3,), "error_threshold_rad": 0.05}
+    for name, params in (("serpenoid", PARAMS[0]), ("keyframes", waiting)):
+        records: list[CycleRecord] = []
+        metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+        with TwinBackend(robot) as twin:
+            run_gait(twin, make_gait(name, 8, params), SafetyLayer.for_robot(robot),
+                     RunPlan(1.2, ramp_out=False), metrics, observers=[records.append])
+        commands = GaitCommands([make_gait(name, 8, params)], robot)
+        trace = TwinBatch(robot).run(commands, 1.2, 100.0)[0]
+        assert commands.open_loop == (name == "serpenoid")
+        assert trace.cycles == len(records) == 120
+        assert np.array_equal(trace.time_s, [r.time_s for r in records])
+        assert np.array_equal(trace.target_rad, [r.target_rad for r in records])
+        assert np.array_equal(trace.command_rad, [r.command_rad for r in records])
+        assert np.array_equal(trace.position_rad, [r.state.position_rad for r in records])
+        assert np.array_equal(trace.effort_nm, [r.state.effort_nm for r in records])
+        assert np.array_equal(trace.com_m, [r.body.com_m for r in records if r.body])
+
+
 def test_hopeless_runs_stop_early_and_say_why() -> None:
     robot = load_robot("snake12")
     batch = TwinBatch(robot)
     envelope = Envelope.for_robot(robot, float(batch.start_com_m[2]))
     flying = dataclasses.replace(envelope, lift_limit_m=-1.0)  # every sample counts as flight
     gaits = [make_gait("sidewinding", 12)]
-    trace = batch.run(GaitCommands(gaits, robot, 0.01), 2.0, 100.0, envelope=flying)[0]
+    trace = batch.run(GaitCommands(gaits, robot), 2.0, 100.0, envelope=flying)[0]
     assert trace.stop_reason == "airborne" and trace.cycles == 25
     upside_down = dataclasses.replace(envelope, rest_com_z_m=-1.0, lift_limit_m=10.0)
     upside_down = dataclasses.replace(upside_down, allow_roll=False)
     rolled = batch.run(
-        GaitCommands([make_gait("rolling", 12)], robot, 0.01), 2.0, 100.0, envelope=upside_down
+        GaitCommands([make_gait("rolling", 12)], robot), 2.0, 100.0, envelope=upside_down
     )[0]
     assert rolled.stop_reason in ("", "flipped")
 

@@ -115,7 +115,7 @@ def test_tuned_gait_file_replays_to_the_same_metrics(
 
 def test_ga_refuses_a_search_that_is_not_joint_poses(capsys: pytest.CaptureFixture[str]) -> None:
     argv = ["tune", "gait", "--gait", "serpenoid", "--method", "ga", "--budget", "2", "--quiet"]
-    assert main(argv) == 1
+    assert main(argv) == 2  # --method ga with a gait that has no joint poses: bad usage
     assert "the GA evolves lists of joint poses" in capsys.readouterr().err
 
 

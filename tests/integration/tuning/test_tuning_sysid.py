@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -11,6 +12,7 @@ import pytest
 from snakebot.backends.twin import TwinBackend
 from snakebot.cli.main import main
 from snakebot.config import load_robot
+from snakebot.tuning.config_edit import set_table_values
 from snakebot.tuning.excitation import chirp_plan, record
 from snakebot.tuning.sysid import ServoFit, fit_servo, load_log
 
@@ -95,3 +97,29 @@ def test_cli_recovers_an_actuator_delay_and_writes_it(
     assert summary["tracking_rms_after_rad"] < 0.01 * summary["tracking_rms_before_rad"]
     physics = load_robot(target).servo.physics
     assert physics.actuator_delay_s == pytest.approx(0.015, abs=2e-4)
+
+
+def test_fit_tells_which_p_gain_divisor_the_servo_has(config_dir: Path) -> None:
+    # bam measured 256 on an XL330; the e-Manual's KPP = P/128 suggests 128. A log made by a
+    # servo with 128 is fitted from the shipped 256.
+    robot = load_robot("snake12")
+    nominal = ServoFit.of(robot)
+    assert nominal.p_gain_divisor == 256.0
+    truth = dataclasses.replace(nominal, p_gain_divisor=128.0)
+    # The servos hold the same registers; under 128 they mean twice the stiffness (SI path).
+    truth_robot = truth.apply(robot)
+    assert truth_robot.gain_registers == robot.gain_registers
+    assert truth_robot.gains.kp_nm_per_rad == pytest.approx(2 * robot.gains.kp_nm_per_rad)
+    log_path = config_dir / "lift.csv"
+    with TwinBackend(truth_robot) as twin:
+        plan = chirp_plan(robot, twin.read_state().position_rad, 1, 0.5, duration_s=2.0)
+        record(twin, plan, log_path)
+    result = fit_servo(robot, [load_log(log_path, robot)], ("p_divisor",))
+    assert result.after.p_gain_divisor == pytest.approx(128.0, rel=0.02)
+    assert result.after.report(robot)["p_gain_divisor"] == result.after.p_gain_divisor
+    # Written to [twin.servo] as the CLI does, the robot file loads to the fitted SI gains.
+    target = config_dir / "robots" / "snake12.toml"
+    set_table_values(target, "twin.servo", {"p_gain_divisor": result.after.p_gain_divisor})
+    reloaded = load_robot(target)
+    assert reloaded.gains == result.after.apply(robot).gains
+    assert reloaded.gain_registers == robot.gain_registers

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from snakebot.backends.base import ServoGains
 from snakebot.config import RobotConfig, load_robot
+from snakebot.config.schema import GainRegisters
 
 
 def robot_with_joints(joint_count: int, base: str = "snake8", **twin: object) -> RobotConfig:
@@ -24,8 +24,8 @@ def robot_with_joints(joint_count: int, base: str = "snake8", **twin: object) ->
 
 
 def with_gains(robot: RobotConfig, p: int, d: int = 0) -> RobotConfig:
-    """``robot`` with other Position P/D gain registers."""
-    return dataclasses.replace(robot, gains=ServoGains(position_p=p, position_d=d))
+    """``robot`` with other Position P/D gain registers (as its [gains] would give them)."""
+    return dataclasses.replace(robot, gains=robot.servo.gains_of(GainRegisters(p, 0, d)))
 
 
 def with_delay(robot: RobotConfig, delay_s: float | None) -> RobotConfig:

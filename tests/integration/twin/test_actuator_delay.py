@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.twin import TwinBackend, build_model
 from snakebot.config import RobotConfig, load_robot
+from snakebot.types import JointCommand
 from tests.integration.twin.robots import with_delay
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION

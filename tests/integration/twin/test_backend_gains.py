@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snakebot.backends.base import ServoGains
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.model_builder import joint_name
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
+from snakebot.config.schema import GainRegisters
+from snakebot.types import PDGains
 
-SOFT = ServoGains(position_p=100, position_d=500)
+SOFT = load_robot("snake8").servo.gains_of(GainRegisters(position_p=100, position_d=500))
 
 
 def kp_kv(twin: TwinBackend) -> tuple[np.ndarray, np.ndarray]:
@@ -21,7 +22,7 @@ def kp_kv(twin: TwinBackend) -> tuple[np.ndarray, np.ndarray]:
     return kp, -model.actuator_biasprm[:, 2].copy()
 
 
-def expected(robot: RobotConfig, gains: ServoGains, twin: TwinBackend) -> tuple[float, float]:
+def expected(robot: RobotConfig, gains: PDGains, twin: TwinBackend) -> tuple[float, float]:
     servo = servo_dynamics(robot.servo.physics, gains)
     return servo.stiffness_nm_per_rad, servo.actuator_kv(float(twin.model.opt.timestep))
 
@@ -57,11 +58,23 @@ def test_a_joint_with_torque_off_stays_limp_and_keeps_its_gains_for_later() -> N
         assert kp[0] == pytest.approx(expected(robot, robot.gains, twin)[0])
 
 
-def test_position_i_changes_nothing() -> None:
+def test_the_twin_takes_si_gains_as_they_are() -> None:
+    # No register arithmetic between the contract and MuJoCo: kp is the stiffness asked for
+    # (times sysid's stiffness_scale, 1 here) and kv the damping plus the stable-PD term.
     robot = load_robot("snake8")
+    assert robot.servo.physics.stiffness_scale == 1.0
     twin = TwinBackend(robot)
     with twin:
-        before = kp_kv(twin)
-        twin.set_joint_gains(0, ServoGains(robot.gains.position_p, 900, robot.gains.position_d))
-        after = kp_kv(twin)
-        assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
+        twin.set_joint_gains(0, PDGains(kp_nm_per_rad=2.5, kd_nms_per_rad=0.04))
+        kp, kv = kp_kv(twin)
+        timestep = float(twin.model.opt.timestep)
+        assert kp[0] == 2.5
+        assert kv[0] == pytest.approx(0.04 + timestep * 2.5, rel=1e-12)
+
+
+def test_the_robot_files_register_gains_reach_the_twin_in_si() -> None:
+    # snake8's [gains] P = 640: 1.4 N·m stall * (4096 / 2 pi) / (256 * 885) per unit of P.
+    robot = load_robot("snake8")
+    assert robot.gains.kp_nm_per_rad == pytest.approx(1.4 * 4096 / (2 * np.pi) / (256 * 885) * 640)
+    with TwinBackend(robot) as twin:
+        assert kp_kv(twin)[0] == pytest.approx(np.full(8, robot.gains.kp_nm_per_rad), rel=1e-12)

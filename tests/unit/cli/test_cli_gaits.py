@@ -50,5 +50,5 @@ def test_json_listing_carries_origin_bounds_and_tunable(
 
 
 def test_an_unknown_gait_is_an_error_with_a_hint(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["gaits", "serpentine"]) == 1
+    assert main(["gaits", "serpentine"]) == 2
     assert "did you mean 'serpenoid'" in capsys.readouterr().err

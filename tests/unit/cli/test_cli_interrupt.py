@@ -23,6 +23,8 @@ def imported(line: str) -> str:
         "snakebot.cli",  # importing snakebot.cli.main (python -m snakebot's own import)
         "snakebot.cli.main",  # main() about to build the parser: every command module imports
         "snakebot.control.runner",  # half way through those imports (run_cmd's)
+        # inside MuJoCo's C extensions, whose init turns the interrupt into an ImportError
+        "mujoco._enums",
     ],
 )
 def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) -> None:
@@ -45,3 +47,39 @@ def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) ->
     assert err.rstrip().endswith("snakebot: interrupted")
     assert proc.returncode == 130
     assert out == ""  # interrupted before the gait list
+
+
+@pytest.mark.parametrize("where", ["command_returned", "exiting", "tearing_down"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(
+    signum: int, where: str
+) -> None:
+    # The third Ctrl-C of an impatient user can land after the stop policy went out, while the
+    # process is already on its way out (shutting the interpreter down takes a second on a loaded
+    # machine): the exit code and the printed output must be the command's, not a death by
+    # signal. The signal is sent from those spots.
+    hook = {
+        "command_returned": "real = main.main\n"
+                            "def hit(argv=None):\n    code = real(argv)\n"
+                            "    kill()\n    return code\n"
+                            "main.main = hit\n",
+        "exiting": "real = sys.exit\n"
+                   "def hit(code):\n    kill()\n    real(code)\n"
+                   "sys.exit = hit\n",
+        # module teardown, after Python has put the default signal handlers back
+        "tearing_down": "class Dying:\n    def __del__(self):\n        kill()\n"
+                        "dying = Dying()\n",
+    }[where]
+    script = (
+        "import os, sys\n"
+        "from snakebot.cli import main\n"
+        f"def kill():\n    os.kill(os.getpid(), {int(signum)})\n"
+        + hook +
+        "sys.argv = ['snakebot', 'gaits', '--json']\n"
+        "main.entry_point()\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60)
+    assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert proc.returncode == 0
+    assert '"serpenoid"' in proc.stdout  # the gait list was printed, not lost

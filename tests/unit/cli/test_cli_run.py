@@ -57,23 +57,24 @@ def test_gait_file_replays_to_the_same_metrics(
 
 
 @pytest.mark.parametrize(
-    ("argv", "message"),
+    ("argv", "code", "message"),
     [
-        (["--set", "omega=abc"], "serpenoid.omega"),
-        (["--set", "nope=1"], "nope"),
-        (["--set", "omega"], "omega"),
-        (["--gait", "moonwalk"], "moonwalk"),
-        (["--robot", "snake99"], "known robots"),
-        (["--friction", "0.1"], "--friction"),
-        (["--rate", "30"], "whole number"),
+        # A bad value typed on the command line is a usage error (2); a missing file is 1.
+        (["--set", "omega=abc"], 2, "serpenoid.omega"),
+        (["--set", "nope=1"], 2, "nope"),
+        (["--set", "omega"], 2, "omega"),
+        (["--gait", "moonwalk"], 2, "moonwalk"),
+        (["--robot", "snake99"], 1, "known robots"),
+        (["--friction", "0.1"], 2, "--friction"),
+        (["--rate", "30"], 2, "whole number"),
     ],
 )
-def test_bad_values_exit_1_with_a_clear_message(
-    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+def test_bad_values_exit_with_a_clear_message(
+    argv: list[str], code: int, message: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main(["run", "--duration", "1", *argv]) == 1
+    assert main(["run", "--duration", "1", *argv]) == code
     err = capsys.readouterr().err
-    assert err.startswith("snakebot: error:")
+    assert err.startswith("snakebot: error:" if code == 1 else ("snakebot", "usage: snakebot run"))
     assert message in err
 
 
@@ -105,7 +106,7 @@ def test_log_has_one_row_per_cycle(tmp_path: Path, capsys: pytest.CaptureFixture
 def test_human_summary(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", "--duration", "1"]) == 0
     out = capsys.readouterr().out
-    assert "snake8 / serpenoid on sim" in out and "body lengths" in out
+    assert "snake8 / serpenoid on twin" in out and "body lengths" in out
 
 
 def test_model_export_loads_in_mujoco(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

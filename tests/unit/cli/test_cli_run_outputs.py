@@ -55,20 +55,73 @@ def test_an_unwritable_video_stops_the_run_before_it_starts(
     (tmp_path / "folder.mp4").mkdir()
     log = tmp_path / "run.csv"
     code, out, err = run(capsys, "--video", video.format(**paths), "--log", str(log))
-    assert code == 1 and out == ""
+    assert code == (2 if message.startswith("--video") else 1) and out == ""  # 2: bad usage
     assert err.startswith(f"snakebot: error: {message.format(**paths)}")
     assert not log.exists()  # refused before the run: no log either
 
 
 def test_video_renders_offscreen_without_a_display_or_mujoco_gl(tmp_path: Path) -> None:
     video = tmp_path / "run.mp4"
-    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY")}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
     done = subprocess.run(
         [sys.executable, "-m", "snakebot", "run", "--duration", "0.3", "--video", str(video)],
-        capture_output=True, text=True, timeout=120, env=env,
+        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
     )
     if sys.platform.startswith("linux"):
         assert done.returncode == 0, done.stderr
         assert video.stat().st_size > 1000
     else:  # elsewhere MuJoCo's default platform renders, or it is a clear error
         assert done.returncode in (0, 1), done.stderr
+
+
+HEADLESS_VIDEO_IN_PROCESS = """
+import sys
+from snakebot.cli.main import main
+sys.exit(main(["run", "--duration", "0.3", "--video", sys.argv[1]]))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="headless Linux rendering")
+def test_video_renders_headless_when_main_is_called_in_process(tmp_path: Path) -> None:
+    """main() from a script (not the console script) with nothing set: this was exit 1 ("no
+    offscreen rendering") because mujoco was imported before MUJOCO_GL was chosen."""
+    video = tmp_path / "run.mp4"
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
+    done = subprocess.run(
+        [sys.executable, "-c", HEADLESS_VIDEO_IN_PROCESS, str(video)],
+        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
+    )
+    assert done.returncode == 0, done.stderr
+    assert video.stat().st_size > 1000
+    assert f"rendering {video} offscreen" in done.stderr
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a display-less Linux session")
+def test_viewer_without_a_display_leaves_an_existing_log_untouched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    log = tmp_path / "yesterday.csv"
+    log.write_text("time_s,joint\n0.0,0.1\n")
+    code, out, err = run(capsys, "--viewer", "--log", str(log))
+    assert code == 1 and out == ""
+    assert "--viewer needs a display" in err
+    assert log.read_text() == "time_s,joint\n0.0,0.1\n"
+
+
+def test_video_without_imageio_leaves_an_existing_log_untouched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The `video` extra not installed: importing imageio fails as it would without it.
+    monkeypatch.setitem(sys.modules, "imageio", None)
+    monkeypatch.setitem(sys.modules, "imageio.v2", None)
+    log = tmp_path / "yesterday.csv"
+    log.write_text("time_s,joint\n0.0,0.1\n")
+    code, out, err = run(capsys, "--video", str(tmp_path / "run.mp4"), "--log", str(log))
+    assert code == 1 and out == ""
+    assert "pip install 'snakebot[video]'" in err
+    assert log.read_text() == "time_s,joint\n0.0,0.1\n"
+    assert not (tmp_path / "run.mp4").exists()

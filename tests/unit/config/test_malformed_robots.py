@@ -61,6 +61,7 @@ def joints(count: int) -> Callable[[str], str]:
 
 
 RANGE = "expected a number in"
+REGISTER_GAINS = "position_p = 640\nposition_i = 0\nposition_d = 4000"
 INT_RANGE = "expected an integer in"
 
 CASES = [
@@ -119,6 +120,14 @@ CASES = [
           "expected an integer"),
     robot("unknown gain", "position_d = 4000", "position_d = 4000\nposition_q = 3",
           "gains.position_q", "unknown key"),
+    robot("gains as registers and in SI", "position_d = 4000",
+          "position_d = 4000\nkp_nm_per_rad = 2.0", "gains.kp_nm_per_rad", "not both"),
+    robot("SI stiffness beyond the P register", REGISTER_GAINS, "kp_nm_per_rad = 1000.0",
+          "gains.kp_nm_per_rad", RANGE),
+    robot("negative SI damping", REGISTER_GAINS,
+          "kp_nm_per_rad = 2.0\nkd_nms_per_rad = -0.1", "gains.kd_nms_per_rad", RANGE),
+    robot("SI I gain beyond the register", REGISTER_GAINS,
+          "kp_nm_per_rad = 2.0\nposition_i = 16384", "gains.position_i", INT_RANGE),
     # -- [settings] and joints[].settings ------------------------------------------------------
     robot("misspelt setting", "[settings]", "[settings]\nshutdwn = 1", "settings.shutdwn",
           "did you mean shutdown"),
@@ -163,6 +172,8 @@ CASES = [
     twin_servo("negative friction loss", "friction_loss_nm = -0.1", "twin.servo.friction_loss_nm",
                RANGE),
     twin_servo("long delay", "actuator_delay_s = 0.5", "twin.servo.actuator_delay_s", RANGE),
+    twin_servo("zero P divisor override", "p_gain_divisor = 0", "twin.servo.p_gain_divisor",
+               RANGE),
     twin_servo("unknown twin.servo key", "backlash_rad = 0.1", "twin.servo.backlash_rad",
                "unknown key"),
     # -- [joint_defaults] ----------------------------------------------------------------------
@@ -204,16 +215,26 @@ CASES = [
           "no control table"),
     servo("model of another file", 'model = "XL430-W250"', 'model = "XM430-W350"', "model",
           "names model"),
-    servo("wrong model number", "model_number = 1060", "model_number = 1061", "model_number",
-          "is model number 1060"),
-    servo("zero stall torque", "stall_torque_nm = 1.4", "stall_torque_nm = 0",
-          "physics.stall_torque_nm", RANGE),
-    servo("huge stall torque", "stall_torque_nm = 1.4", "stall_torque_nm = 1e308",
-          "physics.stall_torque_nm", RANGE),
-    servo("negative speed", "no_load_speed_rad_s = 5.969", "no_load_speed_rad_s = -1",
-          "physics.no_load_speed_rad_s", RANGE),
-    servo("zero nominal voltage", "nominal_voltage_v = 11.1", "nominal_voltage_v = 0",
-          "physics.nominal_voltage_v", RANGE),
+    servo("model number in the servo file", 'model = "XL430-W250"',
+          'model = "XL430-W250"\nmodel_number = 1060', "model_number", "kept once"),
+    servo("stall torque in the servo file", "[physics]", "[physics]\nstall_torque_nm = 1.4",
+          "physics.stall_torque_nm", "kept once"),
+    servo("no-load speed in the servo file", "[physics]", "[physics]\nno_load_speed_rad_s = 6",
+          "physics.no_load_speed_rad_s", "kept once"),
+    servo("nominal voltage in the servo file", "[physics]", "[physics]\nnominal_voltage_v = 12",
+          "physics.nominal_voltage_v", "kept once"),
+    servo("resolution in the servo file", "[physics]", "[physics]\nticks_per_rev = 4096",
+          "physics.ticks_per_rev", "kept once"),
+    servo("default gains in the servo file", "[settings]",
+          "[default_gains]\nposition_p = 640\n\n[settings]", "default_gains", "kept once"),
+    servo("zero P divisor", "p_gain_divisor = 256", "p_gain_divisor = 0",
+          "physics.p_gain_divisor", RANGE),
+    servo("P divisor in the servo file's twin table", "[settings]",
+          "[twin]\np_gain_divisor = 128\n\n[settings]", "twin.p_gain_divisor",
+          "the P-gain divisor is physics.p_gain_divisor"),
+    servo("huge D divisor", "d_gain_divisor = 32", "d_gain_divisor = 1e9",
+          "physics.d_gain_divisor", RANGE),
+    servo("no D divisor", "d_gain_divisor = 32", "", "physics.d_gain_divisor", "missing"),
     servo("mains supply", "supply_voltage_v = 11.1", "supply_voltage_v = 230",
           "physics.supply_voltage_v", RANGE),
     servo("negative armature", "armature_kgm2 = 0.002", "armature_kgm2 = -1",
@@ -222,29 +243,17 @@ CASES = [
           "physics.friction_loss_nm", RANGE),
     servo("nan damping", "viscous_damping_nms = 0.004", "viscous_damping_nms = nan",
           "physics.viscous_damping_nms", "finite"),
-    servo("resolution of another servo", "ticks_per_rev = 4096", "ticks_per_rev = 4095",
-          "physics.ticks_per_rev", "turns once in 4096 ticks"),
-    servo("no resolution", "ticks_per_rev = 4096", "ticks_per_rev = 0", "physics.ticks_per_rev",
-          INT_RANGE),
     servo("PWM beyond the register", "pwm_limit = 885", "pwm_limit = 886", "physics.pwm_limit",
           "at most 885"),
     servo("zero D period", "d_gain_loop_period_s = 0.001", "d_gain_loop_period_s = 0",
           "physics.d_gain_loop_period_s", RANGE),
     servo("unknown physics key", "pwm_limit = 885", "pwm_limit = 885\ngear_ratio = 258",
           "physics.gear_ratio", "unknown key"),
-    servo("default P beyond the register", "position_p = 640", "position_p = 16384",
-          "default_gains.position_p", INT_RANGE),
-    servo("default I beyond the register", "position_i = 0", "position_i = 99999",
-          "default_gains.position_i", INT_RANGE),
-    servo("negative default D", "position_d = 4000", "position_d = -4000",
-          "default_gains.position_d", INT_RANGE),
-    servo("unknown default gain", "[default_gains]", "[default_gains]\nvelocity_p = 1",
-          "default_gains.velocity_p", "unknown key"),
     servo("unknown servo setting", "[settings]", "[settings]\nbogus = 1", "settings.bogus",
           "bogus"),
-    servo("unknown servo table", "[default_gains]", "[extras]\nnote = 1\n\n[default_gains]",
+    servo("unknown servo table", "[settings]", "[extras]\nnote = 1\n\n[settings]",
           "extras", "unknown key"),
-    servo("unknown servo key", "model_number = 1060", "model_number = 1060\nvendor = \"ROBOTIS\"",
+    servo("unknown servo key", 'model = "XL430-W250"', 'model = "XL430-W250"\nvendor = "ROBOTIS"',
           "vendor", "unknown key"),
 ]
 
@@ -289,3 +298,12 @@ def test_docs_list_every_range_as_the_code_has_it() -> None:
     docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
     for key, limits in {**ROBOT, **SERVO}.items():
         assert f"| `{key}` | {limits.describe()} | {limits.why} |" in docs, key
+
+
+def test_docs_list_the_twin_servo_model_ranges() -> None:
+    from snakebot.config.servo_twin import BOUNDS
+
+    docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
+    for key, limits in BOUNDS.items():
+        for where in (f"twin.servo.{key}", f"twin.{key}"):
+            assert f"| `{where}` | {limits.describe()} | {limits.why} |" in docs, where

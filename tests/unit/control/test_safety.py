@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from snakebot.config import load_robot
+from snakebot.control.cycle import CycleSchedule
 from snakebot.control.safety import SafetyLayer, smooth_ramp
 from snakebot.errors import SafetyLimitError
 
@@ -48,9 +49,10 @@ def test_in_range_target_passes_unchanged_when_slow() -> None:
 
 def test_amplitude_ramps_towards_rest_pose() -> None:
     layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=2.0)
-    assert layer.ramp_in(0.0) == 0.0
-    assert layer.ramp_in(1.0) == pytest.approx(0.5)
-    assert layer.ramp_in(2.5) == 1.0
+    schedule = CycleSchedule(100.0, 10.0, layer.ramp_s)
+    assert schedule.ramp_in(0.0) == 0.0
+    assert schedule.ramp_in(1.0) == pytest.approx(0.5)
+    assert schedule.ramp_in(2.5) == 1.0
     layer.reset(np.zeros(N))
     np.testing.assert_allclose(layer.filter(np.full(N, 0.1), 0.01, amplitude=0.5), 0.05)
     assert smooth_ramp(0.25) < 0.25  # gentle start

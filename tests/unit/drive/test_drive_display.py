@@ -8,10 +8,10 @@ import re
 
 import numpy as np
 
-from snakebot.backends.base import JointState
 from snakebot.drive.display import WIDTH, DriveDisplay, Frame, render
 from snakebot.drive.loop import DriveCycle
 from snakebot.gaits.live import LiveGait
+from snakebot.types import JointState
 
 GAITS = ("sidewinding", "rolling", "lateral_undulation", "turn_in_place", "linear_progression")
 
@@ -71,7 +71,11 @@ def test_hardware_readings_missing_on_the_twin_read_n_a() -> None:
 
 def cycle(k: int, error: float) -> DriveCycle:
     state = JointState(k * 0.01, np.full(12, -error), np.zeros(12), np.zeros(12))
-    return DriveCycle(k, k * 0.01, np.zeros(12), np.zeros(12), state, None, status(), ())
+    return DriveCycle(
+        cycle=k, gait_time_s=k * 0.01, target_rad=np.zeros(12), command_rad=np.zeros(12),
+        state=state, body=None, amplitude=1.0, scored=True, period_s=0.01, overrun=False,
+        achieved_rate_hz=100.0, status=status(), keys=(),
+    )
 
 
 def test_frames_are_drawn_only_when_due_and_the_cursor_comes_back() -> None:

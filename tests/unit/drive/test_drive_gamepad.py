@@ -75,7 +75,7 @@ def pygame(monkeypatch: pytest.MonkeyPatch) -> Iterator[object]:
 
 
 def test_no_pad_connected_is_a_clear_error(pygame: object) -> None:
-    with pytest.raises(ConfigError, match="--gamepad: no gamepad found: plug one in"):
+    with pytest.raises(ConfigError, match="gamepad: no gamepad found: plug one in"):
         GamepadSource().open()
 
 

@@ -27,7 +27,9 @@ def test_shipped_robots_have_valid_settings(name: str) -> None:
     assert first["baud_rate"] == 3  # 1 Mbps, from [bus] baud
     assert (first["operating_mode"], first["drive_mode"], first["homing_offset"]) == (3, 0, 0)
     assert (first["min_position_limit"], first["max_position_limit"]) == (910, 3186)
-    assert first["position_p_gain"] == robot.gains.position_p
+    # [gains] holds registers; loaded into SI and turned back into the same registers.
+    gains = (first["position_p_gain"], first["position_i_gain"], first["position_d_gain"])
+    assert gains == (640, 0, 4000)
     assert chain.notes == ()
 
 

@@ -116,3 +116,43 @@ def test_test_signals_move_one_joint_and_stay_within_limits() -> None:
     assert step.shape == (30, 2) and step[-1].tolist() == pytest.approx([0.0, 1.2])
     chirp = chirp_commands(hold, 0, 0.1, rate_hz=100, duration_s=2.0)
     assert np.all(chirp[:, 1] == 1.4) and np.abs(chirp[:, 0]).max() <= 0.1
+
+
+def rolling_quats(upside_down_fraction: float, stretch: int = 20) -> np.ndarray:
+    """Head quaternions (K, 4): upside down (rolled pi about x) in stretches of ``stretch``
+    cycles, short of the early stop's 0.25 s, for ``upside_down_fraction`` of the run."""
+    quats = np.tile([1.0, 0.0, 0.0, 0.0], (K, 1))
+    down = 0
+    for start in range(0, K, 2 * stretch):
+        take = min(stretch, round(upside_down_fraction * K) - down)
+        if take <= 0:
+            break
+        quats[start : start + take] = [0.0, 1.0, 0.0, 0.0]
+        down += take
+    return quats
+
+
+def test_a_gait_upside_down_43_percent_of_the_time_is_infeasible_unless_it_may_roll() -> None:
+    # The audit: the tuner's "flipped" check (0.25 s upside down without a break) missed a gait
+    # that rolled over and back, upside down 43 % of the time.
+    env = envelope()
+    rolled = trace(head_quat=rolling_quats(0.43))
+    assert np.mean(rolled.up_z < -0.5) == pytest.approx(0.43)
+    result = assess(rolled, env, K * DT)
+    assert result.upside_down_fraction == pytest.approx(0.43)
+    assert not result.feasible
+    assert assess(rolled, Envelope(**{**env.__dict__, "allow_roll": True}), K * DT).feasible
+    assert assess(trace(head_quat=rolling_quats(0.05)), env, K * DT).feasible
+
+
+def test_sinking_into_the_floor_or_chattering_is_infeasible() -> None:
+    env = Envelope(**{**envelope().__dict__, "radius_m": 0.02})
+    sunk = np.zeros(K)
+    sunk[30:40] = -0.008  # 8 mm into the floor: 40 % of the radius, 25 % allowed
+    result = assess(trace(clearance_m=sunk), env, K * DT)
+    assert result.penetration_excess == pytest.approx(0.15)
+    assert not result.feasible
+    chatter = np.tile([[1.0, 0.0], [-1.0, 0.0]], (K // 2, 1))  # joint 0 reverses every cycle
+    result = assess(trace(velocity_rad_s=chatter), env, K * DT)
+    assert result.chatter_excess == pytest.approx(0.99 - 0.25)
+    assert not result.feasible

@@ -8,10 +8,10 @@ import os
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.dynamixel.backend import DynamixelBackend
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.types import JointCommand
 from tests.integration.backends.dynamixel.conftest import BAUD, Bench, make_bench, robot_variant
 
 

@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand, ServoGains
 from snakebot.backends.dynamixel.faults import PoseOutsideLimitsError
-from snakebot.backends.dynamixel.ticks import rad_to_ticks
 from snakebot.config.loader import load_servo_model
-from snakebot.config.schema import RobotConfig
+from snakebot.config.schema import GainRegisters, RobotConfig
 from snakebot.emulation import ExternalMotion, make_chain_for_ids, registered
+from snakebot.servo import rad_to_ticks
+from snakebot.types import JointCommand, PDGains
 from tests.integration.backends.dynamixel.conftest import BAUD, Bench, robot_variant
 
 DT = 0.01
@@ -44,7 +44,7 @@ def test_a_gait_is_tracked_and_goals_follow_the_tick_convention(bench: Bench) ->
         for joint, servo_id in enumerate(robot.servo_ids):
             j = robot.joints[joint]
             expected = rad_to_ticks(goal[joint], zero_offset_rad=j.zero_offset_rad,
-                                    direction=j.direction)
+                                    direction=j.direction, ticks_per_rev=4096)
             assert bench.servo(servo_id).peek("goal_position") == expected
         for _ in range(50):
             backend.advance(DT)
@@ -106,12 +106,39 @@ def test_a_joint_beyond_its_servo_position_limit_is_refused_not_stepped(bench: B
     assert servo.peek("present_position") == 3156
 
 
-def test_gains_are_written_to_the_position_pid_registers(bench: Bench) -> None:
+def test_si_gains_are_written_to_the_position_pid_registers(bench: Bench) -> None:
     with bench.backend() as backend:
-        backend.set_gains(ServoGains(position_p=900, position_i=12, position_d=34))
+        mapping = backend.robot.servo.gain_mapping
+        # 900 and 34 register units, a little off so the backend has to round.
+        wanted = PDGains(mapping.kp_nm_per_rad(900.3), mapping.kd_nms_per_rad(33.8))
+        backend.set_position_i_gain(12)
+        backend.set_gains(wanted)
+        assert backend.gain_registers == GainRegisters(900, 12, 34)
     got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
            for s in bench.chain.servos}
     assert got == {(900, 12, 34)}
+
+
+def test_gains_beyond_the_registers_are_clipped_to_the_control_table(bench: Bench) -> None:
+    with bench.backend() as backend:
+        backend.set_gains(PDGains(kp_nm_per_rad=1e6, kd_nms_per_rad=1e6))
+        assert backend.gain_registers is not None
+        assert (backend.gain_registers.position_p, backend.gain_registers.position_d) == (
+            16383, 16383
+        )
+    assert {s.peek("position_p_gain") for s in bench.chain.servos} == {16383}
+
+
+def test_connect_writes_the_robot_files_registers_back_unchanged(bench: Bench) -> None:
+    # snake12's [gains] are registers 640/0/4000: loaded into SI and written back as the same.
+    for servo in bench.chain.servos:
+        servo.poke("position_p_gain", 100)
+        servo.poke("position_d_gain", 7)
+    with bench.backend():
+        pass
+    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+           for s in bench.chain.servos}
+    assert got == {(640, 0, 4000)}
 
 
 def test_watchdog_is_armed_and_rearmed_after_a_pause(bench: Bench) -> None:
@@ -134,7 +161,7 @@ def test_goals_outside_the_joint_limits_are_clipped(bench: Bench) -> None:
         assert backend.stats.extra["clipped_commands"] == 1
         with pytest.raises(ValueError, match="non-finite"):
             backend.send_command(JointCommand(np.full(12, np.nan)))
-    limit = rad_to_ticks(1.5)
+    limit = rad_to_ticks(1.5, ticks_per_rev=4096)
     assert all(s.peek("goal_position") <= limit for s in bench.chain.servos)
 
 
@@ -143,9 +170,9 @@ def test_slow_rate_reads_report_voltage_and_temperature(bench: Bench) -> None:
     with bench.backend() as backend:
         for _ in range(10):
             backend.read_state()
-        assert backend.health["temperature_c"][2] == 55.0
+        assert backend.health()["temperature_c"][2] == 55.0
         assert backend.stats.extra["max_temperature_c"] == 55.0
-        assert backend.health["input_voltage_v"] == pytest.approx(np.full(12, 11.1))
+        assert backend.health()["input_voltage_v"] == pytest.approx(np.full(12, 11.1))
 
 
 def test_xm430_effort_is_current_times_the_torque_constant() -> None:
@@ -173,3 +200,17 @@ def test_without_current_the_cycle_reads_velocity_and_position_only(bench: Bench
         assert backend._state_plan.block.address == 128  # Present Velocity .. Position
     np.testing.assert_allclose(state.position_rad, 0.3, atol=2e-3)
     np.testing.assert_array_equal(state.effort_nm, np.zeros(12))
+
+
+def test_a_gain_candidates_i_register_reaches_the_servos_beside_the_pd_contract(
+    bench: Bench,
+) -> None:
+    # tune gains searches Position I too: it travels beside the SI gains, Dynamixel only.
+    from snakebot.tuning.gains import apply_gains
+
+    with bench.backend() as backend:
+        sent = apply_gains(backend, backend.robot, GainRegisters(700, 25, 300))
+        assert sent == backend.robot.servo.gains_of(GainRegisters(700, 25, 300))
+    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+           for s in bench.chain.servos}
+    assert got == {(700, 25, 300)}

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.dynamixel.backend import DynamixelBackend
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.errors import SnakebotError
+from snakebot.types import JointCommand
 from tests.integration.backends.dynamixel.conftest import BAUD, Bench, robot_variant
 
 BENT = np.linspace(-0.8, 0.8, 12)

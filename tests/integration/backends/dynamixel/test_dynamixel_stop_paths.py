@@ -12,11 +12,11 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from snakebot.backends.base import JointCommand
 from snakebot.backends.dynamixel.backend import DynamixelBackend
 from snakebot.emulation import EmulatedChain, registered
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.errors import BusError
+from snakebot.types import JointCommand
 from tests.integration.backends.dynamixel.conftest import (
     BAUD,
     Bench,

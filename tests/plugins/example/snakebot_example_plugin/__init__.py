@@ -1,1 +1,2 @@
-"""An example snakebot plugin: a standing-wave gait, found through the ``snakebot.gaits`` group."""
+"""An example snakebot plugin: a standing-wave gait (entry-point group ``snakebot.gaits``) and a
+kinematic backend (``snakebot.backends``)."""

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -8,9 +9,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from snakebot.backends.dynamixel.ticks import TickConverter, rad_to_ticks, ticks_to_rad
+from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
+from snakebot.servo import ticks
+
+rad_to_ticks = functools.partial(ticks.rad_to_ticks, ticks_per_rev=4096)
+ticks_to_rad = functools.partial(ticks.ticks_to_rad, ticks_per_rev=4096)
 
 TICK = 2 * math.pi / 4096
 

@@ -1,0 +1,56 @@
+"""Sensors of the twin: an IMU in the head and the servos' encoders, as a real robot reads them.
+
+The IMU gives the head's orientation (w, x, y, z) and a gyro's angular rate in the head's own
+frame, with optional Gaussian noise; the encoders round positions to whole ticks and add
+optional Gaussian noise. Noise comes from one generator seeded per twin, so runs repeat.
+Reading them never changes the physics.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from snakebot.config.servo_extras import ServoExtras
+
+
+class TwinSensors:
+    """The head IMU and the encoders of one twin (``head_id`` the head body)."""
+
+    def __init__(
+        self, model: mujoco.MjModel, head_id: int, extras: ServoExtras, ticks_per_rev: int,
+        seed: int = 0,
+    ) -> None:
+        self._model = model
+        self._head = head_id
+        self._gyro_noise = extras.imu_gyro_noise_rad_s or 0.0
+        self._position_noise = extras.encoder_noise_rad or 0.0
+        self._tick_rad = 2 * math.pi / ticks_per_rev if extras.quantise_encoder else 0.0
+        self._rng = np.random.default_rng(seed)
+        self._velocity = np.zeros(6)
+
+    @property
+    def alters_positions(self) -> bool:
+        """Whether read positions differ from the simulated ones."""
+        return bool(self._tick_rad or self._position_noise)
+
+    def gyro_rad_s(self, data: mujoco.MjData) -> np.ndarray:
+        """The head's angular velocity (3,) in its own frame, rad/s, plus gyro noise."""
+        mujoco.mj_objectVelocity(
+            self._model, data, mujoco.mjtObj.mjOBJ_BODY, self._head, self._velocity, 1
+        )
+        rate = self._velocity[:3].copy()
+        if self._gyro_noise:
+            rate += self._rng.normal(0.0, self._gyro_noise, 3)
+        return rate
+
+    def encoder_rad(self, position_rad: np.ndarray) -> np.ndarray:
+        """``position_rad`` (N,) as the encoders report it: in whole ticks, plus noise."""
+        out = position_rad
+        if self._tick_rad:
+            out = np.round(out / self._tick_rad) * self._tick_rad
+        if self._position_noise:
+            out = out + self._rng.normal(0.0, self._position_noise, out.shape)
+        return out

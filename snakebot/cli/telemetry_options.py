@@ -1,0 +1,170 @@
+"""``--log``, ``--foxglove[=PORT]`` and ``--mcap FILE`` for ``run`` and ``drive``: the options and
+the sinks they open (CSV with its JSON sidecar, the Foxglove server, the MCAP file)."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from snakebot.backends.base import Backend
+from snakebot.cli.backend_options import backend_spec
+from snakebot.cli.common import check_writable
+from snakebot.errors import OutputError
+from snakebot.telemetry import CsvTelemetryWriter, column_names
+from snakebot.telemetry.sink import CycleLog, combine
+
+DEFAULT_PORT = 8765
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a TCP port number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a TCP port 0-65535 (0: any free), got {value}")
+    return value
+
+
+def add_telemetry_options(parser: argparse.ArgumentParser) -> None:
+    """Add ``--foxglove[=PORT]``, ``--foxglove-host`` and ``--mcap`` (``--log`` stays the
+    command's own)."""
+    parser.add_argument(
+        "--foxglove",
+        nargs="?",
+        const=DEFAULT_PORT,
+        type=_port,
+        metavar="PORT",
+        help=f"stream live to Foxglove: a WebSocket server on 127.0.0.1:PORT (default "
+        f"{DEFAULT_PORT}; 0: any free port; extra: snakebot[foxglove]); the twin then keeps to "
+        "the wall clock; docs/driving.md has the layout",
+    )
+    parser.add_argument(
+        "--foxglove-host",
+        default="127.0.0.1",
+        metavar="HOST",
+        help="address the --foxglove server binds (default 127.0.0.1: this machine only)",
+    )
+    parser.add_argument(
+        "--mcap", type=Path, metavar="FILE", help="record the Foxglove channels to an MCAP file"
+    )
+
+
+@dataclass
+class Telemetry:
+    """The sinks a run writes to: ``log`` gets every cycle (None: none asked for)."""
+
+    log: CycleLog | None = None
+    csv: CsvTelemetryWriter | None = None
+    foxglove: Any = None
+    summary: dict[str, object] = field(default_factory=dict)
+
+
+def open_telemetry(
+    stack: contextlib.ExitStack,
+    args: argparse.Namespace,
+    *,
+    command: str,
+    robot: Any,
+    backend: Backend,
+    rate_hz: float,
+    gait: Mapping[str, Any],
+) -> Telemetry:
+    """Open what ``--log``, ``--foxglove`` and ``--mcap`` ask for, closed by ``stack``.
+
+    Call before the backend connects: a file that cannot be written, a port that cannot be
+    bound, or a missing extra stops the run before a servo moves.
+    """
+    telemetry = Telemetry()
+    if args.log:
+        telemetry.csv = stack.enter_context(CsvTelemetryWriter(args.log, robot.joint_count))
+        from snakebot.telemetry.sidecar import write_sidecar
+
+        sidecar = write_sidecar(
+            args.log, command=command, robot=robot, backend=backend_spec(args).name,
+            rate_hz=rate_hz,
+            columns=column_names(robot.joint_count), extra=gait,
+        )
+        telemetry.summary["log_sidecar"] = str(sidecar)
+    port = getattr(args, "foxglove", None)
+    if port is not None or args.mcap is not None:
+        telemetry.foxglove = sink = _open_foxglove(stack, args, robot, backend, rate_hz, command)
+        if sink.port is not None:
+            telemetry.summary["foxglove"] = f"ws://{args.foxglove_host}:{sink.port}"
+        if args.mcap is not None:
+            telemetry.summary["mcap"] = str(args.mcap)
+    telemetry.log = combine([telemetry.csv, telemetry.foxglove])
+    return telemetry
+
+
+def _open_foxglove(
+    stack: contextlib.ExitStack,
+    args: argparse.Namespace,
+    robot: Any,
+    backend: Backend,
+    rate_hz: float,
+    command: str,
+) -> Any:
+    from snakebot.drive.observers import backend_readings
+    from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, SlowReadings, TelemetryOptions
+    from snakebot.telemetry.robot_scene import robot_geometry
+
+    if args.mcap is not None:
+        check_writable(args.mcap, "MCAP file")
+    options = TelemetryOptions(port=args.foxglove, host=args.foxglove_host, mcap_path=args.mcap)
+    health, alerts = backend_readings(backend)
+    readings = SlowReadings(health=health, alerts=alerts, overruns=lambda: backend.stats.overruns)
+    try:
+        sink = stack.enter_context(
+            FoxgloveTelemetry(
+                options,
+                servo_ids=getattr(robot, "servo_ids", range(robot.joint_count)),
+                rate_hz=rate_hz,
+                geometry=robot_geometry(robot, backend),
+                readings=readings,
+                drive=command == "drive",
+            )
+        )
+    except OutputError as exc:
+        if exc.path != f"{options.host}:{options.port}":
+            raise
+        # the port is taken: say which option chose it
+        raise OutputError(f"--foxglove={args.foxglove}", exc.reason) from exc
+    if sink.port is not None:
+        url = f"ws://{options.host}:{sink.port}"
+        print(f"snakebot: Foxglove: open connection {url} (layout: docs/foxglove/"
+              "snakebot-layout.json)", file=sys.stderr, flush=True)
+    return sink
+
+
+def drive_observer(telemetry: Telemetry) -> Any:
+    """A drive observer writing each cycle to the sinks, and the live gait's status to
+    Foxglove's ``/drive``; None when there is no sink."""
+    log, foxglove = telemetry.log, telemetry.foxglove
+    if log is None:
+        return None
+
+    def observe(cycle: Any) -> None:
+        state = cycle.state
+        com = None if cycle.body is None else cycle.body.com_m
+        imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
+        log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
+                  state.velocity_rad_s, state.effort_nm, com, imu)
+        if foxglove is not None:
+            status = cycle.status
+            controls = status.controls or status.setpoint
+            foxglove.drive(
+                state.time_s,
+                {"gait": status.gait, "mode": status.mode, "speed": controls.speed,
+                 "turn": controls.turn, "amplitude": controls.amplitude,
+                 "wavelength": controls.wavelength, "blend": status.blend},
+                cycle.target_rad,
+                cycle.keys,
+            )
+
+    return observe

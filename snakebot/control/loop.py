@@ -1,0 +1,134 @@
+"""The step-by-step control cycle on any backend: command, send, let time pass, read, record.
+
+``run_gait`` and the live drive loop both step a ``CycleLoop``; the batched tuning engine runs
+the same ``GaitCycle`` and ``CycleSchedule`` on ``mujoco.batch`` (snakebot.tuning.engine).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from snakebot.backends.base import Backend
+from snakebot.control.cycle import (
+    CycleHook,
+    CycleObserver,
+    CycleRecord,
+    CycleSchedule,
+    GaitCycle,
+)
+from snakebot.control.metrics import RunMetrics
+from snakebot.telemetry.sink import CycleLog
+from snakebot.types import JointCommand, JointState
+
+
+class CycleLoop:
+    """One run's cycles on a connected backend, and which parts still take part.
+
+    ``step`` returns each cycle's ``CycleRecord`` when ``records`` is set or ``observers`` are
+    given (else None: nobody reads it, and the twin's cycle stays as cheap as it was).
+
+    ``stage`` names the part running when an exception leaves ``step`` ("gait", "safety",
+    "backend", "metrics", "log", "hook"); ``leave_out`` drops a failed part from the cycles that
+    follow (the runner's ramp-out).
+    """
+
+    def __init__(
+        self,
+        backend: Backend,
+        cycle: GaitCycle,
+        schedule: CycleSchedule,
+        metrics: RunMetrics,
+        *,
+        log: CycleLog | None = None,
+        on_cycle: CycleHook | None = None,
+        observers: Sequence[CycleObserver] = (),
+        records: bool = False,
+    ) -> None:
+        self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
+        self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
+        self.records = records
+        self.state: JointState = backend.read_state()
+        self.start_s = self.state.time_s
+        self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target
+        self.command: np.ndarray = self.state.position_rad.copy()  # the last command sent
+        self.use_gait = True
+        self.cycle = 0
+        self.stage = "gait"
+        self._last_period_s: float | None = None
+
+    def start(self) -> None:
+        """Reset the gaits and the safety layer to the measured pose; open the scored window."""
+        self.gaits.reset(self.state.position_rad)
+        self.metrics.start(self.state.time_s, self.backend.body_state())
+
+    @property
+    def elapsed_s(self) -> float:
+        """Robot time since the run started."""
+        return self.state.time_s - self.start_s
+
+    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord | None:
+        """One cycle with the targets of ``gait_time_s`` at ``amplitude``; scored cycles count
+        in the metrics. Returns the cycle's record (observers have seen it), or None."""
+        backend, schedule = self.backend, self.schedule
+        self.stage = "gait"
+        before = self.state
+        if self.use_gait:
+            target = self.gaits.targets(gait_time_s, before.position_rad)
+        else:
+            target = self.target
+        self.stage = "safety"
+        slew_s = schedule.slew_period_s(self.cycle, self._last_period_s)
+        command = self.gaits.commands(target, slew_s, amplitude)
+        self.target, self.command = target, command
+        self.stage = "backend"
+        overruns = backend.stats.overruns
+        backend.send_command(JointCommand(command))
+        backend.advance(schedule.period_s)
+        self.state = state = backend.read_state()
+        body = backend.body_state()
+        self.stage = "metrics"
+        if scored:
+            self.metrics.add(command, state, body, schedule.period_s)
+        self.stage = "log"
+        if self.log is not None:
+            com = None if body is None else body.com_m
+            imu = None if body is None else (body.head_quat, body.head_gyro_rad_s)
+            self.log.write(state.time_s, self.cycle, command, state.position_rad,
+                           state.velocity_rad_s, state.effort_nm, com, imu)
+        self.cycle += 1
+        period = state.time_s - before.time_s
+        self._last_period_s = period
+        self.stage = "hook"
+        if self.on_cycle is not None:
+            self.on_cycle(self.cycle, gait_time_s)
+        if not (self.observers or self.records):
+            return None
+        elapsed = state.time_s - self.start_s
+        record = CycleRecord(
+            cycle=self.cycle,
+            gait_time_s=gait_time_s,
+            target_rad=target,
+            command_rad=command,
+            state=state,
+            body=body,
+            amplitude=amplitude,
+            scored=scored,
+            period_s=period,
+            overrun=backend.stats.overruns != overruns,
+            achieved_rate_hz=self.cycle / elapsed if elapsed > 0 else schedule.rate_hz,
+        )
+        for observer in self.observers:
+            observer(record)
+        return record
+
+    def leave_out(self, stage: str) -> None:
+        """Drop the part that failed from the cycles that follow."""
+        if stage in ("gait", "safety"):
+            self.use_gait = False  # hold the last target the safety layer accepted
+        elif stage == "log":
+            self.log = None
+        elif stage == "hook":
+            self.on_cycle = None
+            self.observers = ()

@@ -1,0 +1,96 @@
+"""``snakebot log export``: a telemetry CSV as MCAP (the live channels, for Foxglove) or Parquet.
+
+MCAP goes through the same :class:`~snakebot.telemetry.foxglove_live.FoxgloveTelemetry` as a
+live ``--mcap`` recording, timed at the sidecar's start time plus robot time; the 3-D scene is
+the forward kinematics of the logged joint angles through the twin's model of the sidecar's
+robot (when that robot file is still there). Parquet needs pyarrow (``snakebot[parquet]``):
+the columns as float64, the sidecar in the file's key-value metadata under ``snakebot``.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snakebot.errors import ConfigError, MissingDependencyError, OutputError
+from snakebot.telemetry.csv_log import TelemetryLog
+from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, Geometry, TelemetryOptions
+from snakebot.telemetry.log_summary import com_path, nominal_period_s
+
+FORMATS = ("mcap", "parquet")
+PARQUET_INSTALL = "pip install 'snakebot[parquet]'"
+
+
+def export_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -> int:
+    """Write ``log`` to MCAP at ``path``; returns the cycles written."""
+    meta = sidecar or {}
+    period = nominal_period_s(log, sidecar)
+    robot = meta.get("robot", {})
+    servo_ids = robot.get("servo_ids") or list(range(log.joints("command_rad").shape[1]))
+    sink = FoxgloveTelemetry(
+        TelemetryOptions(mcap_path=path),
+        servo_ids=servo_ids,
+        rate_hz=1.0 / period if period else 0.0,
+        geometry=_geometry(meta),
+        start_epoch_ns=_start_ns(meta),
+    )
+    with sink:
+        time_s, cycle = log.column("time_s"), log.column("cycle").astype(int)
+        command, position = log.joints("command_rad"), log.joints("position_rad")
+        velocity, effort = log.joints("velocity_rad_s"), log.joints("effort_nm")
+        com = com_path(log)
+        for row in range(len(time_s)):
+            sink.write(float(time_s[row]), int(cycle[row]), command[row], position[row],
+                       velocity[row], effort[row], None if com is None else com[row])
+    return sink.rows
+
+
+def export_parquet(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -> int:
+    """Write ``log`` to Parquet at ``path``; returns the rows written."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError as exc:
+        raise MissingDependencyError(
+            f"--format parquet needs pyarrow: {PARQUET_INSTALL} (or --format mcap)"
+        ) from exc
+    columns = {name: pa.array(np.ascontiguousarray(log.values[:, i]))
+               for i, name in enumerate(log.columns)}
+    table = pa.table(columns)
+    if sidecar:
+        table = table.replace_schema_metadata({"snakebot": json.dumps(sidecar)})
+    try:
+        pq.write_table(table, path)
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the Parquet file: {exc}") from exc
+    return int(table.num_rows)
+
+
+def _geometry(meta: dict[str, Any]) -> Geometry | None:
+    """The scene of the sidecar's robot, from its robot file; None when it cannot be loaded."""
+    source = meta.get("robot", {}).get("source")
+    if not source or not Path(source).is_file():
+        return None
+    from snakebot.config import load_robot
+    from snakebot.telemetry.scene import KinematicLinkPoses
+
+    try:
+        robot = load_robot(source)
+    except ConfigError:
+        return None
+    poses = KinematicLinkPoses(robot)
+    return Geometry(robot.link_count, robot.link.length_m, robot.link.radius_m, lambda: poses)
+
+
+def _start_ns(meta: dict[str, Any]) -> int:
+    created = meta.get("created_utc")
+    if isinstance(created, str):
+        try:
+            return int(datetime.datetime.fromisoformat(created).timestamp() * 1e9)
+        except ValueError:
+            pass
+    return 0

@@ -1,0 +1,79 @@
+"""Value types shared by config, control and the backends: SI units and radians throughout.
+
+Only numpy is imported here, so ``config/`` and ``control/`` can use these without importing
+``backends/`` (nothing imports upward). Servo ticks and register units never appear in them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+StopPolicy = Literal["hold", "limp"]
+"""What the servos do after a run's ramp-out: hold the last pose or go limp (torque off)."""
+
+
+@dataclass(frozen=True)
+class JointState:
+    """One snapshot of every joint, head to tail.
+
+    ``position_rad``, ``velocity_rad_s`` and ``effort_nm`` have shape (N,); ``time_s`` is robot
+    time (simulated on the twin, monotonic wall clock on hardware).
+    """
+
+    time_s: float
+    position_rad: np.ndarray
+    velocity_rad_s: np.ndarray
+    effort_nm: np.ndarray
+
+
+@dataclass(frozen=True)
+class BodyState:
+    """Whole-body quantities only a twin (or a motion-capture rig) can measure.
+
+    ``com_m`` is the centre of mass (3,) in the world frame, ``head_quat`` the head link's
+    orientation (w, x, y, z). ``head_gyro_rad_s`` (3,) is what a gyro in the head reads: its
+    angular velocity in its own frame (None where no IMU is modelled).
+    """
+
+    com_m: np.ndarray
+    head_quat: np.ndarray
+    head_gyro_rad_s: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class JointCommand:
+    """Goal positions for every joint, head to tail, shape (N,), radians."""
+
+    position_rad: np.ndarray
+
+
+@dataclass(frozen=True)
+class PDGains:
+    """Position-loop gains in SI, the same for every joint: what crosses the Backend contract.
+
+    ``kp_nm_per_rad`` is the stiffness (N·m per rad of position error), ``kd_nms_per_rad`` the
+    damping (N·m per rad/s of joint speed). The twin uses them as they are; the Dynamixel backend
+    turns them into its Position P/D Gain registers (snakebot.servo.GainMapping). Both must be
+    finite and >= 0 (ValueError otherwise).
+    """
+
+    kp_nm_per_rad: float
+    kd_nms_per_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("kp_nm_per_rad", "kd_nms_per_rad"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0.0 <= value < float("inf")):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+
+
+@dataclass
+class CycleStats:
+    """Timing bookkeeping a real-time backend keeps for the runner's summary."""
+
+    overruns: int = 0
+    worst_lateness_s: float = 0.0
+    extra: dict[str, float] = field(default_factory=dict)
