@@ -27,7 +27,7 @@ from snakebot.errors import ConfigError, GaitError, SnakebotError, UsageError
 COMMANDS: tuple[str, ...] = (
     "run", "drive", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune",
     "sysid",
-    "log",
+    "log", "rl",
 )
 COMMANDS += ("robots", "ports")  # issue 9: where robots come from, which serial ports exist
 

@@ -35,7 +35,7 @@ from snakebot.cli.common import (
 )
 from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
 from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, TERRAIN_HELP
-from snakebot.errors import ConfigError, OutputError
+from snakebot.errors import ConfigError, OutputError, UsageError
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
 from snakebot.session import (
@@ -72,6 +72,12 @@ def add_parser(subparsers: Any) -> None:
         help="override a gait parameter (repeatable), e.g. --set omega=pi",
     )
     parser.add_argument("--gait-file", type=Path, help="replay a saved gait (TOML)")
+    parser.add_argument("--policy", metavar="DIR", help="play a trained policy (`snakebot rl "
+                        "train`) as the gait, on a servo snake; needs snakebot[rl]")
+    # dest: ``args.command`` is the subcommand's name (main.py's error messages use it)
+    parser.add_argument("--command", dest="policy_command", metavar="A,B", help="with --policy: "
+                        "speed,turn_rate (m/s, rad/s) for a velocity policy; goal X,Y (m, X "
+                        "ahead) for a goal policy")
     add_backend_argument(parser)
     parser.add_argument(
         "--duration",
@@ -166,8 +172,15 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
+    if args.policy is None and args.policy_command is not None:
+        raise UsageError("--command goes with --policy (a trained policy's command)")
     snake, spec = prepare(args, BACKEND_OPTIONS)
-    gait_name, gait = build_gait(snake.robot, args)
+    if args.policy is None:
+        gait_name, gait = build_gait(snake.robot, args)
+    else:  # a closed-loop gait: it reads the backend it drives
+        from snakebot.rl.cli_policy import policy_gait
+
+        gait_name, gait = policy_gait(snake.robot, snake.backend, args)
     if (args.video or args.viewer) and spec.hardware:
         raise ConfigError(
             "--video" if args.video else "--viewer",

@@ -37,6 +37,8 @@ def scale_into_limits(
     pose_rad: FloatArray, lower_rad: FloatArray, upper_rad: FloatArray
 ) -> FloatArray:
     """Scale each pose (..., N) uniformly about 0 just enough to fit [lower, upper] (N,) in rad."""
+    if np.all(pose_rad >= lower_rad) and np.all(pose_rad <= upper_rad):
+        return pose_rad.copy()  # the common case, and what the scaling below gives bit for bit
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         room = np.where(
             pose_rad > 0.0,

@@ -58,6 +58,10 @@ CASES = [
     bad("run", "--video", "{blocker}/run.mp4", names=("{blocker}/run.mp4", "Not a directory")),
     bad("run", "--duration", "abc", code=2, names=("--duration",)),
     bad("run", "--rate", "1e-300", code=2, names=("--rate",)),
+    bad("run", "--command", "1,0", code=2, names=("--command",)),
+    # rl (cases that need no learning package: the rest are in tests/integration/rl)
+    bad("rl", "train", "--steps", "0", code=2, names=("--steps",)),
+    bad("rl", "compare", "--encodings", "dft,nope", code=2, names=("--encodings", "dft_shift")),
     bad("run", "--rate", "nan", code=2, names=("--rate",)),
     bad("run", "--set", "omega=abc", code=2, names=("omega",)),
     bad("run", "--gait", "moonwalk", code=2, names=("moonwalk", "usage: snakebot run")),

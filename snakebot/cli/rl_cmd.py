@@ -1,0 +1,231 @@
+"""``snakebot rl train|eval|compare``: learn gaits in the twin's Gymnasium environments.
+
+Nothing here imports gymnasium, torch or stable-baselines3 until a subcommand runs; a missing
+one is reported with the extra that installs it (``snakebot[rl]``, ``snakebot[rl-train]``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from snakebot.cli.common import add_dry_run, positive_int, print_json, report_dry_run
+from snakebot.errors import ConfigError, UsageError
+
+ENV_CHOICES = ("snakebot/SnakeGoal-v0", "snakebot/SnakeVelocity-v0")
+ENCODING_CHOICES = ("simple", "sinusoid", "dft", "dft_shift", "compound")
+# PPO throughput measured on two cores with tools/bench_rl.py (docs/learning.md, "Which
+# vectorisation"): the fastest setting is the default.
+DEFAULT_N_ENVS = 2
+DEFAULT_VEC = "subproc"
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``rl`` and its subcommands."""
+    parser = subparsers.add_parser(
+        "rl", help="train and evaluate learned gaits (needs snakebot[rl-train])",
+        description="Reinforcement learning on the twin: Gymnasium environments "
+        "snakebot/SnakeGoal-v0 and snakebot/SnakeVelocity-v0, trained with PPO.",
+    )
+    sub = parser.add_subparsers(dest="rl_command", metavar="SUBCOMMAND", required=True)
+
+    train = sub.add_parser("train", help="train a policy; saves it with its env settings")
+    _env_options(train)
+    train.add_argument("--algo", choices=("ppo",), default="ppo", help="algorithm (ppo)")
+    train.add_argument("--steps", type=positive_int, default=200_000,
+                       help="env steps to train (default 200000)")
+    _vec_options(train)
+    train.add_argument("--rollout", type=positive_int, default=2048,
+                       help="env steps per PPO update, over all envs (default 2048)")
+    train.add_argument("--out", type=Path, help="policy folder (default rl-runs/ENV-ENCODING)")
+    train.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_dry_run(train, "no training, no policy folder")
+    train.set_defaults(handler=run_train, writes=True)
+
+    evaluate = sub.add_parser("eval", help="evaluate a trained policy (and zero/random ones)")
+    evaluate.add_argument("policy", type=Path, help="policy folder from `rl train`")
+    evaluate.add_argument("--episodes", type=positive_int, default=20,
+                          help="episodes, on seeds SEED..SEED+N-1 (default 20)")
+    evaluate.add_argument("--seed", type=int, default=1000, help="first episode seed")
+    evaluate.add_argument("--baselines", choices=("on", "off"), default="on",
+                          help="also run a zero and a random policy on the same seeds")
+    evaluate.add_argument("--video", type=Path, help="render the first episode to an MP4")
+    evaluate.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_dry_run(evaluate, "no episodes, no video")
+    evaluate.set_defaults(handler=run_eval, writes=True)  # --video
+
+    compare = sub.add_parser("compare", help="train every encoding, plot the curves together")
+    compare.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0])
+    compare.add_argument("--encodings", default="simple,sinusoid,dft,dft_shift",
+                         help="comma-separated encodings (default the seed's four)")
+    compare.add_argument("--robot", default="snake8", help="robot name or file (default snake8)")
+    compare.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                         help="env setting for every run (repeatable)")
+    compare.add_argument("--steps", type=positive_int, default=100_000,
+                         help="env steps per encoding (default 100000)")
+    compare.add_argument("--seed", type=int, default=0)
+    _vec_options(compare)
+    compare.add_argument("--out", type=Path, default=Path("rl-runs/compare"),
+                         help="folder: one policy folder per encoding and compare.png")
+    compare.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_dry_run(compare, "no training, no policy folders, no plot")
+    compare.set_defaults(handler=run_compare, writes=True)
+
+
+def _env_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0],
+                        help="environment (default snakebot/SnakeGoal-v0)")
+    parser.add_argument("--encoding", choices=ENCODING_CHOICES, default="dft_shift",
+                        help="action encoding (default dft_shift)")
+    parser.add_argument("--robot", default="snake8", help="robot name or file (default snake8)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="env setting (repeatable), e.g. --set episode_s=20 "
+                        "--set goal_distance_bl=2,3; see docs/learning.md")
+    parser.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
+
+
+def _vec_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--n-envs", type=positive_int, default=DEFAULT_N_ENVS,
+                        help=f"parallel envs (default {DEFAULT_N_ENVS}, measured fastest on two "
+                        "cores)")
+    parser.add_argument("--vec", choices=("dummy", "subproc"), default=DEFAULT_VEC,
+                        help=f"dummy: envs in this process; subproc: one process each "
+                        f"(default {DEFAULT_VEC})")
+
+
+def parse_settings(items: list[str]) -> dict[str, Any]:
+    """--set KEY=VALUE: numbers, comma lists of numbers (tuples) or words."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, raw = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError("--set", item, "expected KEY=VALUE, e.g. episode_s=20")
+        parts = [p.strip() for p in raw.split(",")]
+        try:
+            values: list[Any] = [_number(p) for p in parts]
+        except ValueError:
+            if len(parts) > 1:
+                raise ConfigError("--set", item, "expected numbers in a comma list") from None
+            values = [raw.strip()]
+        out[key.strip()] = tuple(values) if len(values) > 1 else values[0]
+    return out
+
+
+def _number(text: str) -> float | int:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(text)
+    return int(value) if text.lstrip("+-").isdigit() else value
+
+
+def env_kwargs(args: argparse.Namespace, encoding: str) -> dict[str, Any]:
+    """The kwargs of gymnasium.make: robot, encoding and --set, checked by building them, with
+    every default filled in (a policy keeps the settings it was trained with, whatever later
+    versions change)."""
+    given = parse_settings(args.set)
+    for key in ("robot", "encoding"):
+        if key in given:
+            raise UsageError(f"--set {key}=...: use --{key}")
+    _check_robot(args.robot)
+    from snakebot.rl.settings import GoalSettings, VelocitySettings, settings_dict, split_kwargs
+
+    task = GoalSettings if "Goal" in args.env else VelocitySettings
+    kwargs = {"robot": args.robot, "encoding": encoding, **given}
+    return settings_dict(*split_kwargs(kwargs, task))
+
+
+def _check_robot(name: str) -> None:
+    """ConfigError now (before any env starts) for a robot that cannot be loaded, or a
+    mass-spring body: the environments drive servo snakes."""
+    from snakebot.config import RobotConfig
+    from snakebot.session import load_robot
+
+    if not isinstance(load_robot(name), RobotConfig):
+        raise ConfigError("--robot", name, "the learning environments drive servo snakes (robot "
+                          "files), not mass-spring bodies")
+
+
+def _check_out(out: Path) -> None:
+    """OutputError for an output folder that is a file (a dry run creates nothing)."""
+    from snakebot.errors import OutputError
+
+    for folder in (out, *out.parents):
+        if folder.exists() and not folder.is_dir():
+            raise OutputError(folder, "is a file, not a folder: cannot write the policy there")
+
+
+def run_train(args: argparse.Namespace) -> int:
+    """Train one policy, print where it went."""
+    from snakebot.rl.train import TrainSettings, dump_json, train
+
+    kwargs = env_kwargs(args, args.encoding)
+    out = args.out or Path("rl-runs") / f"{args.env.split('/')[-1]}-{args.encoding}"
+    if args.dry_run:
+        _check_out(out)
+        return report_dry_run(args, {"env": args.env, "encoding": args.encoding,
+                                     "robot": args.robot, "steps": args.steps, "out": str(out),
+                                     "env_kwargs": kwargs})
+    settings = TrainSettings(args.env, kwargs, args.steps, seed=args.seed, n_envs=args.n_envs,
+                             vec=args.vec, algo=args.algo, rollout_steps=args.rollout)
+    if not args.json:
+        print(f"training {args.env} ({args.encoding}, {args.robot}) for {args.steps} steps on "
+              f"{args.n_envs} {args.vec} env(s) -> {out}")
+    result = train(settings, out)
+    summary = dump_json(result)
+    if args.json:
+        print_json(summary)
+    else:
+        ended = "interrupted after" if result.interrupted else "done:"
+        cpu = "" if summary["cpu_s"] is None else f", {summary['cpu_s']:.0f} CPU s"
+        print(f"{ended} {summary['steps']} steps in {summary['wall_s']:.0f} s "
+              f"({summary['steps_per_s']:.0f} steps/s{cpu}); "
+              f"policy, learning_curve.csv and .png in {out}")
+    return 130 if result.interrupted else 0
+
+
+def run_eval(args: argparse.Namespace) -> int:
+    """Evaluate a policy folder against zero and random policies on the same seeds."""
+    from snakebot.rl.evaluate import evaluate_folder, print_table
+
+    if args.dry_run:
+        from snakebot.rl.policy_file import load_policy
+
+        policy = load_policy(args.policy)
+        if args.video is not None:
+            _check_out(args.video.parent)
+        return report_dry_run(args, {"policy": str(args.policy), "env": policy.env_id,
+                                     "episodes": args.episodes, "seed": args.seed,
+                                     "video": None if args.video is None else str(args.video)})
+    results = evaluate_folder(args.policy, episodes=args.episodes, seed=args.seed,
+                              baselines=args.baselines == "on", video=args.video)
+    if args.json:
+        print_json({name: r.summary() for name, r in results.items()})
+    else:
+        print_table(results)
+    return 0
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    """Train each encoding in turn; curves side by side in compare.png."""
+    encodings = [e.strip() for e in args.encodings.split(",") if e.strip()]
+    bad = [e for e in encodings if e not in ENCODING_CHOICES]
+    if bad or not encodings:
+        raise ConfigError("--encodings", args.encodings,
+                          f"expected a comma list of {', '.join(ENCODING_CHOICES)}")
+    from snakebot.rl.compare import compare
+
+    runs = {e: env_kwargs(args, e) for e in encodings}
+    if args.dry_run:
+        _check_out(args.out)
+        return report_dry_run(args, {"env": args.env, "encodings": encodings,
+                                     "robot": args.robot, "steps": args.steps,
+                                     "out": str(args.out)})
+    summary = compare(args.env, runs, args.steps, args.out, seed=args.seed,
+                      n_envs=args.n_envs, vec=args.vec)
+    if args.json:
+        print_json(summary)
+    else:
+        print(f"compare.png and one policy folder per encoding in {args.out}")
+    return 0

@@ -1,0 +1,40 @@
+"""``snakebot run --policy DIR --command A,B``: the checks and the gait, kept out of run_cmd."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from snakebot.backends.base import Backend
+from snakebot.config import RobotConfig
+from snakebot.config.body import BodyConfig
+from snakebot.errors import ConfigError, UsageError
+from snakebot.gaits import Gait
+from snakebot.rl.policy_gait import policy_gait_for_backend
+
+
+def parse_command(text: str | None) -> tuple[float, float] | None:
+    """``A,B`` as two finite numbers; ConfigError naming --command otherwise."""
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        a, b = (float(p) for p in parts)
+    except ValueError:
+        raise ConfigError("--command", text, "expected two numbers A,B, e.g. 0.1,0") from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise ConfigError("--command", text, "expected two finite numbers")
+    return a, b
+
+
+def policy_gait(robot: RobotConfig | BodyConfig, backend: Backend,
+                args: argparse.Namespace) -> tuple[str, Gait]:
+    """The --policy gait for ``backend`` (made, not yet connected); UsageError when --gait,
+    --gait-file or --set come too, or the robot is a mass-spring body (no servos to drive)."""
+    if args.gait or args.gait_file or args.set:
+        raise UsageError("--policy is the gait: drop --gait, --gait-file and --set")
+    if isinstance(robot, BodyConfig):
+        raise UsageError(f"--policy drives servo snakes (robot files); {robot.name} is a "
+                         "mass-spring body")
+    return policy_gait_for_backend(args.policy, robot, backend,
+                                   parse_command(args.policy_command), args.rate)

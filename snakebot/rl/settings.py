@@ -1,0 +1,156 @@
+"""Settings of the learning environments: frozen, JSON-ready, saved with every trained policy."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from snakebot.errors import ConfigError
+from snakebot.rl.encodings import ENCODINGS
+
+GOAL_ENV_ID = "snakebot/SnakeGoal-v0"
+VELOCITY_ENV_ID = "snakebot/SnakeVelocity-v0"
+ENV_IDS = (GOAL_ENV_ID, VELOCITY_ENV_ID)
+
+
+@dataclass(frozen=True)
+class EnvSettings:
+    """What both tasks share: the robot, the encoding and the clocks.
+
+    ``action_hz``: how often the policy acts; ``control_hz``: the gait -> safety -> backend
+    cycle in between (a whole multiple of ``action_hz``, and a whole number of physics steps);
+    ``episode_s``: episodes end (truncated) after this much simulated time; ``phase_hz``: the
+    dft_shift wave's laps per second and the clock of static encodings; ``dft_bins``: K;
+    ``timestep_s``: overrides the robot's twin timestep.
+    """
+
+    robot: str = "snake8"
+    encoding: str = "dft_shift"
+    action_hz: float = 10.0
+    control_hz: float = 50.0
+    episode_s: float = 30.0
+    phase_hz: float = 0.5
+    dft_bins: int = 3
+    timestep_s: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.encoding not in ENCODINGS:
+            raise ConfigError("encoding", "", f"unknown encoding {self.encoding!r}; expected "
+                              f"one of {', '.join(ENCODINGS)}")
+        for key in ("action_hz", "control_hz", "episode_s", "phase_hz"):
+            _positive(key, getattr(self, key))
+        ratio = self.control_hz / self.action_hz
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ConfigError("control_hz", "", f"expected a whole multiple of action_hz "
+                              f"{self.action_hz:g} Hz, got {self.control_hz:g} Hz")
+
+    @property
+    def cycles_per_action(self) -> int:
+        """Control cycles per policy action."""
+        return round(self.control_hz / self.action_hz)
+
+    @property
+    def max_steps(self) -> int:
+        """Policy steps in one episode."""
+        return max(1, round(self.episode_s * self.action_hz))
+
+
+@dataclass(frozen=True)
+class GoalSettings:
+    """The goal task: where goals appear and what the reward pays.
+
+    Goals appear ``goal_distance_bl`` (low, high) body lengths from the centre of mass, at a
+    bearing in ``goal_bearing_rad`` (low, high) from the snake's starting heading (default: all
+    around). Reward per step = -step_cost + velocity_weight * (COM velocity toward the goal, body
+    lengths/s) - distance_weight * (distance, body lengths) + goal_bonus on reaching the goal
+    (within ``goal_radius_bl``), which ends the episode.
+    """
+
+    goal_distance_bl: tuple[float, float] = (2.0, 4.0)
+    goal_bearing_rad: tuple[float, float] = (-math.pi, math.pi)
+    goal_radius_bl: float = 0.5
+    step_cost: float = 0.01
+    velocity_weight: float = 1.0
+    distance_weight: float = 0.01
+    goal_bonus: float = 10.0
+
+    def __post_init__(self) -> None:
+        _range("goal_distance_bl", self.goal_distance_bl, 0.0)
+        _range("goal_bearing_rad", self.goal_bearing_rad, -math.inf)
+        _positive("goal_radius_bl", self.goal_radius_bl)
+
+
+@dataclass(frozen=True)
+class VelocitySettings:
+    """The velocity task: commands (speed m/s along the body, turn rate rad/s), resampled every
+    ``command_period_s``; reward = exp(-(v - v_cmd)^2 / speed_sigma^2) + turn_weight *
+    exp(-(w - w_cmd)^2 / turn_sigma^2) - effort_weight * mean (effort / stall torque)^2."""
+
+    speed_range_mps: tuple[float, float] = (0.05, 0.35)
+    turn_range_rad_s: tuple[float, float] = (-0.3, 0.3)
+    command_period_s: float = 5.0
+    speed_sigma_mps: float = 0.1
+    turn_sigma_rad_s: float = 0.15
+    turn_weight: float = 0.5
+    effort_weight: float = 0.05
+
+    def __post_init__(self) -> None:
+        _range("speed_range_mps", self.speed_range_mps, -math.inf)
+        _range("turn_range_rad_s", self.turn_range_rad_s, -math.inf)
+        for key in ("command_period_s", "speed_sigma_mps", "turn_sigma_rad_s"):
+            _positive(key, getattr(self, key))
+
+
+def _positive(key: str, value: object) -> None:
+    if not isinstance(value, int | float) or not (value > 0 and math.isfinite(value)):
+        raise ConfigError(key, "", f"expected a positive number, got {value!r}")
+
+
+def _range(key: str, value: object, minimum: float) -> None:
+    ok = isinstance(value, tuple | list) and len(value) == 2
+    if ok:
+        assert isinstance(value, tuple | list)
+        try:
+            low, high = (float(v) for v in value)
+        except (TypeError, ValueError):
+            low = high = math.nan
+        ok = math.isfinite(low) and math.isfinite(high) and minimum <= low <= high
+    if not ok:
+        raise ConfigError(key, "", f"expected (low, high) with {minimum:g} <= low <= high, "
+                          f"got {value!r}")
+
+
+def split_kwargs(kwargs: dict[str, Any], *task: type) -> tuple[Any, ...]:
+    """Sort env kwargs into EnvSettings and the task's settings classes; ConfigError naming an
+    unknown key and listing the valid ones."""
+    classes = (EnvSettings, *task)
+    known = {f.name: cls for cls in classes for f in dataclasses.fields(cls)}
+    unknown = sorted(set(kwargs) - set(known))
+    if unknown:
+        raise ConfigError(unknown[0], "", f"unknown env setting; expected one of "
+                          f"{', '.join(sorted(known))}")
+    out = []
+    for cls in classes:
+        mine = {k: _tuple(v) for k, v in kwargs.items() if known[k] is cls}
+        out.append(cls(**mine))
+    return tuple(out)
+
+
+def _tuple(value: object) -> object:
+    return tuple(value) if isinstance(value, list) else value
+
+
+def settings_dict(*settings: object) -> dict[str, Any]:
+    """All fields of the given settings dataclasses as one JSON-ready dict."""
+    out: dict[str, Any] = {}
+    for item in settings:
+        out.update(dataclasses.asdict(item))  # type: ignore[call-overload]
+    return out
+
+
+__all__ = [
+    "ENV_IDS", "GOAL_ENV_ID", "VELOCITY_ENV_ID", "EnvSettings", "GoalSettings",
+    "VelocitySettings", "settings_dict", "split_kwargs",
+]

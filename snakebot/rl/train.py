@@ -1,0 +1,305 @@
+"""Training with stable-baselines3 PPO (the ``rl-train`` extra): progress, curve, saved policy.
+
+The seed trained TRPO while its text says PPO; this is PPO. Each rollout of ``n_steps`` per env
+is one point of the learning curve: mean return and success rate of the episodes that ended in
+it, and the throughput so far.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import resource
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from snakebot.errors import ConfigError, OutputError
+from snakebot.rl.deps import require
+from snakebot.rl.policy_file import (
+    MODEL_FILE,
+    NumpyActor,
+    save_actor,
+    write_settings,
+)
+
+VECTORISATIONS = ("dummy", "subproc")
+CURVE_FIELDS = ("steps", "wall_s", "episodes", "mean_return", "success_rate",
+                "mean_episode_steps", "steps_per_s")
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """One training run: PPO for ``steps`` env steps over ``n_envs`` envs vectorised ``vec``
+    ("dummy": in this process, "subproc": one process each; the CLI's defaults are the fastest
+    measured on two cores, docs/learning.md)."""
+
+    env_id: str
+    env_kwargs: dict[str, Any]
+    steps: int
+    n_envs: int
+    vec: str
+    seed: int = 0
+    rollout_steps: int = 2048
+    algo: str = "ppo"
+    ppo: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.algo != "ppo":
+            raise ConfigError("--algo", "", f"expected ppo, got {self.algo!r}")
+        if self.vec not in VECTORISATIONS:
+            raise ConfigError("--vec", "", f"expected one of {', '.join(VECTORISATIONS)}")
+        if self.n_envs < 1 or self.rollout_steps % self.n_envs:
+            raise ConfigError("--n-envs", "", f"expected a divisor of the rollout "
+                              f"({self.rollout_steps} steps), got {self.n_envs}")
+        if self.steps < 1:
+            raise ConfigError("--steps", "", f"expected a positive count, got {self.steps}")
+
+
+@dataclass
+class CurvePoint:
+    """One learning-curve row (after a rollout)."""
+
+    steps: int
+    wall_s: float
+    episodes: int
+    mean_return: float
+    success_rate: float
+    mean_episode_steps: float
+    steps_per_s: float
+
+
+@dataclass
+class TrainResult:
+    """What a run produced: its curve, wall time and throughput, and where it saved."""
+
+    curve: list[CurvePoint]
+    wall_s: float
+    steps: int
+    folder: Path
+    cpu_s: float = math.nan
+    interrupted: bool = False
+
+    @property
+    def steps_per_s(self) -> float:
+        """Env steps per second of wall time, PPO updates included."""
+        return self.steps / self.wall_s if self.wall_s > 0 else 0.0
+
+
+def make_vec_env(env_id: str, env_kwargs: dict[str, Any], n_envs: int, vec: str,
+                 seed: int) -> Any:
+    """An SB3 VecEnv of ``n_envs`` copies, in this process (dummy) or one process each."""
+    sb3_vec = require("stable_baselines3.common.vec_env", "rl train")
+    fns = [_env_fn(env_id, env_kwargs) for _ in range(n_envs)]
+    venv = sb3_vec.SubprocVecEnv(fns) if vec == "subproc" else sb3_vec.DummyVecEnv(fns)
+    venv.seed(seed)
+    return venv
+
+
+def _env_fn(env_id: str, env_kwargs: dict[str, Any]) -> Callable[[], Any]:
+    def make() -> Any:
+        import gymnasium
+
+        import snakebot.rl  # noqa: F401  (registers the envs in a fresh worker process)
+
+        return gymnasium.make(env_id, **env_kwargs)
+
+    return make
+
+
+class _Tracker:
+    """Episode returns and successes per env, and the curve rows written as they come."""
+
+    def __init__(self, n_envs: int, csv_file: TextIO, progress: TextIO | None,
+                 total: int) -> None:
+        self.returns = np.zeros(n_envs)
+        self.lengths = np.zeros(n_envs, dtype=int)
+        self.done_returns: list[float] = []
+        self.done_success: list[bool] = []
+        self.done_lengths: list[int] = []
+        self.episodes = 0
+        self.curve: list[CurvePoint] = []
+        self.writer = csv.writer(csv_file)
+        self.writer.writerow(CURVE_FIELDS)
+        self.csv_file = csv_file
+        self.progress = progress
+        self.total = total
+        self.start = time.monotonic()
+
+    def on_step(self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
+        self.returns += rewards
+        self.lengths += 1
+        for i in np.flatnonzero(dones):
+            self.done_returns.append(float(self.returns[i]))
+            self.done_lengths.append(int(self.lengths[i]))
+            if "is_success" in infos[i]:  # the goal task; the velocity task has no success
+                self.done_success.append(bool(infos[i]["is_success"]))
+            self.returns[i] = 0.0
+            self.lengths[i] = 0
+            self.episodes += 1
+
+    def on_rollout(self, steps: int) -> None:
+        wall = time.monotonic() - self.start
+        returns, success = self.done_returns, self.done_success
+        point = CurvePoint(
+            steps=steps, wall_s=round(wall, 3), episodes=self.episodes,
+            mean_return=float(np.mean(returns)) if returns else math.nan,
+            success_rate=float(np.mean(success)) if success else math.nan,
+            mean_episode_steps=float(np.mean(self.done_lengths)) if returns else math.nan,
+            steps_per_s=round(steps / wall, 2) if wall > 0 else 0.0,
+        )
+        self.done_returns, self.done_success, self.done_lengths = [], [], []
+        self.curve.append(point)
+        self.writer.writerow([getattr(point, name) for name in CURVE_FIELDS])
+        self.csv_file.flush()
+        if self.progress is not None:
+            self.progress.write(
+                f"  {steps:>9d}/{self.total} steps  {wall:7.0f} s  {point.steps_per_s:6.0f} "
+                f"steps/s  return {point.mean_return:8.2f}  success "
+                f"{_percent(point.success_rate)}  ({point.episodes} episodes)\n"
+            )
+            self.progress.flush()
+
+
+def _percent(value: float) -> str:
+    return "  n/a" if math.isnan(value) else f"{100 * value:4.0f}%"
+
+
+def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sys.stderr,
+          plot: bool = True) -> TrainResult:
+    """Train, then save policy.json, actor.npz, policy.zip, learning_curve.csv (+ .png).
+
+    Ctrl-C ends training early and still saves the policy learned so far (``interrupted``).
+    The curve CSV is written row by row, so an interrupted run keeps what it measured. Raises
+    MissingDependencyError naming the ``rl-train`` extra, ConfigError for bad settings,
+    OutputError when the folder cannot be written.
+    """
+    torch = require("torch", "rl train")
+    sb3 = require("stable_baselines3", "rl train")
+    callbacks = require("stable_baselines3.common.callbacks", "rl train")
+    torch.set_num_threads(1)  # one core per env process; PPO's small MLP gains nothing more
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        csv_file = (folder / "learning_curve.csv").open("w", newline="")
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+        raise OutputError(folder, f"cannot write the training output: {reason}") from exc
+    cpu_start = _cpu_s()
+    venv = make_vec_env(settings.env_id, settings.env_kwargs, settings.n_envs, settings.vec,
+                        settings.seed)
+    tracker = _Tracker(settings.n_envs, csv_file, progress, settings.steps)
+
+    class Callback(callbacks.BaseCallback):  # type: ignore[misc,name-defined]
+        def _on_step(self) -> bool:
+            tracker.on_step(self.locals["rewards"], self.locals["dones"], self.locals["infos"])
+            return True
+
+        def _on_rollout_end(self) -> None:
+            tracker.on_rollout(int(self.num_timesteps))
+
+    ppo_kwargs = {"n_steps": settings.rollout_steps // settings.n_envs, **settings.ppo}
+    interrupted = False
+    try:
+        model = sb3.PPO("MlpPolicy", venv, seed=settings.seed, verbose=0, device="cpu",
+                        **ppo_kwargs)
+        try:
+            model.learn(total_timesteps=settings.steps, callback=Callback())
+        except KeyboardInterrupt:  # Ctrl-C: keep the policy learned so far
+            interrupted = True
+    finally:
+        venv.close()
+        csv_file.close()
+    wall = time.monotonic() - tracker.start
+    # subproc workers are children of multiprocessing's forkserver, not of this process: their
+    # CPU time cannot be counted here, so none is reported rather than a part of it.
+    cpu = _cpu_s() - cpu_start if settings.vec == "dummy" else math.nan
+    steps = int(model.num_timesteps)
+    model.save(folder / MODEL_FILE)
+    save_actor(actor_from_sb3(model), folder / "actor.npz")
+    last = tracker.curve[-1] if tracker.curve else None
+    meta = {
+        "algo": settings.algo,
+        "steps": steps,
+        "interrupted": interrupted,
+        "seed": settings.seed,
+        "n_envs": settings.n_envs,
+        "vec": settings.vec,
+        "ppo": ppo_kwargs,
+        "wall_s": round(wall, 2),
+        "cpu_s": _finite(round(cpu, 2)),
+        "steps_per_s": round(steps / wall, 2) if wall > 0 else None,
+        "final_mean_return": None if last is None else _finite(last.mean_return),
+        "final_success_rate": None if last is None else _finite(last.success_rate),
+        "versions": {"stable_baselines3": sb3.__version__, "torch": torch.__version__},
+    }
+    write_settings(folder, settings.env_id, settings.env_kwargs, meta)
+    result = TrainResult(tracker.curve, wall, steps, folder, cpu, interrupted)
+    if plot:
+        from snakebot.rl.plots import curve_plot
+
+        curve_plot({_label(settings): tracker.curve}, folder / "learning_curve.png",
+                   title=f"{settings.env_id} ({settings.env_kwargs.get('encoding', '')})")
+    return result
+
+
+def _cpu_s() -> float:
+    """CPU seconds of this process and its waited-for children: what a dummy-vectorised run
+    cost whatever else the machine was doing."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def _label(settings: TrainSettings) -> str:
+    return str(settings.env_kwargs.get("encoding", settings.env_id))
+
+
+def _finite(value: float) -> float | None:
+    return None if math.isnan(value) else value
+
+
+def actor_from_sb3(model: Any) -> NumpyActor:
+    """The deterministic actor of an SB3 MlpPolicy (its policy net and action net) as numpy."""
+    torch = require("torch", "rl train")
+    policy = model.policy
+    layers = [m for m in policy.mlp_extractor.policy_net if isinstance(m, torch.nn.Linear)]
+    acts = {type(m).__name__ for m in policy.mlp_extractor.policy_net} - {"Linear"}
+    activation = {"Tanh": "tanh", "ReLU": "relu"}.get(acts.pop() if acts else "Tanh")
+    if activation is None:
+        raise ConfigError("policy", "", "only Tanh or ReLU MLP policies can be exported")
+    layers.append(policy.action_net)
+    weights = tuple(m.weight.detach().cpu().numpy().astype(np.float64) for m in layers)
+    biases = tuple(m.bias.detach().cpu().numpy().astype(np.float64) for m in layers)
+    return NumpyActor(weights, biases, activation)
+
+
+def read_curve(path: Path) -> list[CurvePoint]:
+    """A learning_curve.csv back as points."""
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    return [CurvePoint(int(r["steps"]), float(r["wall_s"]), int(r["episodes"]),
+                       float(r["mean_return"]), float(r["success_rate"]),
+                       float(r["mean_episode_steps"]), float(r["steps_per_s"])) for r in rows]
+
+
+def dump_json(result: TrainResult) -> dict[str, Any]:
+    """The JSON summary of a training run."""
+    last = result.curve[-1] if result.curve else None
+    payload = {
+        "folder": str(result.folder),
+        "steps": result.steps,
+        "wall_s": round(result.wall_s, 2),
+        "cpu_s": _finite(round(result.cpu_s, 2)),
+        "interrupted": result.interrupted,
+        "steps_per_s": round(result.steps_per_s, 2),
+        "final_mean_return": None if last is None else _finite(last.mean_return),
+        "final_success_rate": None if last is None else _finite(last.success_rate),
+    }
+    json.dumps(payload)
+    return payload

@@ -1,0 +1,116 @@
+"""`snakebot rl train/eval/compare` as a user runs them: the CI's 2 x 2048-step PPO smoke."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium
+import numpy as np
+import pytest
+
+import snakebot.rl
+from snakebot.rl.policy_file import load_policy
+from tests.integration.rl.policies import constant_policy
+
+pytestmark = pytest.mark.slow
+# Cheaper steps for CI (25 Hz actions, one control cycle each); the PPO run is the real one.
+FAST = ["--set", "action_hz=25", "--set", "control_hz=25", "--set", "episode_s=8"]
+
+
+def cli(*args: str, timeout: float = 900) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "snakebot", *args], capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def test_ppo_smoke_trains_two_rollouts_saves_the_policy_and_evaluates_it(tmp_path: Path) -> None:
+    out = tmp_path / "policy"
+    done = cli("rl", "train", "--env", "snakebot/SnakeGoal-v0", "--encoding", "dft_shift",
+                    "--steps", "4096", "--n-envs", "2", "--vec", "dummy", "--out", str(out),
+                    *FAST)
+    assert done.returncode == 0, done.stderr
+    assert "2048/4096 steps" in done.stderr and "4096/4096 steps" in done.stderr  # progress
+    with (out / "learning_curve.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["steps"]) for r in rows] == [2048, 4096]
+    assert all(float(r["episodes"]) > 0 and np.isfinite(float(r["mean_return"])) for r in rows)
+    assert (out / "learning_curve.png").stat().st_size > 10_000
+    policy = load_policy(out)
+    assert policy.env_kwargs["encoding"] == "dft_shift"
+    assert policy.env_kwargs["action_hz"] == 25 and policy.env_kwargs["goal_bonus"] == 10.0
+    assert policy.meta["steps"] == 4096 and policy.meta["cpu_s"] > 0  # dummy: CPU counted
+
+    # The numpy actor is SB3's deterministic policy.
+    from stable_baselines3 import PPO
+
+    model = PPO.load(out / "policy.zip", device="cpu")
+    env = gymnasium.make(snakebot.rl.GOAL_ENV_ID, **policy.env_kwargs)
+    obs, _ = env.reset(seed=5)
+    for _ in range(5):
+        expected, _ = model.predict(obs, deterministic=True)
+        np.testing.assert_allclose(policy.actor(obs), expected, atol=1e-5)
+        obs, *_ = env.step(expected)
+    env.close()
+
+    evaluated = cli("rl", "eval", str(out), "--episodes", "2", "--json")
+    assert evaluated.returncode == 0, evaluated.stderr
+    results = json.loads(evaluated.stdout)
+    assert set(results) == {"policy", "zero", "random"}
+    assert all(r["episodes"] == 2 for r in results.values())
+
+
+def test_eval_counts_goals_reached_against_zero_and_random(tmp_path: Path) -> None:
+    # A policy that always swims ahead, on goals straight ahead: it reaches them all; a zero
+    # dft_shift action holds the snake straight and still.
+    folder = constant_policy(tmp_path / "ahead", snakebot.rl.GOAL_ENV_ID, [0, 1, 0, 0, 0],
+                             2 * 8 + 2 + 2, encoding="dft_shift", episode_s=12,
+                             goal_bearing_rad=(0.0, 0.0), goal_distance_bl=(2.0, 2.5))
+    video = tmp_path / "first.mp4"
+    done = cli("rl", "eval", str(folder), "--episodes", "3", "--json", "--video",
+                    str(video))
+    assert done.returncode == 0, done.stderr
+    results = json.loads(done.stdout)
+    assert results["policy"]["success_rate"] == 1.0
+    assert results["policy"]["time_to_goal_s"] < 12
+    assert results["zero"]["success_rate"] == 0.0
+    assert results["policy"]["cost_of_transport"] > 0
+    assert video.stat().st_size > 1000
+
+
+def test_compare_draws_every_encoding_side_by_side(tmp_path: Path) -> None:
+    out = tmp_path / "compare"
+    done = cli("rl", "compare", "--encodings", "sinusoid,dft", "--steps", "2048",
+                    "--n-envs", "1", "--vec", "dummy", "--out", str(out), "--json", *FAST)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert set(summary["runs"]) == {"sinusoid", "dft"}
+    assert (out / "compare.png").stat().st_size > 10_000
+    assert (out / "sinusoid" / "actor.npz").exists() and (out / "dft" / "policy.json").exists()
+
+
+def test_bad_rl_options_are_named(tmp_path: Path) -> None:
+    bad = cli("rl", "train", "--set", "goal_radius=1", "--out", str(tmp_path / "x"))
+    assert bad.returncode == 1 and "goal_radius" in bad.stderr and "goal_radius_bl" in bad.stderr
+    assert cli("rl", "train", "--encoding", "rotating").returncode == 2
+    assert cli("rl", "compare", "--encodings", "dft,nope").returncode == 2  # a flag's value
+    assert cli("rl", "eval", str(tmp_path / "none")).returncode == 1
+
+
+def test_dry_runs_check_the_settings_and_write_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    train = cli("rl", "train", "--out", str(out / "policy"), "--dry-run", "--json", *FAST)
+    assert train.returncode == 0, train.stderr
+    plan = json.loads(train.stdout)
+    assert plan["dry_run"] is True and plan["env_kwargs"]["action_hz"] == 25
+    compare = cli("rl", "compare", "--encodings", "sinusoid,dft", "--out", str(out), "--dry-run",
+                  "--json")
+    assert compare.returncode == 0, compare.stderr
+    assert json.loads(compare.stdout)["encodings"] == ["sinusoid", "dft"]
+    bad = cli("rl", "train", "--set", "goal_radius=1", "--dry-run", "--out", str(out))
+    assert bad.returncode == 1 and "goal_radius_bl" in bad.stderr  # checked, not just skipped
+    body = cli("rl", "train", "--robot", "worm", "--dry-run", "--out", str(out))
+    assert body.returncode == 2 and "mass-spring" in body.stderr
+    assert list(tmp_path.iterdir()) == []

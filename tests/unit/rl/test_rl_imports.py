@@ -1,0 +1,51 @@
+"""`import snakebot` (and the CLI's parser) stay light; a missing extra is named when needed."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+HEAVY = ("gymnasium", "torch", "stable_baselines3")
+
+
+def python(code: str) -> subprocess.CompletedProcess[str]:
+    # torch alone takes seconds to import on a busy machine
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+
+
+def test_import_snakebot_and_building_the_cli_import_no_learning_package() -> None:
+    done = python(
+        "import sys, snakebot, snakebot.cli.main as m\n"
+        "m.build_parser()\n"
+        f"print([name for name in {HEAVY!r} if name in sys.modules])\n"
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
+def blocked(modules: tuple[str, ...], then: str) -> subprocess.CompletedProcess[str]:
+    """Run ``then`` with ``modules`` uninstallable (None in sys.modules makes import fail)."""
+    block = "".join(f"sys.modules[{m!r}] = None\n" for m in modules)
+    return python(f"import sys\n{block}{then}")
+
+
+def test_without_gymnasium_the_rl_extra_is_named(tmp_path: Path) -> None:
+    done = blocked(("gymnasium",), "import snakebot.rl\n")
+    assert done.returncode != 0
+    assert "MissingDependencyError" in done.stderr and "snakebot[rl]" in done.stderr
+    run = blocked(("gymnasium",), "from snakebot.cli.main import main\n"
+                  f"sys.exit(main(['run', '--policy', {str(tmp_path)!r}, '--command', '0,0']))")
+    assert run.returncode == 1
+    assert "pip install 'snakebot[rl]'" in run.stderr
+
+
+def test_without_stable_baselines3_or_torch_the_rl_train_extra_is_named(tmp_path: Path) -> None:
+    for module in ("stable_baselines3", "torch"):
+        done = blocked((module,), "from snakebot.cli.main import main\n"
+                       f"sys.exit(main(['rl', 'train', '--steps', '10', '--out', "
+                       f"{str(tmp_path / module)!r}]))")
+        assert done.returncode == 1, done.stderr
+        assert f"needs {module}" in done.stderr
+        assert "pip install 'snakebot[rl-train]'" in done.stderr
