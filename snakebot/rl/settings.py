@@ -23,7 +23,9 @@ class EnvSettings:
     cycle in between (a whole multiple of ``action_hz``, and a whole number of physics steps);
     ``episode_s``: episodes end (truncated) after this much simulated time; ``phase_hz``: the
     dft_shift wave's laps per second and the clock of static encodings; ``dft_bins``: K;
-    ``timestep_s``: overrides the robot's twin timestep.
+    ``timestep_s``: overrides the robot's twin timestep; ``terrain``: the twin's ground,
+    ``NAME[:key=value,...]`` as ``snakebot run --terrain`` takes it (docs/terrain.md);
+    ``friction_model``: auto, pairs or scale (None: the robot file's).
     """
 
     robot: str = "snake8"
@@ -34,6 +36,8 @@ class EnvSettings:
     phase_hz: float = 0.5
     dft_bins: int = 3
     timestep_s: float | None = None
+    terrain: str = "flat"
+    friction_model: str | None = None
 
     def __post_init__(self) -> None:
         if self.encoding not in ENCODINGS:

@@ -47,7 +47,10 @@ class TwinLoop:
             self.robot.upper_rad, phase_hz=settings.phase_hz, dft_bins=settings.dft_bins,
         )
         self.clock = GaitClock(self.encoding)
-        backend = make_backend(self.robot, "twin", timestep_s=settings.timestep_s)
+        backend = make_backend(
+            self.robot, "twin", timestep_s=settings.timestep_s, terrain=settings.terrain,
+            friction_model=settings.friction_model,
+        )
         assert isinstance(backend, TwinBackend)  # a robot file's twin (RobotConfig above)
         self.backend = backend
         self.backend.connect()

@@ -105,6 +105,20 @@ def test_episodes_truncate_at_episode_s() -> None:
     env.close()
 
 
+def test_envs_take_the_twins_terrains() -> None:
+    # The same --terrain text as `snakebot run`: a 10 degree slope tilts the ground under the
+    # snake (its start pose follows it), and a bad key is a ConfigError naming it.
+    env = gymnasium.make(GOAL, encoding="sinusoid", terrain="slope:angle_deg=10")
+    env.reset(seed=0)
+    twin = env.unwrapped.loop.backend
+    assert type(twin.terrain).__name__ == "Slope"
+    for _ in range(5):
+        env.step(np.zeros(4, dtype=np.float32))
+    env.close()
+    with pytest.raises(ConfigError, match="angle_deg"):
+        gymnasium.make(GOAL, encoding="sinusoid", terrain="slope:angle_deg=90").reset(seed=0)
+
+
 def test_velocity_env_measures_the_speed_the_snake_moves_at() -> None:
     env = gymnasium.make(VELOCITY, encoding="sinusoid")
     env.reset(seed=0, options={"command": (0.1, 0.0)})
