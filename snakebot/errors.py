@@ -13,7 +13,9 @@ class SnakebotError(Exception):
 class ConfigError(SnakebotError, ValueError):
     """A robot, servo or gait file (or a command-line value) is invalid.
 
-    ``source`` is the file or option, ``key`` the dotted key path in it (``joints[3].servo_id``).
+    ``source`` is the file, or the keyword argument the value came in (``budget``, ``terrain``:
+    the command line names the flag instead), ``key`` the dotted key path in it
+    (``joints[3].servo_id``) or the offending value.
     """
 
     def __init__(self, source: str | Path, key: str, message: str) -> None:
@@ -26,6 +28,11 @@ class ConfigError(SnakebotError, ValueError):
 
 class GaitError(SnakebotError, ValueError):
     """A gait was asked for with an unknown name or invalid parameters."""
+
+
+class GaitParamError(ConfigError, GaitError):
+    """A gait parameter given as ``key=value`` text is invalid: a GaitError, and a ConfigError
+    whose ``source`` is the keyword the text came in (``set``) and ``key`` the text itself."""
 
 
 class GaitAxesWarning(UserWarning):

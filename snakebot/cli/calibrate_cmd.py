@@ -17,11 +17,11 @@ from snakebot.cli.common import (
     robot_name,
     robot_write_target,
 )
+from snakebot.cli.console import confirm
 from snakebot.config import load_robot
 from snakebot.errors import UsageError
 from snakebot.setup import Link, SetupError, load_settings
 from snakebot.setup.calibrate import MAX_OFFSET_DEG, measure, refusals, write_offsets
-from snakebot.setup.console import confirm
 
 
 def add_parser(subparsers: Any) -> None:

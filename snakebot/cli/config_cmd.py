@@ -14,9 +14,9 @@ from snakebot.cli.common import (
     print_json,
     robot_name,
 )
+from snakebot.cli.console import confirm
 from snakebot.config import load_robot
 from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
-from snakebot.setup.console import confirm
 from snakebot.setup.diff import ChainDiff
 from snakebot.setup.link import SEARCH_BAUDS
 

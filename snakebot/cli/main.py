@@ -12,6 +12,7 @@ import difflib
 import importlib
 import json
 import os
+import re
 import signal
 import sys
 import traceback
@@ -21,7 +22,7 @@ from typing import Any, NoReturn, TextIO
 
 from snakebot import __version__
 from snakebot.backends.offscreen_gl import choose_offscreen_gl
-from snakebot.errors import ConfigError, GaitError, SnakebotError, UsageError
+from snakebot.errors import ConfigError, SnakebotError, UsageError
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
 COMMANDS: tuple[str, ...] = (
@@ -199,8 +200,10 @@ def _main(argv: Sequence[str] | None) -> int:
     except SnakebotError as exc:
         if args.debug:
             traceback.print_exc()
+        leaf = getattr(args, "cli_parser", parser)
+        exc = as_flag_error(exc, leaf)
         code = EXIT_USAGE if names_an_option(exc) else EXIT_ERROR
-        return _fail(f"snakebot: error: {exc}", code, as_json)
+        return _fail(f"snakebot: error: {name_flags(str(exc), leaf)}", code, as_json)
     except BrokenPipeError:
         return EXIT_ERROR
     except Exception:
@@ -223,12 +226,53 @@ def _complete(parser: argparse.ArgumentParser) -> None:
     argcomplete.autocomplete(parser)
 
 
+_UNIT_SUFFIXES = ("_rad", "_rad_s", "_s", "_hz", "_m", "_deg")
+
+
+def option_flag(parser: argparse.ArgumentParser, name: str) -> str | None:
+    """The flag of ``parser`` that gives library keyword ``name``, or None.
+
+    The library names the keyword it was given (``budget``, ``hold_rad``, ``terrain``); a flag
+    whose destination is that keyword, or that keyword less its unit suffix (``--hold`` for
+    ``hold_rad``, ``--rate`` for ``rate_hz``), is the one the user typed.
+    """
+    candidates = [name] + [name[: -len(s)] for s in _UNIT_SUFFIXES if name.endswith(s)]
+    for candidate in candidates:
+        for action in parser._actions:
+            longs = [s for s in action.option_strings if s.startswith("--")]
+            if action.dest == candidate and longs:
+                return longs[0]
+    return None
+
+
+def as_flag_error(exc: SnakebotError, parser: argparse.ArgumentParser) -> SnakebotError:
+    """``exc`` as the command line should say it: a ConfigError about a library keyword this
+    command takes as a flag becomes one about the flag (``budget: ...`` -> ``--budget: ...``)."""
+    if isinstance(exc, ConfigError) and not exc.source.startswith("--"):
+        flag = option_flag(parser, exc.source)
+        if flag is not None:
+            return ConfigError(flag, exc.key, exc.reason)
+    return exc
+
+
+_OPTION_MENTION = re.compile(r"\((?:backend )?option ([a-z][a-z0-9_]*)\)")
+
+
+def name_flags(text: str, parser: argparse.ArgumentParser) -> str:
+    """``text`` with each ``(option NAME)`` / ``(backend option NAME)`` the library wrote as
+    advice replaced by the flag of ``parser`` that sets it (``(--allow-extra-servos)``)."""
+
+    def flag_of(match: re.Match[str]) -> str:
+        flag = option_flag(parser, match.group(1))
+        return f"({flag})" if flag else match.group(0)
+
+    return _OPTION_MENTION.sub(flag_of, text)
+
+
 def names_an_option(exc: SnakebotError) -> bool:
     """True for an error about a command-line value (exit 2): a ConfigError whose source is an
-    option (``--friction``), or a GaitError about ``--set KEY=VALUE``."""
-    if isinstance(exc, ConfigError):
-        return exc.source.startswith("--")
-    return isinstance(exc, GaitError) and str(exc).startswith("--")
+    option (``--friction``) once :func:`as_flag_error` has named the flag."""
+    return isinstance(exc, ConfigError) and exc.source.startswith("--")
 
 
 def _fail(message: str, code: int, as_json: bool) -> int:

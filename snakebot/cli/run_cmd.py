@@ -178,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
     if args.policy is None:
         gait_name, gait = build_gait(snake.robot, args)
     else:  # a closed-loop gait: it reads the backend it drives
-        from snakebot.rl.cli_policy import policy_gait
+        from snakebot.cli.policy_options import policy_gait
 
         gait_name, gait = policy_gait(snake.robot, snake.backend, args)
     if (args.video or args.viewer) and spec.hardware:

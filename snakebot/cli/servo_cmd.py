@@ -16,12 +16,12 @@ from snakebot.cli.common import (
     robot_name,
 )
 from snakebot.cli.config_cmd import servo_id_arg
+from snakebot.cli.console import confirm
 from snakebot.config import load_robot
 from snakebot.errors import BusError, UsageError
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
-from snakebot.setup.console import confirm
 from snakebot.setup.maintenance import factory_reset, reboot, servo_info
 
 

@@ -49,7 +49,8 @@ def check_port(
     if scheme == EMULATOR_SCHEME:
         raise ConfigError(
             source, key, f"refusing {port!r} here: emulator URLs ({EMULATOR_SCHEME}://) work only "
-            f"as --port on the command line; this needs {DEVICE_EXAMPLES}",
+            f"as a port given directly (the command line's, a program's), never from a file; this "
+            f"needs {DEVICE_EXAMPLES}",
         )
     also = f", or an emulator URL {EMULATOR_SCHEME}://NAME" if allow_emulator else ""
     raise ConfigError(

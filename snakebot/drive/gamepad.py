@@ -97,15 +97,14 @@ class GamepadSource(InputSource):
         try:
             import pygame
         except ImportError as exc:
-            raise MissingDependencyError(f"--gamepad needs pygame-ce: {INSTALL}") from exc
+            raise MissingDependencyError(f"gamepad driving needs pygame-ce: {INSTALL}") from exc
         pygame.display.init()  # the event queue lives in SDL's video subsystem
         pygame.joystick.init()
         self._pygame = pygame
         if pygame.joystick.get_count() <= self.index:
             self.close()
             raise ConfigError(
-                "gamepad", "", "no gamepad found: plug one in (or drive from the keyboard "
-                "without --gamepad)"
+                "gamepad", "", "no gamepad found: plug one in (or drive from the keyboard)"
             )
         pad = pygame.joystick.Joystick(self.index)
         self.name = f"gamepad {pad.get_name()!r}"

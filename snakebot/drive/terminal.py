@@ -49,8 +49,8 @@ class TerminalSource(InputSource):
             import termios
         except ImportError:  # Windows: no termios
             raise ConfigError(
-                "--script", "", "keyboard driving needs a POSIX terminal (Linux, macOS); "
-                "here, drive with --gamepad or --script FILE"
+                "script", "", "keyboard driving needs a POSIX terminal (Linux, macOS); "
+                "here, drive with a gamepad or a key script"
             ) from None
 
         if self._fd is None:
@@ -61,12 +61,12 @@ class TerminalSource(InputSource):
                     self._fd = os.open("/dev/tty", os.O_RDWR | os.O_NOCTTY)
                 except OSError:
                     raise ConfigError(
-                        "--script", "", "no terminal to read keys from: run `snakebot drive` in "
-                        "a terminal, or give --script FILE or --gamepad"
+                        "script", "", "no terminal to read keys from: drive from a terminal, or "
+                        "give a key script or a gamepad"
                     ) from None
                 self._owned = True
         if not os.isatty(self._fd):
-            raise ConfigError("--script", "", "standard input is not a terminal: give --script")
+            raise ConfigError("script", "", "standard input is not a terminal: give a key script")
         self.name = f"terminal {os.ttyname(self._fd)}"
         self._saved = termios.tcgetattr(self._fd)
         mode = termios.tcgetattr(self._fd)

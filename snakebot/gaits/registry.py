@@ -1,4 +1,4 @@
-"""Every gait by name: specs for --help, make_gait() for the runner, --set parsing for the CLI.
+"""Every gait by name: specs for --help, make_gait() for the runner, key=value parsing.
 
 Gaits come from the built-ins below, from installed plugins (entry-point group
 ``snakebot.gaits``, each entry naming a GaitSpec) and from register_gait(); the clash and
@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.errors import GaitAxesWarning, GaitError
+from snakebot.errors import GaitAxesWarning, GaitError, GaitParamError
 from snakebot.gaits import compound, dft, keyframes, miller, serpenoid, simple
 from snakebot.gaits.base import FloatArray, Gait, check_joint_count
 from snakebot.gaits.spec import (
@@ -151,26 +151,32 @@ def check_joint_axes(name: str, joint_axes: Sequence[str], robot: str = "the rob
     return text
 
 
-def parse_set_options(name: str, items: Sequence[str]) -> dict[str, object]:
-    """Parse --set "key=value" strings for gait name into typed values (numbers may be "pi/4")."""
+def parse_set_options(
+    name: str, items: Sequence[str], *, source: str = "set"
+) -> dict[str, object]:
+    """Parse ``"key=value"`` strings for gait ``name`` into typed values (numbers may be
+    ``"pi/4"``). GaitParamError (source ``source``, key the offending text) for a malformed
+    item, an unknown key or a value of the wrong kind."""
     spec = get_spec(name)
     parsed: dict[str, object] = {}
     for item in items:
         key, sep, raw = str(item).partition("=")
         key = key.strip()
         if not sep or not key:
-            raise GaitError(
-                f"--set {item}: expected key=value, e.g. {_example(spec.params[0])}; "
+            raise GaitParamError(
+                source, str(item), f"expected key=value, e.g. {_example(spec.params[0])}; "
                 f"valid keys for {name}: {', '.join(spec.param_names)}"
             )
         try:
             param = spec.param(key)
         except GaitError as exc:
-            raise GaitError(f"--set {item}: {exc}") from None
+            raise GaitParamError(source, str(item), str(exc)) from None
         try:
             parsed[key] = convert_value(param, raw)
         except (TypeError, ValueError) as exc:
-            raise GaitError(f"--set {item}: {expectation(name, param)} ({exc})") from None
+            raise GaitParamError(
+                source, str(item), f"{expectation(name, param)} ({exc})"
+            ) from None
     return parsed
 
 

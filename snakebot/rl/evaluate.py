@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from snakebot.control.metrics import GRAVITY_M_S2
-from snakebot.errors import MissingDependencyError, OutputError
+from snakebot.errors import OutputError
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.policy_file import load_policy
 from snakebot.rl.settings import GOAL_ENV_ID
@@ -158,12 +158,9 @@ def _hold_commands(task: Any) -> Any:
 
 def write_video(path: Path, frames: list[np.ndarray], fps: int) -> None:
     """Encode RGB frames to ``path`` (imageio + ffmpeg, the ``video`` extra)."""
-    try:
-        import imageio.v2 as imageio
-    except ImportError as exc:
-        raise MissingDependencyError(
-            "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
-        ) from exc
+    from snakebot.backends.twin.video import require_video_writer
+
+    imageio = require_video_writer()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         writer: Any = imageio.get_writer(str(path), fps=fps, macro_block_size=8)

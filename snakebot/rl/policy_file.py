@@ -110,8 +110,8 @@ def load_policy(folder: Path) -> PolicyFile:
     settings_path = folder / SETTINGS_FILE
     actor_path = folder / ACTOR_FILE
     if not folder.is_dir():
-        raise ConfigError(folder, "", "no such policy folder (expected the --out folder of "
-                          "`snakebot rl train`)")
+        raise ConfigError(folder, "", "no such policy folder (expected a folder that training "
+                          "wrote: `snakebot rl train --out DIR`)")
     try:
         payload = json.loads(settings_path.read_text())
     except FileNotFoundError:

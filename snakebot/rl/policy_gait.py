@@ -96,7 +96,7 @@ class PolicyGait(Gait):
             raise ConfigError(
                 source, "", "a SnakeGoal policy observes the goal from the snake's pose (centre "
                 "of mass and heading) every step; this backend has no pose source (the servos "
-                "report joints only). Play it on the twin (--backend sim), train a "
+                "report joints only). Play it on the twin (backend sim), train a "
                 "SnakeVelocity policy for the bus, or plug in a pose source (docs/learning.md, "
                 "'Pose sources')"
             )
@@ -118,7 +118,7 @@ class PolicyGait(Gait):
         self.pose = pose
         self.user_command = (float(command[0]), float(command[1]))
         if not all(math.isfinite(v) for v in self.user_command):
-            raise ConfigError("--command", "", f"expected two finite numbers, got {command}")
+            raise ConfigError("command", "", f"expected two finite numbers, got {command}")
         self.clock = GaitClock(self.encoding)
         self.decisions = 0
         self.goal_xy_m: FloatArray | None = None
@@ -215,11 +215,11 @@ def policy_gait_for_backend(
     if command is None:
         what = "speed,turn_rate (m/s, rad/s)" if policy.env_id == VELOCITY_ENV_ID else \
             "goal X,Y (m, from the snake, X forward)"
-        raise ConfigError("--command", "", f"--policy {folder} needs --command {what}")
+        raise ConfigError("command", "", f"the policy in {folder} needs a command: {what}")
     action_hz = float(policy.env_kwargs.get("action_hz", EnvSettings.action_hz))
     if rate_hz < action_hz:
-        raise ConfigError("--rate", "", f"the policy acts at {action_hz:g} Hz; run the control "
-                          f"loop at least that fast (e.g. --rate 100)")
+        raise ConfigError("rate_hz", "", f"the policy acts at {action_hz:g} Hz; run the "
+                          f"control loop at least that fast (e.g. 100 Hz)")
     if pose is None and knows_pose(backend):
         pose = backend
     gait = PolicyGait(policy, robot, state_reader(backend), command, pose=pose)

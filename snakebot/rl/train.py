@@ -52,14 +52,14 @@ class TrainSettings:
 
     def __post_init__(self) -> None:
         if self.algo != "ppo":
-            raise ConfigError("--algo", "", f"expected ppo, got {self.algo!r}")
+            raise ConfigError("algo", "", f"expected ppo, got {self.algo!r}")
         if self.vec not in VECTORISATIONS:
-            raise ConfigError("--vec", "", f"expected one of {', '.join(VECTORISATIONS)}")
+            raise ConfigError("vec", "", f"expected one of {', '.join(VECTORISATIONS)}")
         if self.n_envs < 1 or self.rollout_steps % self.n_envs:
-            raise ConfigError("--n-envs", "", f"expected a divisor of the rollout "
+            raise ConfigError("n_envs", "", f"expected a divisor of the rollout "
                               f"({self.rollout_steps} steps), got {self.n_envs}")
         if self.steps < 1:
-            raise ConfigError("--steps", "", f"expected a positive count, got {self.steps}")
+            raise ConfigError("steps", "", f"expected a positive count, got {self.steps}")
 
 
 @dataclass

@@ -86,7 +86,7 @@ def _lone(link: Link, found: list[Found], from_id: int | None) -> Found:
             "Check the servo's power (its LED blinks once at power-up) and cable"
         )
     if len(found) > 1:
-        hint = ("connect only the new servo, or name it with --from ID (a new servo is ID 1 at "
+        hint = ("connect only the new servo, or name the ID to change (a new servo is ID 1 at "
                 "57600)") if from_id is None else "unplug all but the one to change"
         raise SetupError(f"{link.port}: {len(found)} servos answer ({_describe(found)}); "
                          f"assign-id changes one servo at a time: {hint}")
@@ -101,7 +101,7 @@ def _check_free(link: Link, servo: Found, to_id: int, bauds: set[int]) -> None:
         if probe.models or probe.corrupt:
             raise SetupError(
                 f"{link.port}: ID {to_id} is taken: a servo already answers as ID {to_id} at "
-                f"{baud} baud. Pick another --to, or move that servo first"
+                f"{baud} baud. Pick another new ID, or move that servo first"
             )
 
 

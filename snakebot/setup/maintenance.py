@@ -46,7 +46,7 @@ def factory_reset(link: Link, servo_id: int, baud: int, *, keep_id: bool,
     """
     if keep_baud and not keep_id:
         raise SetupError("the firmware keeps the baud rate only together with the ID (Factory "
-                         "Reset option 0x02): add --keep-id, or drop --keep-baud")
+                         "Reset option 0x02): keep the ID too, or do not keep the baud rate")
     bus = link.at(baud)
     table = bus.table
     if bus.read(servo_id, "torque_enable"):

@@ -56,7 +56,7 @@ def export_parquet(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path
         import pyarrow.parquet as pq
     except ImportError as exc:
         raise MissingDependencyError(
-            f"--format parquet needs pyarrow: {PARQUET_INSTALL} (or --format mcap)"
+            f"Parquet export needs pyarrow: {PARQUET_INSTALL} (or export to MCAP)"
         ) from exc
     columns = {name: pa.array(np.ascontiguousarray(log.values[:, i]))
                for i, name in enumerate(log.columns)}

@@ -78,7 +78,7 @@ def foxglove_module() -> Any:
         import foxglove
     except ImportError as exc:
         raise MissingDependencyError(
-            f"--foxglove and --mcap need the Foxglove SDK: {INSTALL}"
+            f"live Foxglove views and MCAP recordings need the Foxglove SDK: {INSTALL}"
         ) from exc
     return foxglove
 

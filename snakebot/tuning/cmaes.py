@@ -21,7 +21,9 @@ def require_cma() -> Any:
     try:
         import cma
     except ImportError as exc:
-        raise MissingDependencyError(f"--method cmaes needs the cma package: {INSTALL}") from exc
+        raise MissingDependencyError(
+            f"CMA-ES (method cmaes) needs the cma package: {INSTALL}"
+        ) from exc
     return cma
 
 
@@ -45,10 +47,10 @@ def cmaes_search(
     space = problem.space
     dims = len(space.dims)
     if dims < 2:
-        raise ConfigError("--params", space.names[0], "CMA-ES needs 2 or more; use --method grid")
+        raise ConfigError("params", space.names[0], "CMA-ES needs 2 or more; use method grid")
     size = popsize or default_popsize(dims, problem.plan.workers)
     if size > budget:
-        raise ConfigError("--budget", str(budget), f"less than one CMA-ES population ({size})")
+        raise ConfigError("budget", str(budget), f"less than one CMA-ES population ({size})")
     span = space.upper - space.lower
     start = (space.start() - space.lower) / span
     options = {

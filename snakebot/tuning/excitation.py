@@ -37,11 +37,11 @@ def chirp_plan(
 ) -> FloatArray:
     """Commands (K, N): ramp ``joint`` to ``hold_rad``, chirp it, ramp back to ``start_rad``."""
     if not 0 <= joint < robot.joint_count:
-        raise ConfigError("--joint", str(joint), f"expected 0..{robot.joint_count - 1}")
+        raise ConfigError("joint", str(joint), f"expected 0..{robot.joint_count - 1}")
     peak = amplitude_rad * 2 * math.pi * stop_hz
     if peak > robot.max_speed_rad_s:
         raise ConfigError(
-            "--amplitude",
+            "amplitude_rad",
             f"{amplitude_rad:g}",
             f"the chirp would need {peak:.1f} rad/s at "
             f"{stop_hz:g} Hz, more than the allowed {robot.max_speed_rad_s:.1f} rad/s",
@@ -50,7 +50,7 @@ def chirp_plan(
     hold[joint] = hold_rad
     low, high = robot.lower_rad[joint], robot.upper_rad[joint]
     if not (low <= hold_rad - amplitude_rad and hold_rad + amplitude_rad <= high):
-        raise ConfigError("--hold", f"{hold_rad:g}", "the chirp would leave the joint's limits")
+        raise ConfigError("hold_rad", f"{hold_rad:g}", "the chirp would leave the joint's limits")
     steps = max(1, round(ramp_s * rate_hz))
     fraction = np.array([smooth_ramp((k + 1) / steps) for k in range(steps)])[:, None]
     ramp_in = start_rad + fraction * (hold - start_rad)

@@ -53,14 +53,14 @@ def genetic_search(
     space = problem.space
     if not space.dims or not all(d.pose_angle for d in space.dims):
         raise ConfigError(
-            "--method",
+            "method",
             "ga",
             "the GA evolves lists of joint poses: search only a gait's pose list "
-            "(e.g. --gait keyframes --params poses; `snakebot gaits` marks such parameters)",
+            "(e.g. params poses of gait keyframes; `snakebot gaits` marks such parameters)",
         )
     joints = problem.robot.joint_count
     if len(space.dims) % joints:
-        raise ConfigError("--params", "poses", f"expected whole poses of {joints} angles")
+        raise ConfigError("params", "poses", f"expected whole poses of {joints} angles")
     rng = np.random.default_rng(seed)
     ops = _Operators(rng, space.lower, space.upper, joints)
     size = min(cfg.population, budget)

@@ -40,12 +40,12 @@ def grid_search(problem: SearchProblem, budget: int, chunk: int = 20) -> GridRes
     dims = len(space.dims)
     if dims > 4:
         raise ConfigError(
-            "--method", "grid", f"a grid over {dims} parameters is too big; use cmaes"
+            "method", "grid", f"a grid over {dims} parameters is too big; use cmaes"
         )
     count = points_per_dim(budget, dims)
     if count**dims > budget:
         raise ConfigError(
-            "--budget", str(budget), f"a grid over {dims} parameters needs at least {2**dims}"
+            "budget", str(budget), f"a grid over {dims} parameters needs at least {2**dims}"
         )
     axes = tuple(
         np.linspace(lo, hi, count) for lo, hi in zip(space.lower, space.upper, strict=True)

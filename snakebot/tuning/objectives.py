@@ -31,7 +31,7 @@ class Objective:
     def __post_init__(self) -> None:
         if self.name not in OBJECTIVES:
             raise ConfigError(
-                "--objective", "", f"expected one of {', '.join(OBJECTIVES)}, got {self.name!r}"
+                "objective", "", f"expected one of {', '.join(OBJECTIVES)}, got {self.name!r}"
             )
 
     @property

@@ -21,7 +21,7 @@ def pyplot() -> Any:
     try:
         import matplotlib
     except ImportError as exc:
-        raise MissingDependencyError(f"--report plots need matplotlib: {INSTALL}") from exc
+        raise MissingDependencyError(f"report plots need matplotlib: {INSTALL}") from exc
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

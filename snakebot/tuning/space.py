@@ -111,7 +111,7 @@ def build_space(
     if not names:
         numeric = [p.name for p in spec.params if p.kind == "number"]
         raise ConfigError(
-            "--params",
+            "params",
             "",
             f"no default search parameters for {gait}; name some of: " + ", ".join(numeric),
         )
@@ -124,22 +124,22 @@ def build_space(
             try:
                 param = spec.param(key)
             except GaitError as exc:
-                raise ConfigError("--params", name, str(exc)) from None
+                raise ConfigError("params", name, str(exc)) from None
             if not param.searchable or key in used:
-                raise ConfigError("--params", name, "expected distinct number or list parameters")
+                raise ConfigError("params", name, "expected distinct number or list parameters")
             used.add(key)
         lower, upper = _bounds(spec, name, keys, given, joint_limit_rad)
         value = base[keys[0]]
         if isinstance(value, tuple):
             if len(keys) > 1 or not value:
-                raise ConfigError("--params", name, "a list parameter cannot be tied or empty")
+                raise ConfigError("params", name, "a list parameter cannot be tied or empty")
             poses = spec.param(keys[0]).joint_poses
             dims += [Dim(f"{name}[{i}]", keys, i, lower, upper, poses) for i in range(len(value))]
         else:
             dims.append(Dim(name, keys, None, lower, upper))
     unknown = set(given) - {d.name for d in dims} - used
     if unknown:
-        raise ConfigError("--bounds", sorted(unknown)[0], "not one of the searched parameters")
+        raise ConfigError("bounds", sorted(unknown)[0], "not one of the searched parameters")
     return SearchSpace(gait, dict(base), tuple(dims))
 
 
@@ -155,10 +155,10 @@ def parse_bounds(items: Sequence[str]) -> dict[str, tuple[float, float]]:
             lower, upper = parse_number(low), parse_number(high)
         except ValueError as exc:
             raise ConfigError(
-                "--bounds", item, f"expected NAME=LOW:HIGH, e.g. omega=0.5:4*pi ({exc})"
+                "bounds", item, f"expected NAME=LOW:HIGH, e.g. omega=0.5:4*pi ({exc})"
             ) from None
         if not lower < upper:
-            raise ConfigError("--bounds", item, "expected LOW < HIGH")
+            raise ConfigError("bounds", item, "expected LOW < HIGH")
         out[name.strip()] = (lower, upper)
     return out
 
@@ -175,7 +175,7 @@ def _bounds(
             return given[key]
     param = spec.param(keys[0])
     if param.bounds is None:
-        raise ConfigError("--bounds", name, f"no default bounds; pass --bounds {name}=LOW:HIGH")
+        raise ConfigError("bounds", name, f"no default bounds; give bounds {name}=LOW:HIGH")
     lower, upper = param.bounds
     if param.joint_poses:
         lower, upper = max(lower, -limit), min(upper, limit)

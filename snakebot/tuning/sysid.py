@@ -249,11 +249,11 @@ def fit_servo(
     names = tuple(names)
     unknown = [n for n in names if n not in PARAMS]
     if unknown or not names:
-        raise ConfigError("--params", ",".join(unknown), f"expected some of {', '.join(PARAMS)}")
+        raise ConfigError("params", ",".join(unknown), f"expected some of {', '.join(PARAMS)}")
     start = ServoFit.of(robot)
     zero = [n for n in names if n != "delay" and getattr(start, FIELDS[n]) <= 0]
     if zero:
-        raise ConfigError("--params", zero[0], "cannot fit a parameter that is 0 now (log scale)")
+        raise ConfigError("params", zero[0], "cannot fit a parameter that is 0 now (log scale)")
     if "delay" in names and start.actuator_delay_s is None:
         start = dataclasses.replace(start, actuator_delay_s=0.0)
         robot = start.apply(robot)

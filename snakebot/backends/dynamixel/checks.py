@@ -60,7 +60,7 @@ def chain_report(
 
 EXTRA_SERVOS_HINT = (
     "the robot file does not name them: is this the right robot file? If they are meant to be on "
-    "the bus, pass --allow-extra-servos (DynamixelBackend(allow_extra_servos=True)); a new servo "
+    "the bus, allow extra servos (backend option allow_extra_servos); a new servo "
     "is ID 1 at 57600 bit/s: give it its configured ID"
 )
 

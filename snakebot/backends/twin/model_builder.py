@@ -122,7 +122,7 @@ def resolve_friction_model(
     chosen = model or robot.twin.friction_model
     if chosen not in FRICTION_MODELS:
         raise ConfigError(
-            "--friction-model", "", f"expected one of {FRICTION_MODELS}, got {chosen!r}"
+            "friction_model", "", f"expected one of {FRICTION_MODELS}, got {chosen!r}"
         )
     if chosen == "auto":
         return "pairs" if terrain.plane_ground else "scale"

@@ -24,7 +24,7 @@ def require_video_writer() -> Any:
         import imageio.v2 as imageio
     except ImportError as exc:
         raise MissingDependencyError(
-            "--video needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
+            "video output needs imageio and its ffmpeg plugin: pip install 'snakebot[video]'"
         ) from exc
     return imageio
 

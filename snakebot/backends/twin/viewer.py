@@ -20,8 +20,8 @@ def check_display() -> None:
         and os.uname().sysname != "Darwin"
     ):
         raise BackendError(
-            "--viewer needs a display (DISPLAY is not set); use --video out.mp4 to render "
-            "offscreen instead"
+            "the live viewer needs a display (DISPLAY is not set); record a video file "
+            "instead, which renders offscreen"
         )
 
 

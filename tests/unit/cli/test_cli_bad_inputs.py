@@ -122,6 +122,12 @@ CASES = [
     bad("tune", "gait", "--robot", "{heavy}", names=("{heavy}", "link.mass_kg")),
     bad("tune", "gait", "--bounds", "omega=x", code=2, names=("--bounds",)),
     bad("tune", "gait", "--budget", "0", code=2, names=("--budget",)),
+    # the library names its keyword ("params: ..."); the command line names the flag, exit 2
+    bad("tune", "gait", "--gait", "dft", code=2, names=("--params: ",)),
+    bad("tune", "gait", "--method", "grid", "--params", "omega,amplitude,phase_lag,offset",
+        "--budget", "3", code=2, names=("--budget: 3",)),
+    bad("sysid", "--record", "{tmp}/chirp.csv", "--joint", "99", code=2, names=("--joint: 99",)),
+    bad("sysid", "--record", "{tmp}/chirp.csv", "--hold", "3", code=2, names=("--hold: 3",)),
     bad("tune", "gait", "--rate", "0", code=2, names=("--rate",)),
     bad("tune", "gait", "--out", "{blocker}/g.toml", names=("{blocker}/g.toml",)),
     bad("tune", "gait", "--report", "{blocker}/report", names=("{blocker}",)),

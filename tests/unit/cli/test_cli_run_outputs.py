@@ -108,7 +108,7 @@ def test_viewer_without_a_display_leaves_an_existing_log_untouched(
     log.write_text("time_s,joint\n0.0,0.1\n")
     code, out, err = run(capsys, "--viewer", "--log", str(log))
     assert code == 1 and out == ""
-    assert "--viewer needs a display" in err
+    assert "the live viewer needs a display" in err
     assert log.read_text() == "time_s,joint\n0.0,0.1\n"
 
 

@@ -87,7 +87,7 @@ CASES = [
     robot("spy URL port", 'port = "/dev/ttyUSB0"', 'port = "spy:///dev/ttyUSB0?file=x"',
           "bus.port", "not a serial port"),
     robot("emulator URL port", 'port = "/dev/ttyUSB0"', 'port = "dxlemu://bus0"', "bus.port",
-          "only as --port"),
+          "only as a port given directly"),
     robot("empty port", 'port = "/dev/ttyUSB0"', 'port = ""', "bus.port", "non-empty"),
     robot("port not a string", 'port = "/dev/ttyUSB0"', "port = 0", "bus.port",
           "expected a string"),

@@ -22,7 +22,7 @@ def test_device_paths_are_accepted(port: str, allow_emulator: bool) -> None:
 @pytest.mark.parametrize("port", ["dxlemu://bus0", "dxlemu://snake?time=wall", "DXLEMU://x"])
 def test_emulator_urls_only_where_allowed(port: str) -> None:
     assert check_port(port) == port
-    with pytest.raises(ConfigError, match="only as --port on the command line") as info:
+    with pytest.raises(ConfigError, match="only as a port given directly") as info:
         check_port(port, source="robot.toml", key="bus.port", allow_emulator=False)
     assert (info.value.source, info.value.key) == ("robot.toml", "bus.port")
 

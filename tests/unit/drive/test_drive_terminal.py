@@ -63,7 +63,9 @@ def test_closing_the_terminal_is_input_lost() -> None:
 def test_a_pipe_is_not_a_terminal() -> None:
     read, write = os.pipe()
     try:
-        with pytest.raises(ConfigError, match="not a terminal: give --script"):
+        with pytest.raises(
+            ConfigError, match=r"^script: standard input is not a terminal: give a key script"
+        ):
             TerminalSource(read).open()
     finally:
         os.close(read)

@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from snakebot.errors import GaitError
+from snakebot.errors import ConfigError, GaitError
 from snakebot.gaits import (
     Gait,
     gait_names,
@@ -134,18 +134,20 @@ def test_parse_set_options_converts_each_kind() -> None:
 @pytest.mark.parametrize(
     ("item", "expected"),
     [
-        ("omega", "--set omega: expected key=value"),
-        ("=1", "--set =1: expected key=value"),
-        ("omega=", "--set omega=: expected a number in rad/s for serpenoid.omega"),
-        ("omega=abc", "--set omega=abc: expected a number in rad/s for serpenoid.omega"),
-        ("omega=1,2", "--set omega=1,2: expected a number in rad/s for serpenoid.omega"),
-        ("nope=1", "--set nope=1: unknown parameter 'nope' for gait 'serpenoid'"),
+        ("omega", "set: omega: expected key=value"),
+        ("=1", "set: =1: expected key=value"),
+        ("omega=", "set: omega=: expected a number in rad/s for serpenoid.omega"),
+        ("omega=abc", "set: omega=abc: expected a number in rad/s for serpenoid.omega"),
+        ("omega=1,2", "set: omega=1,2: expected a number in rad/s for serpenoid.omega"),
+        ("nope=1", "set: nope=1: unknown parameter 'nope' for gait 'serpenoid'"),
     ],
 )
 def test_bad_set_strings_raise_helpful_errors(item: str, expected: str) -> None:
     with pytest.raises(GaitError) as info:
         parse_set_options("serpenoid", [item])
     assert str(info.value).startswith(expected)
+    assert isinstance(info.value, ConfigError)  # the keyword ("set") and the text that failed
+    assert (info.value.source, info.value.key) == ("set", item)
     if item in ("omega", "nope=1"):
         assert "amplitude, omega, phase_lag, offset" in str(info.value)
 

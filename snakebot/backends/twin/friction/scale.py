@@ -57,7 +57,7 @@ class ScaleFriction:
     backward: float
     lateral: float
     v0_m_s: float = DEFAULT_V0_M_S
-    source: str = "--friction"
+    source: str = "friction"
 
     def __post_init__(self) -> None:
         values = (self.forward, self.backward, self.lateral)

@@ -65,7 +65,7 @@ class Terrain:
 
     def __post_init__(self) -> None:
         for key, spec in self.params().items():
-            spec.check("--terrain", key, getattr(self, key))
+            spec.check("terrain", key, getattr(self, key))
 
     def check(self, body: BodyShape) -> None:
         """Raise ConfigError naming a key if this terrain cannot host ``body``."""

@@ -41,14 +41,14 @@ class Pipe(Terrain):
         """The links must fit inside, and the pipe must be longer than the snake."""
         if self.inner_diameter_m <= 2.2 * body.radius_m:
             raise ConfigError(
-                "--terrain",
+                "terrain",
                 "inner_diameter_m",
                 f"expected more than 2.2 link radii ({2.2 * body.radius_m:.3f} m) so the links "
                 f"fit, got {self.inner_diameter_m:g}",
             )
         if self.length_m <= body.body_length_m + 2 * _TAIL_ROOM_M:
             raise ConfigError(
-                "--terrain",
+                "terrain",
                 "length_m",
                 f"expected more than the body length + 0.4 m "
                 f"({body.body_length_m + 2 * _TAIL_ROOM_M:.2f} m), got {self.length_m:g}",

@@ -36,7 +36,7 @@ class Rough(Terrain):
         """The body must start on the field."""
         if self.size_m <= body.body_length_m + 0.1:
             raise ConfigError(
-                "--terrain",
+                "terrain",
                 "size_m",
                 f"expected more than the body length + 0.1 m "
                 f"({body.body_length_m + 0.1:.2f} m), got {self.size_m:g}",

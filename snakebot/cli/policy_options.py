@@ -1,4 +1,7 @@
-"""``snakebot run --policy DIR --command A,B``: the checks and the gait, kept out of run_cmd."""
+"""``snakebot run --policy DIR --command A,B``: the checks and the gait, kept out of run_cmd.
+
+The policy modules import gymnasium, so they are imported only when ``--policy`` is given.
+"""
 
 from __future__ import annotations
 
@@ -6,11 +9,11 @@ import argparse
 import math
 
 from snakebot.backends.base import Backend
+from snakebot.cli.backend_options import flag_errors
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, UsageError
 from snakebot.gaits import Gait
-from snakebot.rl.policy_gait import policy_gait_for_backend
 
 
 def parse_command(text: str | None) -> tuple[float, float] | None:
@@ -36,5 +39,8 @@ def policy_gait(robot: RobotConfig | BodyConfig, backend: Backend,
     if isinstance(robot, BodyConfig):
         raise UsageError(f"--policy drives servo snakes (robot files); {robot.name} is a "
                          "mass-spring body")
-    return policy_gait_for_backend(args.policy, robot, backend,
-                                   parse_command(args.policy_command), args.rate)
+    from snakebot.rl.policy_gait import policy_gait_for_backend
+
+    with flag_errors((), {"command": "--command"}):  # --command's destination is policy_command
+        return policy_gait_for_backend(args.policy, robot, backend,
+                                       parse_command(args.policy_command), args.rate)
