@@ -173,8 +173,11 @@ def write_video(path: Path, frames: list[np.ndarray], fps: int) -> None:
 
 def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
     """One line per policy."""
-    def fmt(value: object, spec: str) -> str:
-        return "n/a" if value is None else format(value, spec)
+    def fmt(value: object, spec: str, unit: str = "") -> str:
+        if value is None:  # "n/a", right-aligned where the number and its unit would stand
+            width = int(spec.split(".")[0] or 0) + len(unit)
+            return "n/a".rjust(width)
+        return format(value, spec) + unit
 
     out.write(f"{'policy':8s} {'episodes':>8s} {'success':>8s} {'to goal':>9s} {'speed':>10s} "
               f"{'CoT':>7s} {'return':>9s}\n")
@@ -182,8 +185,8 @@ def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
         s = result.summary()
         rate = None if s["success_rate"] is None else 100 * s["success_rate"]
         out.write(
-            f"{name:8s} {s['episodes']:8d} {fmt(rate, '7.0f')}% "
-            f"{fmt(s['time_to_goal_s'], '7.1f')} s {fmt(s['speed_mps'], '6.3f')} m/s "
+            f"{name:8s} {s['episodes']:8d} {fmt(rate, '7.0f', '%')} "
+            f"{fmt(s['time_to_goal_s'], '7.1f', ' s')} {fmt(s['speed_mps'], '6.3f', ' m/s')} "
             f"{fmt(s['cost_of_transport'], '7.2f')} "
             f"{fmt(s['mean_return'], '9.2f')}\n"
         )

@@ -1,0 +1,27 @@
+"""`rl eval`'s table: a line per policy, columns that line up, n/a where a mean has no episodes."""
+
+from __future__ import annotations
+
+import io
+
+from snakebot.rl.evaluate import EpisodeStats, EvalResult, print_table
+
+
+def _episode(seed: int, success: bool) -> EpisodeStats:
+    return EpisodeStats(seed, episode_return=3.0 if success else -1.0, steps=60,
+                        success=success, duration_s=6.0, path_m=1.8, positive_work_j=2.0)
+
+
+def test_a_policy_that_reached_no_goal_shows_n_a_in_the_time_to_goal_column() -> None:
+    results = {
+        "policy": EvalResult("policy", 1.0, [_episode(0, True), _episode(1, True)]),
+        "zero": EvalResult("zero", 1.0, [_episode(0, False), _episode(1, False)]),
+    }
+    out = io.StringIO()
+    print_table(results, out)
+    header, trained, zero = out.getvalue().splitlines()
+    assert "100%" in trained and "6.0 s" in trained
+    assert "  0%" in zero and "n/a" in zero and "n/a s" not in zero
+    # every column ends where its header ends
+    assert len(trained) == len(zero) == len(header)
+    assert trained.index(" 0.300 m/s") == zero.index(" 0.300 m/s")
