@@ -70,6 +70,11 @@ class SnakeEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         self.steps += 1
         reward, terminated, info = self._task_step(outcome)
         truncated = not terminated and self.steps >= self.settings.max_steps
+        if outcome.physics_health_error is not None:
+            # The twin left what a real snake can do: end the episode as a time limit would
+            # (truncated, neither a failure nor a goal to the learner), saying why.
+            info["physics_health_error"] = outcome.physics_health_error
+            truncated = not terminated
         return self._obs(), float(reward), bool(terminated), bool(truncated), info
 
     def render(self) -> np.ndarray | None:

@@ -20,6 +20,7 @@ from snakebot.config import RobotConfig, load_robot
 from snakebot.control.cycle import CycleSchedule
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.control.safety import SafetyLayer
+from snakebot.errors import PhysicsHealthError
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.encodings import Encoding, GaitClock, make_encoding
 from snakebot.rl.settings import EnvSettings
@@ -28,12 +29,17 @@ from snakebot.types import BodyState, JointCommand, JointState
 
 @dataclass(frozen=True)
 class StepOutcome:
-    """What one policy step did: COM before/after (3,) m, positive joint work J, the state."""
+    """What one policy step did: COM before/after (3,) m, positive joint work J, the state.
+
+    ``physics_health_error`` is the message of the hard physics-health limit (docs/physics.md)
+    the twin crossed during the step, which then stopped early; None when it stayed credible.
+    """
 
     com_before_m: FloatArray
     com_after_m: FloatArray
     positive_work_j: float
     state: JointState
+    physics_health_error: str | None = None
 
 
 class TwinLoop:
@@ -76,12 +82,17 @@ class TwinLoop:
         hold_ctrl_history(model, data, data.ctrl)
         mujoco.mj_forward(model, data)
         self.clock.reset(phase_rad)
+        self.backend.reset_physics_health()  # each episode is judged on its own
         self.state = self.backend.read_state()
         self.safety.reset(self.state.position_rad)
         return self.state
 
     def step(self, action: FloatArray) -> StepOutcome:
-        """Play ``action`` for one policy period; returns what moved."""
+        """Play ``action`` for one policy period; returns what moved.
+
+        A hard physics-health limit crossed on the way ends the step at that cycle, named in
+        the outcome (the episode cannot go on credibly; training can).
+        """
         gait = self.encoding.gait(action)
         backend, safety, clock, dt = self.backend, self.safety, self.clock, self.dt_s
         com_before = self.body().com_m
@@ -90,7 +101,11 @@ class TwinLoop:
             target = clock.targets(gait)
             command = safety.filter(target, dt, self.schedule.ramp_in(self.state.time_s))
             backend.send_command(JointCommand(command))
-            backend.advance(dt)
+            try:
+                backend.advance(dt)
+            except PhysicsHealthError as exc:
+                self.state = backend.read_state()
+                return StepOutcome(com_before, self.body().com_m, work, self.state, str(exc))
             state = backend.read_state()
             # Robot time, as the runner's gait time: a policy played by `run` turns its phases
             # by the same float differences.

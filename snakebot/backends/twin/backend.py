@@ -140,14 +140,23 @@ class TwinBackend(Backend):
             )
             self._force_limit = self.model.actuator_forcerange.copy()
         self._start_com = self.data.subtree_com[self._head_id].copy()
-        if self._health_limits is not None:
-            links = np.array([self.model.geom(f"{link_name(i)}_geom").id
-                              for i in range(self.robot.link_count)])
-            self.physics_monitor = HealthMonitor(
-                self.model, links, self.robot.link.radius_m, self._dof_index, self._head_id,
-                no_load_speed_rad_s=servo.no_load_speed_rad_s,
-                torque_limit_nm=servo.torque_limit_nm, limits=self._health_limits,
-            )
+        self.reset_physics_health()
+
+    def reset_physics_health(self, limits: HealthLimits | None = None) -> None:
+        """Start the physics-health account afresh (a learning environment's new episode), with
+        ``limits`` from now on when given. Nothing happens with the checks off."""
+        if limits is not None:
+            self._health_limits = limits
+        if self._health_limits is None:
+            return
+        servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
+        links = np.array([self.model.geom(f"{link_name(i)}_geom").id
+                          for i in range(self.robot.link_count)])
+        self.physics_monitor = HealthMonitor(
+            self.model, links, self.robot.link.radius_m, self._dof_index, self._head_id,
+            no_load_speed_rad_s=servo.no_load_speed_rad_s,
+            torque_limit_nm=servo.torque_limit_nm, limits=self._health_limits,
+        )
 
     def _close(self) -> None:
         self.set_torque(self.stop_policy == "hold")

@@ -187,3 +187,34 @@ def test_bad_settings_name_the_setting() -> None:
         gymnasium.make(GOAL, action_hz=10, control_hz=25)
     with pytest.raises(ConfigError, match=r"encoding.*dft_shift"):
         gymnasium.make(VELOCITY, encoding="rotating_dft")
+
+
+def test_an_episode_past_a_hard_physics_limit_ends_truncated_and_training_goes_on() -> None:
+    # Measured: a SnakeVelocity training run died at 8,192 steps when one exploring episode
+    # pushed a module 11.2 mm into the ground (limit 11.0): PhysicsHealthError in a subprocess
+    # worker, EOFError in PPO, exit 3. An episode the twin cannot simulate credibly ends there;
+    # the next starts with a fresh account.
+    from snakebot.backends.twin.health import HealthLimits
+
+    env = gymnasium.make(VELOCITY, encoding="sinusoid").unwrapped
+    try:
+        env.reset(seed=0)
+        backend = env.loop.backend
+        # any joint speed above 1 % of the servo's no-load speed is now "not credible"
+        backend.reset_physics_health(HealthLimits(speed_error=0.01))
+        action = np.array([1.0, 1.0, 0.0, 0.0], dtype=np.float32)
+        ends = []
+        for _ in range(20):
+            _, reward, terminated, truncated, info = env.step(action)
+            if truncated:
+                ends.append(info)
+                break
+        assert ends, "the tight limit never tripped"
+        assert not terminated and math.isfinite(reward)
+        assert "physics health: joint speed" in ends[0]["physics_health_error"]
+        env.reset(seed=1)
+        assert backend.physics_monitor is not None and backend.physics_monitor.cycles == 0
+        _, _, _, truncated, info = env.step(np.zeros(4, dtype=np.float32))
+        assert "physics_health_error" not in info  # the first cycles hold still: credible
+    finally:
+        env.close()
