@@ -59,7 +59,9 @@ class EvalResult:
         out: dict[str, Any] = {
             "episodes": len(eps),
             "mean_return": _mean([e.episode_return for e in eps]),
-            "success_rate": len(successes) / len(eps) if eps else None,
+            # a velocity task has commands to follow, no goal to reach
+            "success_rate": len(successes) / len(eps)
+            if eps and all(e.command is None for e in eps) else None,
             "successes": len(successes),
             "time_to_goal_s": _mean([e.duration_s for e in successes]),
             "speed_mps": path / time_s if time_s > 0 else None,

@@ -25,3 +25,14 @@ def test_a_policy_that_reached_no_goal_shows_n_a_in_the_time_to_goal_column() ->
     # every column ends where its header ends
     assert len(trained) == len(zero) == len(header)
     assert trained.index(" 0.300 m/s") == zero.index(" 0.300 m/s")
+
+
+def test_a_velocity_policy_has_no_success_rate_to_show() -> None:
+    episode = EpisodeStats(0, 100.0, 300, success=False, duration_s=30.0, path_m=6.0,
+                           positive_work_j=9.0, speed_error_mps=0.05, command=(0.2, 0.0),
+                           achieved=(0.18, 0.01))
+    summary = EvalResult("policy", 1.0, [episode]).summary()
+    assert summary["success_rate"] is None and summary["speed_error_mps"] == 0.05
+    out = io.StringIO()
+    print_table({"policy": EvalResult("policy", 1.0, [episode])}, out)
+    assert "0%" not in out.getvalue() and "mean |speed - command| 0.050 m/s" in out.getvalue()
