@@ -255,16 +255,17 @@ def as_flag_error(exc: SnakebotError, parser: argparse.ArgumentParser) -> Snakeb
     return exc
 
 
-_OPTION_MENTION = re.compile(r"\((?:backend )?option ([a-z][a-z0-9_]*)\)")
+_OPTION_MENTION = re.compile(r"\((?:backend )?option ([a-z][a-z0-9_]*)(?=[);])")
 
 
 def name_flags(text: str, parser: argparse.ArgumentParser) -> str:
-    """``text`` with each ``(option NAME)`` / ``(backend option NAME)`` the library wrote as
-    advice replaced by the flag of ``parser`` that sets it (``(--allow-extra-servos)``)."""
+    """``text`` with each ``(option NAME`` / ``(backend option NAME`` (closed by ``)`` or
+    ``;``) the library wrote as advice replaced by the flag of ``parser`` that sets it
+    (``(--allow-extra-servos)``)."""
 
     def flag_of(match: re.Match[str]) -> str:
         flag = option_flag(parser, match.group(1))
-        return f"({flag})" if flag else match.group(0)
+        return f"({flag}" if flag else match.group(0)
 
     return _OPTION_MENTION.sub(flag_of, text)
 

@@ -86,8 +86,10 @@ def _lone(link: Link, found: list[Found], from_id: int | None) -> Found:
             "Check the servo's power (its LED blinks once at power-up) and cable"
         )
     if len(found) > 1:
-        hint = ("connect only the new servo, or name the ID to change (a new servo is ID 1 at "
-                "57600)") if from_id is None else "unplug all but the one to change"
+        hint = (
+            "connect only the new servo, or name the ID to change (option from_id; a new "
+            "servo is ID 1 at 57600)"
+        ) if from_id is None else "unplug all but the one to change"
         raise SetupError(f"{link.port}: {len(found)} servos answer ({_describe(found)}); "
                          f"assign-id changes one servo at a time: {hint}")
     return found[0]
@@ -101,7 +103,7 @@ def _check_free(link: Link, servo: Found, to_id: int, bauds: set[int]) -> None:
         if probe.models or probe.corrupt:
             raise SetupError(
                 f"{link.port}: ID {to_id} is taken: a servo already answers as ID {to_id} at "
-                f"{baud} baud. Pick another new ID, or move that servo first"
+                f"{baud} baud. Pick another new ID (option to), or move that servo first"
             )
 
 

@@ -108,7 +108,7 @@ def test_a_spy_url_in_the_robot_file_does_not_truncate_the_file_it_names(
 
 def test_an_emulator_url_in_the_robot_file_is_refused(config_dir: Path) -> None:
     robot = robot_on_port(config_dir, "dxlemu://bus0")
-    with pytest.raises(ConfigError, match="only as --port on the command line") as info:
+    with pytest.raises(ConfigError, match="only as a port given directly") as info:
         load_robot(robot)
     assert (info.value.source, info.value.key) == (str(robot), "bus.port")
 
