@@ -3,7 +3,7 @@
 The choices are the registry's names (plugins included); each flag is a registry option
 (``--port`` is option ``port``). A flag given to a backend that does not declare its option is
 refused (exit 2): ``--port does nothing with the twin backend``. Library errors about an option
-name the option (``friction: ...``); :func:`flag_errors` re-labels them with the flag.
+name the option (``friction: ...``); the CLI names the flag (``cli/main.as_flag_error``).
 """
 
 from __future__ import annotations
@@ -93,19 +93,20 @@ def given_options(
 
 
 @contextlib.contextmanager
-def flag_errors(options: Sequence[str], flags: Mapping[str, str] | None = None) -> Iterator[None]:
-    """Re-label errors about library option ``friction`` (one of ``options``) as errors about
-    ``--friction`` (or the flag ``flags`` gives it)."""
+def flag_errors(flags: Mapping[str, str] | None = None) -> Iterator[None]:
+    """Re-label a backend's refusal of an option as a usage error about its flag, and a
+    ConfigError about library keyword ``k`` as one about ``flags[k]``: only for keywords whose
+    flag :func:`snakebot.cli.main.as_flag_error` cannot find among the command's destinations
+    (``command``, whose destination is ``policy_command``); it names every other flag itself."""
     names = dict(flags or {})
     try:
         yield
     except BackendOptionError as exc:
         raise UsageError(f"{flag(exc.option)} does nothing with the {exc.backend} backend") from exc
     except ConfigError as exc:
-        if exc.source not in options and exc.source not in names:
+        if exc.source not in names:
             raise
-        label = names.get(exc.source) or flag(exc.source)
-        raise ConfigError(label, exc.key, exc.reason) from exc
+        raise ConfigError(names[exc.source], exc.key, exc.reason) from exc
 
 
 def _declared_options() -> dict[str, BackendOption]:

@@ -182,14 +182,13 @@ def run(args: argparse.Namespace) -> int:
     )
     given = given_options(args, spec, BACKEND_OPTIONS)
     choices = gait_choices(robot, args)
-    with flag_errors((), {"smoothing_s": "--smoothing", "transition_s": "--transition"}):
-        live = live_gait(
-            robot,
-            rate_hz=args.rate,
-            smoothing_s=args.smoothing,
-            transition_s=args.transition,
-            gaits=choices,
-        )
+    live = live_gait(
+        robot,
+        rate_hz=args.rate,
+        smoothing_s=args.smoothing,
+        transition_s=args.transition,
+        gaits=choices,
+    )
     source = make_source(args)
     if args.script is None or args.foxglove is not None:  # a person drives or watches
         given = watched(spec, given)
@@ -201,7 +200,7 @@ def run(args: argparse.Namespace) -> int:
             "robot": robot.name, "gaits": ",".join(c.name for c in choices),
             "backend": spec.name, "log": args.log, "record": args.record,
         })
-    with flag_errors(BACKEND_OPTIONS):
+    with flag_errors():
         snake = Snake.prepare(robot, spec, **given)
     backend = snake.backend
     with contextlib.ExitStack() as stack:
@@ -215,15 +214,14 @@ def run(args: argparse.Namespace) -> int:
         observers += [o for o in (drive_observer(telemetry),) if o is not None]
         signals = stack.enter_context(StopSignals())
         stack.enter_context(source)
-        with flag_errors(BACKEND_OPTIONS):
+        with flag_errors():
             stack.enter_context(snake)
         display = _display(stack, args, robot, backend, controller)
         if display is not None:
             observers.append(display)
-        with flag_errors((), {"rate_hz": "--rate"}):
-            result = snake.drive(
-                live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
-            )
+        result = snake.drive(
+            live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
+        )
     summary = {**_summary(robot, args, choices, result), **telemetry.summary}
     if args.json:
         print_json(summary)

@@ -41,6 +41,6 @@ def policy_gait(robot: RobotConfig | BodyConfig, backend: Backend,
                          "mass-spring body")
     from snakebot.rl.policy_gait import policy_gait_for_backend
 
-    with flag_errors((), {"command": "--command"}):  # --command's destination is policy_command
+    with flag_errors({"command": "--command"}):  # --command's destination is policy_command
         return policy_gait_for_backend(args.policy, robot, backend,
                                        parse_command(args.policy_command), args.rate)

@@ -129,7 +129,7 @@ def prepare(args: argparse.Namespace, options: tuple[str, ...]) -> tuple[Snake, 
     # Someone watching (the viewer, Foxglove) sees the twin at the wall clock's pace.
     if getattr(args, "viewer", False) or getattr(args, "foxglove", None) is not None:
         given = watched(spec, given)
-    with flag_errors(options):
+    with flag_errors():
         snake = Snake.prepare(robot, spec, **given)
     return snake, spec
 
@@ -217,17 +217,16 @@ def run(args: argparse.Namespace) -> int:
         )
         log = telemetry.log
         stack.enter_context(sigterm_as_interrupt())
-        with flag_errors(BACKEND_OPTIONS):
+        with flag_errors():
             stack.enter_context(snake)
         hooks = _cycle_hooks(stack, snake.backend, args)
-        with flag_errors(BACKEND_OPTIONS, {"rate_hz": "--rate"}):
-            summary = snake.run(
-                gait,
-                duration_s=args.duration,
-                rate_hz=args.rate,
-                log=log,
-                on_cycle=_chain(hooks) if hooks else None,
-            )
+        summary = snake.run(
+            gait,
+            duration_s=args.duration,
+            rate_hz=args.rate,
+            log=log,
+            on_cycle=_chain(hooks) if hooks else None,
+        )
     summary = replace(
         summary,
         gait=gait_name,

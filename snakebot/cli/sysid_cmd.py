@@ -165,7 +165,7 @@ def _record(robot: Any, args: argparse.Namespace) -> int:
 
     with contextlib.ExitStack() as stack:
         spec = backend_spec(args)
-        with flag_errors(RECORD_BACKEND_OPTIONS):
+        with flag_errors():
             options = given_options(args, spec, RECORD_BACKEND_OPTIONS)
             backend: Any = stack.enter_context(spec.make(robot, **options))
         start = backend.read_state().position_rad

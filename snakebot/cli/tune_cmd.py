@@ -361,12 +361,12 @@ def _gain_session(robot: Any, args: argparse.Namespace, stack: contextlib.ExitSt
     spec = backend_spec(args)
     options = given_options(args, spec, GAIN_BACKEND_OPTIONS)
     if not spec.hardware:
-        with flag_errors(GAIN_BACKEND_OPTIONS):
+        with flag_errors():
             spec.make(robot, **options)  # a bad option fails now, not in the first candidate
         return lambda: spec.make(robot, **options)
     from snakebot.tuning.gains import held
 
-    with flag_errors(GAIN_BACKEND_OPTIONS):
+    with flag_errors():
         backend = stack.enter_context(spec.make(robot, **options))
     return lambda: held(backend)
 
