@@ -109,6 +109,14 @@ class OutputError(SnakebotError):
         super().__init__(f"{self.path}: {reason}")
 
 
+class OutputExistsError(OutputError):
+    """An output file or folder already holds something the command would replace.
+
+    Nothing is written: the user's recording, report or trained policy stays as it was. ``path``
+    is what exists, ``reason`` says what would be replaced and how to go ahead.
+    """
+
+
 class BackendOptionError(UsageError, TypeError):
     """A backend was given an option it does not take (``port`` with the twin, say).
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot.config.ports import check_port
-from snakebot.errors import ConfigError, OutputError, UsageError
+from snakebot.errors import ConfigError, OutputError, OutputExistsError, UsageError
 
 
 def positive_float(text: str) -> float:
@@ -137,6 +137,45 @@ def check_writable(path: Path, what: str) -> None:
             path.unlink()
     except OSError as exc:
         raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def add_force_option(parser: argparse.ArgumentParser) -> None:
+    """``--force``: the one way to let a command replace an output that already exists."""
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="replace output files or folders that already exist (without it, the command "
+        "refuses and writes nothing)",
+    )
+
+
+def refuse_replacing(path: Path, what: str, *, force: bool) -> None:
+    """OutputExistsError (exit 1) when file ``path`` exists and ``force`` is False.
+
+    The rule for every output: no command replaces an existing file unless told to. Call it
+    before anything is written or any servo moves, so a refused run changes nothing.
+    """
+    if force or not (path.exists() or path.is_symlink()):
+        return
+    raise OutputExistsError(
+        path,
+        f"the {what} exists and would be replaced: pass --force to replace it, or name "
+        "another file",
+    )
+
+
+def refuse_replacing_in(folder: Path, names: Sequence[str], what: str, *, force: bool) -> None:
+    """OutputExistsError when folder ``folder`` already holds any of ``names`` (the files the
+    command would write there) and ``force`` is False; the message lists them."""
+    if force or not folder.is_dir():
+        return
+    found = sorted(name for name in names if (folder / name).exists())
+    if found:
+        raise OutputExistsError(
+            folder,
+            f"holds a {what} ({', '.join(found)}) that would be replaced: pass --force to "
+            "replace it, or name another folder",
+        )
 
 
 def check_folder(path: Path, what: str) -> None:
