@@ -1,10 +1,10 @@
 """A minute of hardware in the loop over a real pty, with two CPU-bound processes beside it.
 
 `snakebot run --backend dynamixel` drives `snakebot emulate --pty --physics`, each in its own
-process, as users run them (tools/soak_pty.py). Deselect locally with `-m "not soak"`; CI runs it.
-SNAKEBOT_SOAK_S sets the duration (default 60 s of real time). A failure while the kernel kept
-the run or the emulator waiting for a CPU for 0.1 s or more (the machine is busier than two
-CPU-bound processes make it) is reported as a skip with the figures, not as a pass.
+process, as users run them (tools/soak_pty.py). Opt-in: `pytest -m soak` (CI runs it in a step of
+its own). SNAKEBOT_SOAK_S sets the duration (default 60 s of real time). It never skips itself: a
+machine too busy to hold the rate fails it, with the measured rate and the longest time the kernel
+kept the run or the emulator waiting for a CPU, so a starved run is told apart from a bug.
 """
 
 from __future__ import annotations
@@ -33,11 +33,11 @@ def test_a_minute_of_hardware_in_the_loop_under_load_loses_nothing() -> None:
                "--load", "2", "--json"]
     done = subprocess.run(command, capture_output=True, text=True, timeout=duration * 5 + 300)
     report = json.loads(done.stdout)
-    if not report["ok"] and report["longest_cpu_wait_s"] >= STARVED_S:
-        pytest.skip(f"the machine kept the run or the emulator from a CPU for "
-                    f"{report['longest_cpu_wait_s']:.2f} s (more than two CPU-bound processes "
-                    f"can): {report['failures']}")
-    assert report["ok"], json.dumps(report, indent=1)
+    starved = (f"; the machine kept the run or the emulator from a CPU for "
+               f"{report['longest_cpu_wait_s']:.2f} s (more than two CPU-bound processes can)"
+               if report["longest_cpu_wait_s"] >= STARVED_S else "")
+    assert report["ok"], f"{report['log_rows']} rows in {duration:g} s{starved}: " + json.dumps(
+        report, indent=1)
     assert report["log_rows"] >= 0.9 * 50 * duration
     assert report["emulator_bus"]["watchdog_trips"] == 0
     assert done.returncode == 0
