@@ -318,11 +318,16 @@ def _print_summary(summary: dict[str, object]) -> None:
         return f"{value:.{digits}f}{unit}" if isinstance(value, float) else f"{value}{unit}"
 
     gaits = summary["gaits"] if isinstance(summary["gaits"], list) else []
+    dropped = (
+        f" ({summary['dropped_keys']} more dropped: too many at once)"
+        if summary.get("dropped_keys")
+        else ""
+    )
     lines = [
         f"{summary['robot']} driven on {summary['backend']}: stopped by {summary['stopped_by']}",
         f"  time         {fmt('duration_s', ' s', 2)}, {fmt('control_cycles')} cycles at "
         f"{fmt('achieved_rate_hz', ' Hz', 1)} ({fmt('overruns')} overruns)",
-        f"  input        {fmt('keys')} keys; gaits {', '.join(map(str, gaits))}",
+        f"  input        {fmt('keys')} keys{dropped}; gaits {', '.join(map(str, gaits))}",
         f"  distance     {fmt('distance_m', ' m')} at heading {fmt('heading_deg', ' deg', 1)}, "
         f"turned {fmt('turn_deg', ' deg', 1)}",
         f"  tracking     {fmt('tracking_rms_rad', ' rad RMS', 4)}; max command "

@@ -22,7 +22,9 @@ from snakebot.errors import ConfigError
 
 TermAttrs = list[Any]
 
-_READ_SIZE = 256
+READ_BYTES = 512
+"""Bytes read from the terminal in one cycle at most: the decoder's time stays bounded (a
+paste drains over a few cycles; snakebot.drive.gate drops it)."""
 
 
 class TerminalSource(InputSource):
@@ -79,32 +81,24 @@ class TerminalSource(InputSource):
         termios.tcsetattr(self._fd, termios.TCSANOW, mode)
 
     def poll(self, now_s: float) -> list[str]:
-        """Keys typed since the last poll; sets ``lost`` if the terminal is gone."""
+        """Keys typed since the last poll (from READ_BYTES at most); sets ``lost`` if the
+        terminal is gone."""
         if self._fd is None or self.lost is not None:
             return []
-        keys: list[str] = []
-        got = False
-        while True:
-            try:
-                ready, _, _ = select.select([self._fd], [], [], 0.0)
-                if not ready:
-                    break
-                data = os.read(self._fd, _READ_SIZE)
-            except OSError as exc:
-                if exc.errno in (errno.EAGAIN, errno.EINTR):
-                    break
-                self.lost = f"the terminal closed ({os.strerror(exc.errno or 0)})"
-                break
-            if not data:
-                self.lost = "the terminal closed (end of input)"
-                break
-            got = True
-            keys += self._decoder.feed(data)
-            if len(data) < _READ_SIZE:
-                break
-        if not got:
-            keys += self._decoder.flush()  # a lone ESC with nothing after it this cycle
-        return keys
+        try:
+            ready, _, _ = select.select([self._fd], [], [], 0.0)
+            data = os.read(self._fd, READ_BYTES) if ready else b""
+        except OSError as exc:
+            if exc.errno in (errno.EAGAIN, errno.EINTR):
+                return []
+            self.lost = f"the terminal closed ({os.strerror(exc.errno or 0)})"
+            return []
+        if ready and not data:
+            self.lost = "the terminal closed (end of input)"
+            return []
+        if not data:
+            return self._decoder.flush()  # a lone ESC with nothing after it this cycle
+        return self._decoder.feed(data)
 
     def close(self) -> None:
         """Restore the terminal's settings; close it if we opened it. Idempotent."""

@@ -1,0 +1,77 @@
+"""A paste into the drive's terminal (issue 18.5): the real loop on the twin, keys through a real
+pseudo-terminal. The cycle keeps its rate whatever arrives, and a mistaken paste moves nothing."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import pytest
+
+from snakebot.backends.twin import TwinBackend
+from snakebot.config import load_robot
+from snakebot.control.metrics import RunMetrics
+from snakebot.control.safety import SafetyLayer
+from snakebot.drive import DriveController, DriveCycle, GaitChoice, run_drive
+from snakebot.drive.setup import live_gait
+
+pytestmark = [
+    pytest.mark.pty,
+    pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX"),
+]
+
+RATE_HZ = 100.0
+PASTE = b"w1a2" * 700  # 2,800 keys that each act: speed up, turn left, switch gaits
+GAITS = [GaitChoice("sidewinding"), GaitChoice("rolling")]
+
+
+class PasteAt:
+    """An observer that pastes into the terminal at drive time 1 s, types q at 3 s, and notes
+    each cycle's wall-clock time and the speed asked for."""
+
+    def __init__(self, master: int) -> None:
+        self.master = master
+        self.wall_s: list[float] = []
+        self.setpoint_speed: list[float] = []
+        self.notices: set[str] = set()
+        self.controller: DriveController | None = None
+
+    def __call__(self, cycle: DriveCycle) -> None:
+        self.wall_s.append(time.monotonic())
+        self.setpoint_speed.append(cycle.status.setpoint.speed)
+        if self.controller is not None and self.controller.notice:
+            self.notices.add(self.controller.notice)
+        if abs(cycle.drive_time_s - 1.0) < 0.5 / RATE_HZ:
+            os.write(self.master, PASTE)
+        if abs(cycle.drive_time_s - 3.0) < 0.5 / RATE_HZ:
+            os.write(self.master, b"q")
+
+
+def test_a_paste_of_thousands_of_keys_neither_stalls_the_loop_nor_moves_the_snake() -> None:
+    import pty
+
+    from snakebot.drive.terminal import TerminalSource
+
+    robot = load_robot("snake12")
+    live = live_gait(robot, rate_hz=RATE_HZ, gaits=GAITS)
+    controller = DriveController(live, GAITS)
+    master, slave = pty.openpty()
+    paste = PasteAt(master)
+    paste.controller = controller
+    try:
+        with TwinBackend(robot) as twin, TerminalSource(slave) as source:
+            result = run_drive(
+                twin, live, SafetyLayer.for_robot(robot), controller, source, rate_hz=RATE_HZ,
+                metrics=RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
+                observers=[paste],
+            )
+    finally:
+        os.close(master)
+        os.close(slave)
+    gaps = [b - a for a, b in zip(paste.wall_s, paste.wall_s[1:], strict=False)]
+    # Unbounded, the 2,800 keys took seconds inside one cycle; a twin cycle costs milliseconds.
+    assert max(gaps) < 0.25, f"max gap {max(gaps):.3f} s"
+    assert result.stopped_by == "quit"  # the q typed after the paste still stopped the drive
+    assert max(paste.setpoint_speed) == 0.0  # the paste was dropped, not played out
+    assert result.summary["keys"] == 1 and result.summary["dropped_keys"] == len(PASTE)
+    assert any("ignored" in notice and "paste" in notice for notice in paste.notices)
