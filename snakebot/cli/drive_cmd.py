@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -223,15 +224,13 @@ def run(args: argparse.Namespace) -> int:
             live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
         )
     summary = {**_summary(robot, args, choices, result), **telemetry.summary}
-    if args.json:
-        print_json(summary)
-    else:
-        _print_summary(summary)
+    stopped = f"the snake was stopped ({robot.safety.stop_policy} at the rest pose)"
+    gone = _print_or_lose(lambda: print_json(summary) if args.json else _print_summary(summary))
     if result.stopped_by.startswith("input lost"):
-        raise DriveInputError(
-            f"{source.name}: {result.stopped_by}; the snake was stopped "
-            f"({robot.safety.stop_policy} at the rest pose)"
-        )
+        raise DriveInputError(f"{source.name}: {result.stopped_by}; {stopped}")
+    if gone is not None:
+        raise DriveInputError(f"the terminal closed before the summary was printed ({gone}); "
+                              f"{stopped}")
     return 130 if result.stopped_by.startswith("interrupted") else 0
 
 
@@ -308,6 +307,25 @@ def _summary(
     if args.record:
         summary["record"] = str(args.record)
     return summary
+
+
+def _print_or_lose(print_summary: Callable[[], None]) -> str | None:
+    """Print the summary; the reason instead when the terminal it goes to was closed (the
+    window shut mid-drive). A dead terminal's output is then discarded, stderr's too if it
+    went with it, so what is left to say neither fails nor turns into an internal error."""
+    from snakebot.drive.terminal import GONE_ERRNOS, discard_output, hung_up
+
+    try:
+        print_summary()
+        sys.stdout.flush()
+    except OSError as exc:
+        if exc.errno not in GONE_ERRNOS:
+            raise
+        discard_output(sys.stdout)
+        if hung_up(sys.stderr):
+            discard_output(sys.stderr)
+        return os.strerror(exc.errno or 0)
+    return None
 
 
 def _print_summary(summary: dict[str, object]) -> None:

@@ -4,23 +4,28 @@ Raw mode (no echo, no line buffering, no signal keys) so every key arrives at on
 Ctrl-Z and Ctrl-\\ are keys the drive handles (stop), not signals that would suspend or kill the
 control loop. Output processing stays on, so the display's newlines still work. The previous
 settings come back on close, whatever happened. A terminal that goes away (EOF, EIO) sets
-``lost``.
+``lost``; :func:`hung_up` and :func:`discard_output` let a command finish quietly on an
+output terminal that went away with it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import io
 import os
 import select
 import sys
-from typing import Any
+from typing import IO, Any
 
 from snakebot.drive.keys import KeyDecoder
 from snakebot.drive.sources import InputSource
 from snakebot.errors import ConfigError
 
 TermAttrs = list[Any]
+
+GONE_ERRNOS = frozenset({errno.EIO, errno.ENXIO})
+"""What writing to a terminal that was closed (a hung-up pty, a vanished device) raises."""
 
 READ_BYTES = 512
 """Bytes read from the terminal in one cycle at most: the decoder's time stays bounded (a
@@ -113,3 +118,25 @@ class TerminalSource(InputSource):
             self._owned = False
             os.close(fd)
             self._fd = None
+
+
+def hung_up(stream: IO[Any]) -> bool:
+    """True when ``stream``'s file is a terminal that hung up (its window was closed)."""
+    try:
+        poller = select.poll()
+        poller.register(stream.fileno(), select.POLLOUT)
+        events = poller.poll(0)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return False
+    return any(event & (select.POLLHUP | select.POLLERR) for _, event in events)
+
+
+def discard_output(stream: IO[Any]) -> None:
+    """Point ``stream``'s file descriptor at /dev/null: what it still buffers for a terminal
+    that is gone is dropped instead of failing again when Python flushes it at exit."""
+    with contextlib.suppress(OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, stream.fileno())
+        finally:
+            os.close(devnull)

@@ -142,3 +142,58 @@ def test_without_a_terminal_it_asks_for_a_script() -> None:
     )
     assert proc.returncode == 2  # usage: without a terminal, drive needs --script
     assert "no terminal to read keys from" in proc.stderr and "--script" in proc.stderr
+
+
+@pytest.mark.parametrize(
+    ("controlling", "to_file"),
+    [(False, True), (True, True), (True, False)],
+    ids=["eio", "sighup", "sighup-stderr-on-the-terminal-too"],
+)
+def test_a_terminal_closed_mid_drive_stops_the_snake_and_exits_1_not_3(
+    tmp_path: Path, controlling: bool, to_file: bool
+) -> None:
+    """`snakebot drive ... 2> err.txt` in a terminal window that is then closed: the summary
+    cannot be printed any more, and that must not turn a safe stop into an internal error
+    (nor, with stderr on the dead terminal too, the error message)."""
+    master, slave = pty.openpty()
+    log, err = tmp_path / "drive.csv", tmp_path / "err.txt"
+
+    def own_the_terminal() -> None:  # as a shell makes the window the session's terminal
+        os.setsid()
+        import fcntl
+
+        fcntl.ioctl(0, termios.TIOCSCTTY, 0)
+
+    with err.open("wb") as stderr:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "snakebot", "drive", "--robot", "snake8", "--log", str(log)],
+            stdin=slave, stdout=slave, stderr=stderr if to_file else slave,
+            preexec_fn=own_the_terminal if controlling else None,
+            start_new_session=not controlling,
+        )
+    try:
+        deadline = time.monotonic() + 60
+        while not (log.exists() and log.read_text().count("\n") > 50):
+            assert time.monotonic() < deadline and proc.poll() is None, err.read_text()
+            time.sleep(0.05)
+        os.write(master, b"wwww")
+        rows = log.read_text().count("\n")
+        while log.read_text().count("\n") < rows + 150:  # 1.5 s of driving at full speed
+            assert time.monotonic() < deadline and proc.poll() is None, err.read_text()
+            time.sleep(0.05)
+        os.close(master)  # the window closes
+        os.close(slave)
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    message = err.read_text()
+    assert proc.returncode == 1, message
+    if to_file:
+        assert "Traceback" not in message and "internal error" not in message
+        assert "snake was stopped" in message
+        assert "terminal closed" in message or "hung up" in message
+    rows = [line.split(",") for line in log.read_text().splitlines()[1:]]
+    assert max(abs(float(v)) for row in rows for v in row[2:10]) > 0.3  # it was moving
+    assert all(float(v) == 0.0 for v in rows[-1][2:10])  # then went to the rest pose
