@@ -24,6 +24,11 @@ class DriveInputError(SnakebotError):
     """The driving input was lost (terminal closed, gamepad unplugged); the snake was stopped."""
 
 
+class InputDeviceError(SnakebotError):
+    """The input device asked for is not there (no gamepad connected): connecting it fixes it,
+    the command line was right."""
+
+
 @dataclass(frozen=True)
 class InputEvent:
     """One key at drive time ``time_s`` (s since the drive started)."""
