@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import shlex
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -15,6 +16,7 @@ from snakebot.cli.backend_options import (
     add_backend_argument,
     add_option_flags,
     backend_spec,
+    flag,
     flag_errors,
     given_options,
 )
@@ -45,7 +47,7 @@ from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError
 from snakebot.gaits import check_joint_axes, parse_set_options
-from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
+from snakebot.session import DEFAULT_BACKEND, DEFAULT_RATE_HZ, Snake, watched
 from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
@@ -245,9 +247,35 @@ def _recorder(
         raise ConfigError(args.record, "", f"cannot write the recording ({exc.strerror})") from exc
     header = (
         f"snakebot drive recording: robot {robot.name}, backend {backend_spec(args).name}, rate "
-        f"{args.rate:g} Hz\nreplay: snakebot drive --robot {robot.name} --script {args.record}"
+        f"{args.rate:g} Hz\nreplay: {replay_command(args, args.record)}"
     )
     return ScriptRecorder(stream, header)
+
+
+def replay_command(args: argparse.Namespace, script: Path) -> str:
+    """The ``snakebot drive`` line that plays ``script`` (a recording of the drive ``args``
+    made) as it was recorded: the robot, backend and its options, gaits and their parameters,
+    rate, smoothing and transition. Outputs (--log, --record, --foxglove, ...) and pacing
+    (--realtime: the twin's results do not depend on it) are left out."""
+    spec = backend_spec(args)
+    words = ["snakebot", "drive", "--robot", robot_name(args, hardware=spec.hardware, what="")]
+    if args.backend != DEFAULT_BACKEND:
+        words += ["--backend", args.backend]
+    for name, value in given_options(args, spec, BACKEND_OPTIONS).items():
+        if name != "realtime":
+            words += [flag(name)] if value is True else [flag(name), str(value)]
+    if args.gaits:
+        words += ["--gaits", args.gaits]
+    for item in args.set:
+        words += ["--set", item]
+    words += ["--rate", repr(args.rate)]
+    for option, value, default in (
+        ("--smoothing", args.smoothing, DEFAULT_SMOOTHING_S),
+        ("--transition", args.transition, DEFAULT_TRANSITION_S),
+    ):
+        if value != default:
+            words += [option, repr(value)]
+    return shlex.join([*words, "--script", str(script)])
 
 
 def _display(
