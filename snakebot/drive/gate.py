@@ -6,7 +6,8 @@ all in one cycle would stall the control loop for seconds, and playing them out 
 following cycles would keep the snake moving for as long after the paste. The gate passes up to
 ``per_cycle`` keys a cycle from a short backlog; when more than ``backlog`` keys wait, the input
 is a flood: what waits is dropped, and so is every key until the input has been quiet for
-``quiet_s``. Keys that make the snake safer (stop, halt) are never dropped.
+``quiet_s``. Keys that make the snake safer (stop, halt) are never dropped. With ``backlog``
+None (a script: every key is meant) nothing is dropped; the keys play out a few a cycle.
 """
 
 from __future__ import annotations
@@ -24,14 +25,15 @@ QUIET_S = 0.25
 
 class KeyGate:
     """Bounds the keys a cycle applies; ``dropped`` counts the keys of floods dropped so far,
-    ``notice`` says what the last flood dropped (for the display)."""
+    ``notice`` says what the last flood dropped (for the display). ``keeps(key)`` is true for
+    the keys a flood never drops."""
 
     def __init__(
         self,
         keeps: Callable[[str], bool] = lambda key: False,
         *,
         per_cycle: int = PER_CYCLE,
-        backlog: int = BACKLOG,
+        backlog: int | None = BACKLOG,
         quiet_s: float = QUIET_S,
     ) -> None:
         self.keeps = keeps
@@ -51,7 +53,10 @@ class KeyGate:
         """The keys to apply at drive time ``now_s`` (s), given the ``keys`` that just arrived."""
         if self._flood_until is not None and not keys and now_s >= self._flood_until:
             self._flood_until = None
-        if keys and (self.flooding or len(self._waiting) + len(keys) > self.backlog):
+        backlog = self.backlog
+        if keys and backlog is not None and (
+            self.flooding or len(self._waiting) + len(keys) > backlog
+        ):
             self._drop([*self._waiting, *keys], now_s)
         else:
             self._waiting.extend(keys)

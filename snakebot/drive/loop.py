@@ -20,7 +20,7 @@ from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController
-from snakebot.drive.gate import KeyGate
+from snakebot.drive.gate import BACKLOG, KeyGate
 from snakebot.drive.sources import InputSource
 from snakebot.gaits.live import LiveGait, LiveStatus
 
@@ -71,10 +71,11 @@ def run_drive(
     """Drive a connected ``backend`` from ``source`` until a stop brings it to the rest pose.
 
     ``stop_check()`` returns a reason to stop (a signal) or None; it is asked every cycle.
-    ``gate`` bounds the keys a cycle applies (default: a KeyGate that never drops the
-    controller's stop and halt keys).
+    ``gate`` bounds the keys a cycle applies (default: a KeyGate that drops a flood from a live
+    source, never the controller's stop and halt keys, and nothing from a script).
     """
-    gate = KeyGate(controller.settles) if gate is None else gate
+    if gate is None:
+        gate = KeyGate(controller.settles, backlog=BACKLOG if source.live else None)
     schedule = CycleSchedule(rate_hz)  # open-ended; the live gait blends in and out itself
     loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics, records=True)
     loop.start()

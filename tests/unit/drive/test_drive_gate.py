@@ -45,3 +45,12 @@ def test_a_paste_arriving_over_many_cycles_is_dropped_until_the_input_is_quiet()
     quiet = now + QUIET_S
     assert gate.admit([], quiet) == [] and not gate.flooding
     assert gate.admit(["d"], quiet + PERIOD_S) == ["d"]  # the next key typed acts
+
+
+def test_a_script_burst_is_played_a_few_keys_a_cycle_and_never_dropped() -> None:
+    gate = KeyGate(backlog=None)  # a script's keys are all meant
+    burst = ["w", "a"] * 50
+    applied = gate.admit(burst, 0.0)
+    for cycle in range(1, 30):
+        applied += gate.admit([], cycle * PERIOD_S)
+    assert applied == burst and gate.dropped == 0
