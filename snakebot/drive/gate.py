@@ -49,6 +49,11 @@ class KeyGate:
         """True while keys are being dropped (until the input has been quiet for ``quiet_s``)."""
         return self._flood_until is not None
 
+    @property
+    def waiting(self) -> int:
+        """Keys admitted but not yet passed (a burst playing out)."""
+        return len(self._waiting)
+
     def admit(self, keys: Sequence[str], now_s: float) -> list[str]:
         """The keys to apply at drive time ``now_s`` (s), given the ``keys`` that just arrived."""
         if self._flood_until is not None and not keys and now_s >= self._flood_until:

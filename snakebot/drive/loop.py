@@ -88,7 +88,7 @@ def run_drive(
         keys = tuple(key for key in gate.admit(source.poll(now), now) if controller.apply(key, now))
         if gate.dropped != dropped:
             controller.notice = gate.notice
-        _check_stop(controller, source, stop_check)
+        _check_stop(controller, source, stop_check, keys_waiting=gate.waiting > 0)
         done = loop.step(now, 1.0, scored=True)
         assert done is not None  # records=True
         status = live.status()
@@ -118,7 +118,13 @@ def run_drive(
     return DriveResult(summary, controller.stop_reason or "", loop.cycle)
 
 
-def _check_stop(controller: DriveController, source: InputSource, check: StopCheck | None) -> None:
+def _check_stop(
+    controller: DriveController,
+    source: InputSource,
+    check: StopCheck | None,
+    *,
+    keys_waiting: bool,
+) -> None:
     if controller.stop_reason is not None:
         return
     reason = check() if check is not None else None
@@ -126,5 +132,5 @@ def _check_stop(controller: DriveController, source: InputSource, check: StopChe
         controller.request_stop(reason)
     elif source.lost is not None:
         controller.request_stop(f"input lost: {source.lost}")
-    elif source.exhausted:
+    elif source.exhausted and not keys_waiting:
         controller.request_stop("end of script")

@@ -77,17 +77,19 @@ def test_a_paste_of_thousands_of_keys_neither_stalls_the_loop_nor_moves_the_snak
     assert any("ignored" in notice and "paste" in notice for notice in paste.notices)
 
 
-def test_a_script_with_many_keys_at_one_time_plays_them_all() -> None:
+@pytest.mark.parametrize("ending", ["1 q\n", ""], ids=["quit", "end-of-script"])
+def test_a_script_with_many_keys_at_one_time_plays_them_all(ending: str) -> None:
     from snakebot.drive import ScriptSource, parse_script
 
     robot = load_robot("snake8")
     live = live_gait(robot, rate_hz=RATE_HZ)
     controller = DriveController(live, [GaitChoice("serpenoid")])
-    script = ScriptSource(parse_script("0 w\n0 s\n" * 40 + "0 w\n1 q\n"))
+    script = ScriptSource(parse_script("0 w\n0 s\n" * 40 + "0 w\n" + ending))
     with TwinBackend(robot) as twin:
         result = run_drive(
             twin, live, SafetyLayer.for_robot(robot), controller, script, rate_hz=RATE_HZ,
             metrics=RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
         )
-    assert result.summary["keys"] == 82 and result.summary["dropped_keys"] == 0
+    assert result.summary["keys"] == 81 + len(ending.split()) // 2
+    assert result.summary["dropped_keys"] == 0
     assert live.setpoint.speed == 0.25  # every w and s applied, in order
