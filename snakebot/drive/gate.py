@@ -77,7 +77,4 @@ class KeyGate:
         self._flood_until = now_s + self.quiet_s
         self._flood_dropped += dropped
         self.dropped += dropped
-        self.notice = (
-            f"ignored {self._flood_dropped} keys that came at once (a paste?); "
-            "type keys one at a time"
-        )
+        self.notice = f"ignored {self._flood_dropped} keys that came at once (a paste?)"

@@ -99,6 +99,18 @@ def test_keys_drive_the_display_shows_it_and_ctrl_c_stops_with_the_terminal_rest
     assert summary["stopped_by"] == "quit" and summary["keys"] == 6
 
 
+def test_a_paste_is_dropped_with_a_note_and_the_drive_still_answers() -> None:
+    with terminal("--robot", "snake12", "--gaits", "sidewinding,rolling") as term:
+        term.read_until(b"gait      sidewinding")
+        term.type(b"w1a2" * 700)  # 2,800 keys pasted by mistake
+        term.read_until(b"keys that came at once (a paste?)")
+        time.sleep(0.5)  # the paste over, the terminal quiet again
+        term.type(b"q")
+        code, summary = term.finish()
+    assert code == 0 and summary["stopped_by"] == "quit"
+    assert summary["dropped_keys"] >= 2800 - 32 and summary["keys"] <= 33
+
+
 def test_a_hang_up_stops_the_snake_and_exits_1() -> None:
     with terminal("--robot", "snake8") as term:
         term.read_until(b"gait      serpenoid")
