@@ -45,7 +45,7 @@ from snakebot.drive.setup import (
 )
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import check_joint_axes, parse_set_options
 from snakebot.session import DEFAULT_BACKEND, DEFAULT_RATE_HZ, Snake, watched
 from snakebot.telemetry.sidecar import gait_facts
@@ -230,10 +230,11 @@ def run(args: argparse.Namespace) -> int:
     gone = _print_or_lose(lambda: print_json(summary) if args.json else _print_summary(summary))
     if result.stopped_by.startswith("input lost"):
         raise DriveInputError(f"{source.name}: {result.stopped_by}; {stopped}")
+    if result.stopped_by.startswith("interrupted"):
+        return 130
     if gone is not None:
-        raise DriveInputError(f"the terminal closed before the summary was printed ({gone}); "
-                              f"{stopped}")
-    return 130 if result.stopped_by.startswith("interrupted") else 0
+        raise OutputError("stdout", f"the summary could not be printed ({gone}); {stopped}")
+    return 0
 
 
 def _recorder(
@@ -338,9 +339,10 @@ def _summary(
 
 
 def _print_or_lose(print_summary: Callable[[], None]) -> str | None:
-    """Print the summary; the reason instead when the terminal it goes to was closed (the
-    window shut mid-drive). A dead terminal's output is then discarded, stderr's too if it
-    went with it, so what is left to say neither fails nor turns into an internal error."""
+    """Print the summary; the reason instead when what it goes to is gone (the terminal
+    window shut mid-drive, the reader of a pipe quit). That output is then discarded, stderr's
+    too if it went with it, so what is left to say neither fails nor turns into an internal
+    error."""
     from snakebot.drive.terminal import GONE_ERRNOS, discard_output, hung_up
 
     try:

@@ -24,8 +24,9 @@ from snakebot.errors import ConfigError
 
 TermAttrs = list[Any]
 
-GONE_ERRNOS = frozenset({errno.EIO, errno.ENXIO})
-"""What writing to a terminal that was closed (a hung-up pty, a vanished device) raises."""
+GONE_ERRNOS = frozenset({errno.EIO, errno.ENXIO, errno.EPIPE})
+"""What writing to an output that went away raises: a closed terminal (a hung-up pty, a
+vanished device), a pipe whose reader quit."""
 
 READ_BYTES = 512
 """Bytes read from the terminal in one cycle at most: the decoder's time stays bounded (a

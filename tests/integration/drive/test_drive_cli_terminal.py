@@ -209,3 +209,26 @@ def test_a_terminal_closed_mid_drive_stops_the_snake_and_exits_1_not_3(
     rows = [line.split(",") for line in log.read_text().splitlines()[1:]]
     assert max(abs(float(v)) for row in rows for v in row[2:10]) > 0.3  # it was moving
     assert all(float(v) == 0.0 for v in rows[-1][2:10])  # then went to the rest pose
+
+
+def test_a_summary_reader_that_quit_is_exit_1_saying_so(tmp_path: Path) -> None:
+    """`snakebot drive --json ... | reader` and the reader quits mid-drive: a stop, then exit 1
+    saying the summary could not be printed (not a traceback, nor Python's exit 120)."""
+    script, log = tmp_path / "short.txt", tmp_path / "drive.csv"
+    script.write_text("0 w\n0 w\n3 q\n")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "snakebot", "drive", "--robot", "snake8", "--realtime",
+         "--script", str(script), "--log", str(log), "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    deadline = time.monotonic() + 60
+    while not (log.exists() and log.read_text().count("\n") > 50):
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.05)
+    proc.stdout.close()  # the reader quits
+    err = proc.stderr.read().decode()
+    proc.wait(timeout=60)
+    assert proc.returncode == 1, err
+    assert "Traceback" not in err and "Exception ignored" not in err
+    assert "the summary could not be printed (Broken pipe)" in err and "snake was stopped" in err
