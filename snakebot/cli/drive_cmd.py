@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
+import shlex
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +16,7 @@ from snakebot.cli.backend_options import (
     add_backend_argument,
     add_option_flags,
     backend_spec,
+    flag,
     flag_errors,
     given_options,
 )
@@ -42,9 +45,9 @@ from snakebot.drive.setup import (
 )
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits import check_joint_axes, parse_set_options
-from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
+from snakebot.session import DEFAULT_BACKEND, DEFAULT_RATE_HZ, Snake, watched
 from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
@@ -223,16 +226,15 @@ def run(args: argparse.Namespace) -> int:
             live, controller, source, rate_hz=args.rate, observers=observers, stop_check=signals
         )
     summary = {**_summary(robot, args, choices, result), **telemetry.summary}
-    if args.json:
-        print_json(summary)
-    else:
-        _print_summary(summary)
+    stopped = f"the snake was stopped ({robot.safety.stop_policy} at the rest pose)"
+    gone = _print_or_lose(lambda: print_json(summary) if args.json else _print_summary(summary))
     if result.stopped_by.startswith("input lost"):
-        raise DriveInputError(
-            f"{source.name}: {result.stopped_by}; the snake was stopped "
-            f"({robot.safety.stop_policy} at the rest pose)"
-        )
-    return 130 if result.stopped_by.startswith("interrupted") else 0
+        raise DriveInputError(f"{source.name}: {result.stopped_by}; {stopped}")
+    if result.stopped_by.startswith("interrupted"):
+        return 130
+    if gone is not None:
+        raise OutputError("stdout", f"the summary could not be printed ({gone}); {stopped}")
+    return 0
 
 
 def _recorder(
@@ -246,9 +248,35 @@ def _recorder(
         raise ConfigError(args.record, "", f"cannot write the recording ({exc.strerror})") from exc
     header = (
         f"snakebot drive recording: robot {robot.name}, backend {backend_spec(args).name}, rate "
-        f"{args.rate:g} Hz\nreplay: snakebot drive --robot {robot.name} --script {args.record}"
+        f"{args.rate:g} Hz\nreplay: {replay_command(args, args.record)}"
     )
     return ScriptRecorder(stream, header)
+
+
+def replay_command(args: argparse.Namespace, script: Path) -> str:
+    """The ``snakebot drive`` line that plays ``script`` (a recording of the drive ``args``
+    made) as it was recorded: the robot, backend and its options, gaits and their parameters,
+    rate, smoothing and transition. Outputs (--log, --record, --foxglove, ...) and pacing
+    (--realtime: the twin's results do not depend on it) are left out."""
+    spec = backend_spec(args)
+    words = ["snakebot", "drive", "--robot", robot_name(args, hardware=spec.hardware, what="")]
+    if args.backend != DEFAULT_BACKEND:
+        words += ["--backend", args.backend]
+    for name, value in given_options(args, spec, BACKEND_OPTIONS).items():
+        if name != "realtime":
+            words += [flag(name)] if value is True else [flag(name), str(value)]
+    if args.gaits:
+        words += ["--gaits", args.gaits]
+    for item in args.set:
+        words += ["--set", item]
+    words += ["--rate", repr(args.rate)]
+    for option, value, default in (
+        ("--smoothing", args.smoothing, DEFAULT_SMOOTHING_S),
+        ("--transition", args.transition, DEFAULT_TRANSITION_S),
+    ):
+        if value != default:
+            words += [option, repr(value)]
+    return shlex.join([*words, "--script", str(script)])
 
 
 def _display(
@@ -310,6 +338,26 @@ def _summary(
     return summary
 
 
+def _print_or_lose(print_summary: Callable[[], None]) -> str | None:
+    """Print the summary; the reason instead when what it goes to is gone (the terminal
+    window shut mid-drive, the reader of a pipe quit). That output is then discarded, stderr's
+    too if it went with it, so what is left to say neither fails nor turns into an internal
+    error."""
+    from snakebot.drive.terminal import GONE_ERRNOS, discard_output, hung_up
+
+    try:
+        print_summary()
+        sys.stdout.flush()
+    except OSError as exc:
+        if exc.errno not in GONE_ERRNOS:
+            raise
+        discard_output(sys.stdout)
+        if hung_up(sys.stderr):
+            discard_output(sys.stderr)
+        return os.strerror(exc.errno or 0)
+    return None
+
+
 def _print_summary(summary: dict[str, object]) -> None:
     def fmt(key: str, unit: str = "", digits: int = 3) -> str:
         value = summary.get(key)
@@ -318,11 +366,16 @@ def _print_summary(summary: dict[str, object]) -> None:
         return f"{value:.{digits}f}{unit}" if isinstance(value, float) else f"{value}{unit}"
 
     gaits = summary["gaits"] if isinstance(summary["gaits"], list) else []
+    dropped = (
+        f" ({summary['dropped_keys']} more dropped: too many at once)"
+        if summary.get("dropped_keys")
+        else ""
+    )
     lines = [
         f"{summary['robot']} driven on {summary['backend']}: stopped by {summary['stopped_by']}",
         f"  time         {fmt('duration_s', ' s', 2)}, {fmt('control_cycles')} cycles at "
         f"{fmt('achieved_rate_hz', ' Hz', 1)} ({fmt('overruns')} overruns)",
-        f"  input        {fmt('keys')} keys; gaits {', '.join(map(str, gaits))}",
+        f"  input        {fmt('keys')} keys{dropped}; gaits {', '.join(map(str, gaits))}",
         f"  distance     {fmt('distance_m', ' m')} at heading {fmt('heading_deg', ' deg', 1)}, "
         f"turned {fmt('turn_deg', ' deg', 1)}",
         f"  tracking     {fmt('tracking_rms_rad', ' rad RMS', 4)}; max command "

@@ -5,6 +5,7 @@ from snakebot.drive.controller import DriveController, GaitChoice
 from snakebot.drive.loop import DriveCycle, DriveObserver, DriveResult, run_drive
 from snakebot.drive.sources import (
     DriveInputError,
+    InputDeviceError,
     InputEvent,
     InputSource,
     ScriptRecorder,
@@ -19,6 +20,7 @@ __all__ = [
     "DriveObserver",
     "DriveResult",
     "GaitChoice",
+    "InputDeviceError",
     "InputEvent",
     "InputSource",
     "ScriptRecorder",

@@ -78,6 +78,10 @@ class DriveController:
             self.on_event(InputEvent(now_s, key))
         return True
 
+    def settles(self, key: str) -> bool:
+        """True for a key that only stops or halts the snake (never dropped from a flood)."""
+        return isinstance(action_for(key, self.keys), Quit | Halt)
+
     def request_stop(self, reason: str) -> None:
         """Stop driving: blend to the rest pose; the first reason given is kept."""
         if self.stop_reason is None:

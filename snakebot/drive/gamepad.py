@@ -16,8 +16,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from snakebot.drive.sources import InputSource
-from snakebot.errors import ConfigError, MissingDependencyError
+from snakebot.drive.sources import InputDeviceError, InputSource
+from snakebot.errors import MissingDependencyError
 
 INSTALL = "pip install 'snakebot[gamepad]'"
 DEAD_ZONE = 0.15
@@ -79,7 +79,7 @@ class PadMapper:
 
 class GamepadSource(InputSource):
     """Keys from gamepad ``index`` (0: the first one connected). Raises MissingDependencyError
-    without pygame-ce, ConfigError when no gamepad is connected."""
+    without pygame-ce, InputDeviceError when no gamepad is connected."""
 
     def __init__(self, index: int = 0) -> None:
         self.name = "gamepad"
@@ -103,8 +103,8 @@ class GamepadSource(InputSource):
         self._pygame = pygame
         if pygame.joystick.get_count() <= self.index:
             self.close()
-            raise ConfigError(
-                "gamepad", "", "no gamepad found: plug one in (or drive from the keyboard)"
+            raise InputDeviceError(
+                "gamepad: no gamepad found: plug one in (or drive from the keyboard)"
             )
         pad = pygame.joystick.Joystick(self.index)
         self.name = f"gamepad {pad.get_name()!r}"

@@ -7,6 +7,7 @@ control's range). Scripts and recordings use the same names, so a recorded drive
 
 from __future__ import annotations
 
+import codecs
 import math
 import re
 
@@ -70,55 +71,64 @@ def analog(key: str) -> tuple[str, float] | None:
 
 
 class KeyDecoder:
-    """Turns the bytes a terminal sends into key names; keeps a sequence split across reads.
+    """Turns the bytes a terminal sends into key names, one byte at a time, so a key split
+    across reads (``ESC [ 1 ;`` then ``5 A``) decodes as if it came whole.
 
-    A lone ESC is reported as ``esc`` only when the next read does not continue it.
+    A lone ESC is reported as ``esc`` only when the next read does not continue it. Escape
+    sequences that are not keys of the drive are dropped whole; a control byte inside one
+    ends it and counts as itself (ctrl-c in line noise still stops), as a VT parser does.
+    Any bytes are accepted: invalid UTF-8 is dropped, nothing raises.
     """
 
     def __init__(self) -> None:
-        self._pending = ""
+        self._utf8 = codecs.getincrementaldecoder("utf-8")(errors="ignore")
+        self._state = _GROUND
+        self._sequence = ""  # the escape sequence so far, while in _CSI / _SS3
 
     def feed(self, data: bytes) -> list[str]:
         """Key names for ``data``; undecodable bytes and unknown sequences are dropped."""
-        text = self._pending + data.decode("utf-8", errors="ignore")
-        self._pending = ""
         keys: list[str] = []
-        i = 0
-        while i < len(text):
-            char = text[i]
-            if char == "\x1b":
-                rest = text[i : i + 3]
-                if len(rest) < 3 and rest in ("\x1b", "\x1b[", "\x1bO"):
-                    self._pending = rest  # maybe the start of a sequence: wait for more
-                    break
-                name = _SEQUENCES.get(rest)
-                if name is not None:
-                    keys.append(name)
-                    i += 3
-                    continue
-                i += _skip_sequence(text, i)
-                if i - 1 >= 0 and text[i - 1] == "\x1b":
-                    keys.append("esc")
-                continue
-            name = _BYTE_NAMES.get(char)
-            if name is not None:
-                keys.append(name)
-            elif char.isprintable():
-                keys.append(char)
-            i += 1
+        for char in self._utf8.decode(data):
+            self._step(char, keys)
         return keys
 
     def flush(self) -> list[str]:
-        """Keys held back waiting for a sequence's next byte (a lone ESC)."""
-        pending, self._pending = self._pending, ""
-        return ["esc"] if pending == "\x1b" else []
+        """Keys held back waiting for a sequence's next byte (a lone ESC); a sequence cut
+        short is dropped."""
+        self._utf8.reset()
+        state, self._state, self._sequence = self._state, _GROUND, ""
+        return ["esc"] if state == _ESC else []
+
+    def _step(self, char: str, keys: list[str]) -> None:
+        state = self._state
+        if state == _ESC:
+            if char in "[O":
+                self._state, self._sequence = (_CSI if char == "[" else _SS3), "\x1b" + char
+                return
+            keys.append("esc")  # ESC then something else: the ESC key, then that
+            self._state = _GROUND
+        elif state in (_CSI, _SS3):
+            if " " <= char <= "?":  # parameter and intermediate bytes
+                if len(self._sequence) <= _LONGEST_SEQUENCE:
+                    self._sequence += char
+                return
+            self._state = _GROUND
+            if "@" <= char <= "~":  # the final byte: the sequence is complete
+                name = _SEQUENCES.get(self._sequence + char)
+                if name is not None:
+                    keys.append(name)
+                return
+            # anything else cuts the sequence short and counts as itself
+        if char == "\x1b":
+            self._state = _ESC
+            return
+        name = _BYTE_NAMES.get(char)
+        if name is not None:
+            keys.append(name)
+        elif char.isprintable():
+            keys.append(char)
 
 
-def _skip_sequence(text: str, start: int) -> int:
-    """Length of the escape sequence at ``start`` (1 for a lone ESC)."""
-    if text[start + 1 : start + 2] not in ("[", "O"):
-        return 1
-    end = start + 2
-    while end < len(text) and not ("@" <= text[end] <= "~"):
-        end += 1
-    return end + 1 - start
+_GROUND, _ESC, _CSI, _SS3 = range(4)
+_LONGEST_SEQUENCE = max(len(seq) for seq in _SEQUENCES)
+"""Longer sequences cannot be keys: only this much of one is kept (memory stays bounded)."""

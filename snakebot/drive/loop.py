@@ -1,6 +1,7 @@
 """The drive loop: input -> live gait -> safety -> backend, at a fixed rate, until a stop.
 
-One cycle: poll the input (never blocks), apply its keys, then the control cycle every loop
+One cycle: poll the input (never blocks), apply a few of its keys (snakebot.drive.gate: a
+paste is dropped, not played out), then the control cycle every loop
 shares (snakebot.control.loop): advance the live gait to the robot's time, pass the targets
 through the safety layer, send, let a period pass (the twin steps, hardware sleeps to the
 deadline), read the state; then hand the cycle's record to the observers (display, telemetry).
@@ -19,6 +20,7 @@ from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.controller import DriveController
+from snakebot.drive.gate import BACKLOG, KeyGate
 from snakebot.drive.sources import InputSource
 from snakebot.gaits.live import LiveGait, LiveStatus
 
@@ -64,11 +66,16 @@ def run_drive(
     metrics: RunMetrics,
     observers: Sequence[DriveObserver] = (),
     stop_check: StopCheck | None = None,
+    gate: KeyGate | None = None,
 ) -> DriveResult:
     """Drive a connected ``backend`` from ``source`` until a stop brings it to the rest pose.
 
     ``stop_check()`` returns a reason to stop (a signal) or None; it is asked every cycle.
+    ``gate`` bounds the keys a cycle applies (default: a KeyGate that drops a flood from a live
+    source, never the controller's stop and halt keys, and nothing from a script).
     """
+    if gate is None:
+        gate = KeyGate(controller.settles, backlog=BACKLOG if source.live else None)
     schedule = CycleSchedule(rate_hz)  # open-ended; the live gait blends in and out itself
     loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics, records=True)
     loop.start()
@@ -77,8 +84,11 @@ def run_drive(
     stop_deadline: float | None = None
     while True:
         now = loop.elapsed_s
-        keys = tuple(key for key in source.poll(now) if controller.apply(key, now))
-        _check_stop(controller, source, stop_check)
+        dropped = gate.dropped
+        keys = tuple(key for key in gate.admit(source.poll(now), now) if controller.apply(key, now))
+        if gate.dropped != dropped:
+            controller.notice = gate.notice
+        _check_stop(controller, source, stop_check, keys_waiting=gate.waiting > 0)
         done = loop.step(now, 1.0, scored=True)
         assert done is not None  # records=True
         status = live.status()
@@ -99,6 +109,7 @@ def run_drive(
     summary["overruns"] = backend.stats.overruns
     summary["stopped_by"] = controller.stop_reason
     summary["keys"] = controller.events
+    summary["dropped_keys"] = gate.dropped
     summary["governed_cycles"] = live.governed_cycles
     summary["interrupted"] = False
     health = getattr(backend, "physics_health", None)  # the twin's physics checks
@@ -107,7 +118,13 @@ def run_drive(
     return DriveResult(summary, controller.stop_reason or "", loop.cycle)
 
 
-def _check_stop(controller: DriveController, source: InputSource, check: StopCheck | None) -> None:
+def _check_stop(
+    controller: DriveController,
+    source: InputSource,
+    check: StopCheck | None,
+    *,
+    keys_waiting: bool,
+) -> None:
     if controller.stop_reason is not None:
         return
     reason = check() if check is not None else None
@@ -115,5 +132,5 @@ def _check_stop(controller: DriveController, source: InputSource, check: StopChe
         controller.request_stop(reason)
     elif source.lost is not None:
         controller.request_stop(f"input lost: {source.lost}")
-    elif source.exhausted:
+    elif source.exhausted and not keys_waiting:
         controller.request_stop("end of script")

@@ -24,6 +24,11 @@ class DriveInputError(SnakebotError):
     """The driving input was lost (terminal closed, gamepad unplugged); the snake was stopped."""
 
 
+class InputDeviceError(SnakebotError):
+    """The input device asked for is not there (no gamepad connected): connecting it fixes it,
+    the command line was right."""
+
+
 @dataclass(frozen=True)
 class InputEvent:
     """One key at drive time ``time_s`` (s since the drive started)."""
@@ -36,11 +41,14 @@ class InputSource(abc.ABC):
     """Keys for the drive, polled every cycle. Use as a context manager (``open``/``close``).
 
     ``lost`` is a reason once the device is gone; ``exhausted`` is true when no key can come
-    any more (the end of a script).
+    any more (the end of a script); ``live`` is false for a script.
     """
 
     name: str = "input"
     lost: str | None = None
+    live: bool = True
+    """True when a person makes the keys as they go (terminal, gamepad): a burst of them is a
+    mistake (a paste) the drive drops (snakebot.drive.gate); a script's keys are all meant."""
 
     @property
     def exhausted(self) -> bool:
@@ -78,6 +86,7 @@ class ScriptSource(InputSource):
     def __init__(self, events: Iterable[InputEvent], name: str = "script") -> None:
         self.events = tuple(events)
         self.name = name
+        self.live = False
         self._next = 0
 
     @classmethod

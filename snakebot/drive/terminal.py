@@ -4,17 +4,19 @@ Raw mode (no echo, no line buffering, no signal keys) so every key arrives at on
 Ctrl-Z and Ctrl-\\ are keys the drive handles (stop), not signals that would suspend or kill the
 control loop. Output processing stays on, so the display's newlines still work. The previous
 settings come back on close, whatever happened. A terminal that goes away (EOF, EIO) sets
-``lost``.
+``lost``; :func:`hung_up` and :func:`discard_output` let a command finish quietly on an
+output terminal that went away with it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import io
 import os
 import select
 import sys
-from typing import Any
+from typing import IO, Any
 
 from snakebot.drive.keys import KeyDecoder
 from snakebot.drive.sources import InputSource
@@ -22,7 +24,13 @@ from snakebot.errors import ConfigError
 
 TermAttrs = list[Any]
 
-_READ_SIZE = 256
+GONE_ERRNOS = frozenset({errno.EIO, errno.ENXIO, errno.EPIPE})
+"""What writing to an output that went away raises: a closed terminal (a hung-up pty, a
+vanished device), a pipe whose reader quit."""
+
+READ_BYTES = 512
+"""Bytes read from the terminal in one cycle at most: the decoder's time stays bounded (a
+paste drains over a few cycles; snakebot.drive.gate drops it)."""
 
 
 class TerminalSource(InputSource):
@@ -79,32 +87,24 @@ class TerminalSource(InputSource):
         termios.tcsetattr(self._fd, termios.TCSANOW, mode)
 
     def poll(self, now_s: float) -> list[str]:
-        """Keys typed since the last poll; sets ``lost`` if the terminal is gone."""
+        """Keys typed since the last poll (from READ_BYTES at most); sets ``lost`` if the
+        terminal is gone."""
         if self._fd is None or self.lost is not None:
             return []
-        keys: list[str] = []
-        got = False
-        while True:
-            try:
-                ready, _, _ = select.select([self._fd], [], [], 0.0)
-                if not ready:
-                    break
-                data = os.read(self._fd, _READ_SIZE)
-            except OSError as exc:
-                if exc.errno in (errno.EAGAIN, errno.EINTR):
-                    break
-                self.lost = f"the terminal closed ({os.strerror(exc.errno or 0)})"
-                break
-            if not data:
-                self.lost = "the terminal closed (end of input)"
-                break
-            got = True
-            keys += self._decoder.feed(data)
-            if len(data) < _READ_SIZE:
-                break
-        if not got:
-            keys += self._decoder.flush()  # a lone ESC with nothing after it this cycle
-        return keys
+        try:
+            ready, _, _ = select.select([self._fd], [], [], 0.0)
+            data = os.read(self._fd, READ_BYTES) if ready else b""
+        except OSError as exc:
+            if exc.errno in (errno.EAGAIN, errno.EINTR):
+                return []
+            self.lost = f"the terminal closed ({os.strerror(exc.errno or 0)})"
+            return []
+        if ready and not data:
+            self.lost = "the terminal closed (end of input)"
+            return []
+        if not data:
+            return self._decoder.flush()  # a lone ESC with nothing after it this cycle
+        return self._decoder.feed(data)
 
     def close(self) -> None:
         """Restore the terminal's settings; close it if we opened it. Idempotent."""
@@ -119,3 +119,25 @@ class TerminalSource(InputSource):
             self._owned = False
             os.close(fd)
             self._fd = None
+
+
+def hung_up(stream: IO[Any]) -> bool:
+    """True when ``stream``'s file is a terminal that hung up (its window was closed)."""
+    try:
+        poller = select.poll()
+        poller.register(stream.fileno(), select.POLLOUT)
+        events = poller.poll(0)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return False
+    return any(event & (select.POLLHUP | select.POLLERR) for _, event in events)
+
+
+def discard_output(stream: IO[Any]) -> None:
+    """Point ``stream``'s file descriptor at /dev/null: what it still buffers for a terminal
+    that is gone is dropped instead of failing again when Python flushes it at exit."""
+    with contextlib.suppress(OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, stream.fileno())
+        finally:
+            os.close(devnull)

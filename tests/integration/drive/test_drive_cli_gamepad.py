@@ -50,3 +50,18 @@ def test_the_stick_drives_and_unplugging_the_pad_stops_the_snake(
     assert "gamepad 'Virtual Controller' was unplugged" in err
     assert summary["stopped_by"] == "input lost: gamepad 'Virtual Controller' was unplugged"
     assert summary["keys"] >= 1 and summary["distance_m"] > 0.05  # it drove, then stopped
+
+
+def test_no_pad_plugged_in_is_exit_1_saying_to_plug_one_in(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # not a usage error (2): the command line is right, plugging a pad in fixes it
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    monkeypatch.setenv("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+    pygame = pytest.importorskip("pygame")
+    pygame.joystick.init()
+    if pygame.joystick.get_count():
+        pytest.skip("a gamepad is connected to this machine")
+    assert main(["drive", "--gamepad", "--robot", "snake8"]) == 1
+    err = capsys.readouterr().err
+    assert "no gamepad found: plug one in" in err and "usage:" not in err

@@ -136,3 +136,29 @@ def test_a_recorded_drive_replays_exactly(
     first.pop("record")
     assert replay == first
     assert first["keys"] == 11 and first["stopped_by"] == "quit"
+
+
+def test_the_replay_line_a_recording_prints_reproduces_the_drive(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The recording's own replay line, run as written (nothing added), drives what was
+    recorded: the gait list, the rate and the drive's settings all travel with it."""
+    import shlex
+
+    script = tmp_path / "tour.txt"
+    script.write_text("0 1\n0 w\n0 w\n0 w\n0 w\n4 a\n4 a\n6 2\n9 q\n")
+    record = tmp_path / "my drive.rec"  # a space: the line must quote it
+    assert main(["drive", "--robot", "snake12", "--gaits", "rolling,sidewinding", "--rate", "50",
+                 "--smoothing", "0.3", "--set", "sidewinding.amplitude_even=0.5",
+                 "--script", str(script), "--record", str(record), "--json"]) == 0
+    first = json.loads(capsys.readouterr().out)
+    lines = [line for line in record.read_text().splitlines() if line.startswith("# replay: ")]
+    assert len(lines) == 1
+    words = shlex.split(lines[0].removeprefix("# replay: "))
+    assert words[:2] == ["snakebot", "drive"]
+    assert main([*words[1:], "--json"]) == 0
+    replay = json.loads(capsys.readouterr().out)
+    first.pop("record")
+    assert replay["gaits"] == ["rolling", "sidewinding"] and replay["rate_hz"] == 50.0
+    assert replay["distance_m"] == pytest.approx(first["distance_m"], rel=1e-9, abs=1e-12)
+    assert replay == first

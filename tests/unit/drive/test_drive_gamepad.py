@@ -8,7 +8,8 @@ from collections.abc import Iterator
 import pytest
 
 from snakebot.drive.gamepad import GamepadSource, PadMapper, stick_value
-from snakebot.errors import ConfigError, MissingDependencyError
+from snakebot.drive.sources import InputDeviceError
+from snakebot.errors import MissingDependencyError
 
 
 def test_sticks_have_a_dead_zone_and_are_rounded() -> None:
@@ -75,7 +76,7 @@ def pygame(monkeypatch: pytest.MonkeyPatch) -> Iterator[object]:
 
 
 def test_no_pad_connected_is_a_clear_error(pygame: object) -> None:
-    with pytest.raises(ConfigError, match="gamepad: no gamepad found: plug one in"):
+    with pytest.raises(InputDeviceError, match="gamepad: no gamepad found: plug one in"):
         GamepadSource().open()
 
 

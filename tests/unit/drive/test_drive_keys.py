@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from snakebot.drive.keys import KeyDecoder, analog, normalise
 
@@ -59,3 +63,44 @@ def test_bad_key_names_say_what_a_key_looks_like(text: str, message: str) -> Non
 def test_analog_keys_carry_their_value() -> None:
     assert analog("speed=0.5") == ("speed", 0.5)
     assert analog("w") is None
+
+
+def test_a_sequence_cut_after_its_parameters_waits_for_the_rest() -> None:
+    # ctrl-up (ESC [ 1 ; 5 A) across two reads: nothing leaks out as keys, nothing raises
+    decoder = KeyDecoder()
+    assert decoder.feed(b"\x1b[1;") == []
+    assert decoder.feed(b"5Aw") == ["w"]
+
+
+def test_a_control_key_inside_a_broken_sequence_still_counts() -> None:
+    # a sequence cut short by ctrl-c (line noise, a half-sent key): the stop key is not eaten
+    assert KeyDecoder().feed(b"\x1b[1;\x03w") == ["ctrl-c", "w"]
+
+
+def _chunked(data: bytes, cuts: list[int]) -> list[bytes]:
+    bounds = sorted({min(cut, len(data)) for cut in cuts} | {0, len(data)})
+    return [data[a:b] for a, b in itertools.pairwise(bounds)]
+
+
+_TERMINAL_BYTES = st.lists(
+    st.one_of(
+        st.binary(max_size=8),
+        st.sampled_from([b"\x1b", b"\x1b[", b"\x1bO", b"\x1b[1;5A", b"\x1b[15~", b"\x1b[A",
+                         b"\x1bOD", b"\xe2\x82\xac", b"\xe2", b"\x03", b"[", b";", b"5"]),
+    ),
+    max_size=40,
+).map(b"".join)
+
+
+@settings(max_examples=400, deadline=None)
+@given(data=_TERMINAL_BYTES, cuts=st.lists(st.integers(min_value=0, max_value=400), max_size=12))
+def test_any_chunking_of_any_bytes_gives_the_keys_of_the_whole(
+    data: bytes, cuts: list[int]
+) -> None:
+    whole = KeyDecoder()
+    expected = whole.feed(data) + whole.flush()
+    pieces = KeyDecoder()
+    got: list[str] = []
+    for chunk in _chunked(data, cuts):
+        got += pieces.feed(chunk)
+    assert got + pieces.flush() == expected
