@@ -13,7 +13,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from snakebot.backends.dynamixel.faults import decode_hardware_error
+from snakebot.backends.dynamixel.faults import ServoStatusError, decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.servo.ticks import rad_to_ticks, ticks_to_rad
 from snakebot.setup.errors import SetupError
@@ -168,7 +168,12 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
         deadline = start_s + travel_s + 2 * JOG_RAMP_S + 2.0
         changed_s = start_s
         while abs(present - goal) > 1 and link.clock_s() < deadline:
-            now = bus.read(j.servo_id, "present_position")
+            try:
+                now = bus.read(j.servo_id, "present_position")
+            except ServoStatusError:
+                raise
+            except BusError:
+                continue  # a reply lost while watching: the servo moves on by its own profile
             if now != present:
                 present, changed_s = now, link.clock_s()
             elif abs(present - goal) <= ARRIVED_TICKS and link.clock_s() - changed_s > SETTLE_S:

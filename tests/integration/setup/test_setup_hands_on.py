@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import threading
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -154,3 +156,26 @@ def test_torque_dry_run_and_a_missing_servo(snake: Bus, cli: Cli) -> None:
     snake.chain.remove(snake.servo(11))
     code, _, err = cli("servo", "torque", "on", *SNAKE12, "--port", snake.url)
     assert code == 1 and "[servo 11]" in err and "--all-bauds" in err
+
+
+def test_a_jog_rides_out_replies_lost_while_it_watches_the_move(snake: Bus, cli: Cli) -> None:
+    """A loaded pty lost three replies in a row to one of a jog's many position polls; the
+    servo moves on by its own profile, so a lost poll is asked again, not fatal."""
+    servo, goal = snake.servo(4), ticks(15)
+
+    def lose_replies_once_moving() -> None:
+        deadline = time.monotonic() + 30
+        while servo.peek("goal_position") != goal and time.monotonic() < deadline:
+            time.sleep(0.001)
+        snake.chain.drop_replies(4, next_n=3)  # one poll and both its retries
+
+    watcher = threading.Thread(target=lose_replies_once_moving)
+    watcher.start()
+    try:
+        code, _, err = cli("servo", "jog", *SNAKE12, "--port", snake.url, "4", "15", "--speed",
+                           "10")  # 1.5 s of bus time: thousands of polls to lose replies in
+    finally:
+        watcher.join()
+    assert code == 0, err
+    assert snake.chain.faults_of(servo).drop_next == 0  # the replies were lost during the jog
+    assert abs(servo.peek("present_position") - goal) <= 6
