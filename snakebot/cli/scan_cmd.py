@@ -66,12 +66,14 @@ def run(args: argparse.Namespace) -> int:
     from snakebot.setup.link import Link
     from snakebot.setup.scan import scan
 
+    expected: tuple[int, ...] | None = None
     if args.robot is not None:
         from snakebot.config import load_robot
 
-        bus = load_robot(args.robot).bus
-        args.port = args.port or bus.port
-        args.baud = args.baud or bus.baud
+        robot = load_robot(args.robot)
+        args.port = args.port or robot.bus.port
+        args.baud = args.baud or robot.bus.baud
+        expected = tuple(robot.servo_ids)
     if args.port is None:
         raise UsageError("name the serial port with --port (`snakebot ports` lists them), or "
                          "--robot NAME to use its bus.port")
@@ -83,15 +85,48 @@ def run(args: argparse.Namespace) -> int:
     elapsed = time.monotonic() - start
     bad_lines = report.bad_lines
     servos = [_as_dict(e, bad_lines) for e in report.entries]
+    missing = _missing(report, expected)
     if args.json:
-        print_json({"port": args.port, "servos": servos, "seconds": round(elapsed, 2)})
+        print_json({"port": args.port, "servos": servos, "missing": missing,
+                    "seconds": round(elapsed, 2)})
     else:
         for entry in report.entries:
             print(_line(entry, bad_lines))
         print(f"{len(servos)} servo(s) on {args.port} in {elapsed:.1f} s")
     _warn_noise(report)
     _raise_problems(args, report)
+    if missing:
+        _warn_missing(args, missing, expected)
     return 0
+
+
+def _missing(report: ScanReport, expected: tuple[int, ...] | None) -> list[int]:
+    """The robot's IDs that did not answer; without a robot, the gaps between the IDs found
+    (a chain numbered 1..N with holes in it looks incomplete)."""
+    found = {e.servo_id for e in report.entries}
+    if expected is not None:
+        return [i for i in expected if i not in found]
+    if not found:
+        return []
+    return [i for i in range(min(found), max(found) + 1) if i not in found]
+
+
+def _warn_missing(
+    args: argparse.Namespace, missing: list[int], expected: tuple[int, ...] | None
+) -> None:
+    ids = ", ".join(map(str, missing))
+    if expected is not None:
+        what = f"{args.robot} has servo(s) {ids}, which did not answer"
+    else:
+        what = (f"ID(s) {ids} did not answer, between IDs {missing[0] - 1} and "
+                f"{missing[-1] + 1} that did,")
+    if args.all_bauds:
+        advice = "at any rate: check its cable, its power and its connector"
+    else:
+        advice = (f"at {args.baud} baud: a servo not set up yet (or left half-way by an "
+                  f"interrupted setup) listens at another rate; `snakebot scan --port {args.port} "
+                  "--all-bauds` finds it, and `snakebot config apply` moves it to the robot's rate")
+    print(f"snakebot: warning: {what} {advice}", file=sys.stderr)
 
 
 def _as_dict(entry: ScanEntry, bad_lines: list[int]) -> dict[str, Any]:

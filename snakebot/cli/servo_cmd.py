@@ -1,4 +1,4 @@
-"""``snakebot servo reboot|reset|info``: recover and inspect single servos."""
+"""``snakebot servo reboot|reset|info|torque|jog``: recover, inspect and move single servos."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from snakebot.cli.common import (
 )
 from snakebot.cli.config_cmd import servo_id_arg
 from snakebot.cli.console import confirm
+from snakebot.cli.servo_hands_on import add_actions
 from snakebot.config import load_robot
 from snakebot.errors import BusError, UsageError
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
@@ -27,7 +28,8 @@ from snakebot.setup.maintenance import factory_reset, reboot, servo_info
 
 def add_parser(subparsers: Any) -> None:
     """Register ``servo`` and its actions."""
-    parser = subparsers.add_parser("servo", help="reboot, factory-reset or inspect one servo")
+    parser = subparsers.add_parser(
+        "servo", help="reboot, factory-reset, inspect, go limp or jog servos")
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
 
     boot = actions.add_parser("reboot", help="reboot servos (clears a latched hardware error)")
@@ -55,6 +57,7 @@ def add_parser(subparsers: Any) -> None:
     info.add_argument("--id", type=servo_id_arg, required=True, help="the servo to read")
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(handler=run_info, writes=False)
+    add_actions(actions, _port, servo_id_arg)
 
 
 def _port(parser: argparse.ArgumentParser) -> None:

@@ -8,6 +8,7 @@ by finding the servo again.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -17,6 +18,9 @@ from snakebot.setup.duplicates import collision_reason
 from snakebot.setup.errors import DuplicateIdError, SetupError, VerifyError
 from snakebot.setup.link import SEARCH_BAUDS, Link, unanswered_ok
 from snakebot.setup.maintenance import wait_for_boot
+
+LATE_REPLY_S = 0.1
+"""How long a verify waits for a late reply to pass before it reads again."""
 
 
 @dataclass(frozen=True)
@@ -149,5 +153,11 @@ def _verify(link: Link, servo_id: int, baud: int, key: str, value: int) -> None:
             f"{baud} baud; `snakebot scan --all-bauds` finds it"
         ) from None
     back = link.at(baud).read(servo_id, key)
+    if back != value:
+        # A reply that came late to one of the pings above can answer this read instead (the SDK
+        # pairs replies with requests by order only; seen over a loaded pty: 36, the low byte of
+        # model 1060): let it pass and ask once more. A value really not taken reads wrong again.
+        time.sleep(LATE_REPLY_S)
+        back = link.at(baud).read(servo_id, key)
     if back != value:
         raise VerifyError(link.port, servo_id, key, value, back)

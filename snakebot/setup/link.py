@@ -101,6 +101,12 @@ class Link:
         """The rate the port is at."""
         return self.bus.baud
 
+    def clock_s(self) -> float:
+        """Seconds on the port's clock: the SDK's ``getCurrentTime`` (wall time on a real port,
+        the emulated bus clock behind ``dxlemu://``, where time passes only with traffic)."""
+        now_ms: float = getattr(self.handler, "getCurrentTime")()  # noqa: B009 - SDK, untyped
+        return now_ms / 1000.0
+
     def at(self, baud: int) -> DynamixelBus:
         """The bus, with the port (re)opened at ``baud`` if it is not there already."""
         if not self._open or self.bus.baud != baud:

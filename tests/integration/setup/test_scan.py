@@ -82,3 +82,39 @@ def test_a_servo_that_answers_pings_only_is_listed_cleanly(snake: Bus, cli: Cli)
     assert code == 0, err
     assert [s["id"] for s in servos] == list(range(1, 13))
     assert servos[3]["duplicate"] is None and servos[3]["model"] == MODEL
+
+
+def test_a_scrambled_chain_with_servos_at_other_bauds_hints_at_all_bauds(
+    snake: Bus, cli: Cli
+) -> None:
+    """issue 19: `emulate --scramble 1` leaves servos 7 and 9 at other rates; scan found 10 of 12
+    and said nothing."""
+    from snakebot.emulation.bench import scramble
+
+    scramble(snake.chain, 1)
+    code, out, err = cli("scan", "--port", snake.url)
+    assert code == 0
+    assert "10 servo(s)" in out
+    assert "ID(s) 7, 9 did not answer, between IDs 6 and 10 that did" in err
+    assert "--all-bauds" in err
+    code, out, err = cli("scan", "--port", snake.url, "--robot", "snake12", "--json")
+    assert json.loads(out)["missing"] == [7, 9]
+    assert "snake12 has servo(s) 7, 9, which did not answer at 1000000 baud" in err
+    assert "--all-bauds" in err
+    code, out, err = cli("scan", "--port", snake.url, "--all-bauds", "--json")
+    assert code == 0 and len(json.loads(out)["servos"]) == 12 and "missing" not in err
+
+
+def test_the_robots_servos_past_the_last_one_found_are_named(snake: Bus, cli: Cli) -> None:
+    for servo_id in (11, 12):
+        snake.servo(servo_id).poke("baud_rate", 1)  # 57600, as a servo not set up yet
+    code, _, err = cli("scan", "--port", snake.url)
+    assert code == 0 and err == ""  # 1..10 without gaps: nothing to say without the robot
+    code, _, err = cli("scan", "--port", snake.url, "--robot", "snake12")
+    assert code == 0
+    assert "servo(s) 11, 12, which did not answer at 1000000 baud" in err
+
+
+def test_a_complete_chain_gets_no_hint(snake: Bus, cli: Cli) -> None:
+    code, _, err = cli("scan", "--port", snake.url, "--robot", "snake12")
+    assert (code, err) == (0, "")

@@ -12,7 +12,7 @@ from tests.integration.setup.conftest import Bus, Cli
 
 
 def test_apply_warns_about_a_servo_outside_the_limits_it_writes(snake: Bus, cli: Cli) -> None:
-    servo = snake.servo(3)  # factory limits 0..4095; the servo file wants -100..100 deg
+    servo = snake.servo(3)  # factory limits 0..4095; the servo file wants -110..110 deg
     servo.state = dataclasses.replace(servo.state, position_rad=2.5)  # 143 deg
     with pytest.warns(PositionOutsideLimitsWarning) as caught:
         code, _, err = cli("config", "apply", "--robot", "snake12", "--port", snake.url, "--yes")
@@ -20,7 +20,7 @@ def test_apply_warns_about_a_servo_outside_the_limits_it_writes(snake: Bus, cli:
     messages = [str(w.message) for w in caught]
     assert len(messages) == 1
     assert messages[0].startswith("servo 3 stands at 2.500 rad from centre")
-    assert "outside the Min/Max Position Limit -100.02..100.02 deg" in messages[0]
+    assert "outside the Min/Max Position Limit -110.039..110.039 deg" in messages[0]
     assert "Move the joint inside by hand" in messages[0]
 
 

@@ -60,9 +60,10 @@ def test_offsets_are_correct_and_written_back_keeping_comments(
 def test_a_reversed_joint_gets_the_sign_of_its_direction(
     snake: Bus, cli: Cli, robot_file: Path
 ) -> None:
-    snake.servo(3).state = replace(snake.servo(3).state, position_rad=0.3)
-    code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", snake.url, "--yes")
-    assert code == 1  # -1.5 rad would need 103 deg, beyond the +-100 deg Position Limits
+    snake.servo(3).state = replace(snake.servo(3).state, position_rad=0.45)
+    code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", snake.url, "--yes",
+                       "--max-offset-deg", "30")
+    assert code == 1  # -1.5 rad would need 112 deg, beyond the +-110 deg Position Limits
     assert "servo 3: Min/Max Position Limit" in err and "widen the Position Limits" in err
     snake.servo(3).state = replace(snake.servo(3).state, position_rad=0.1)
     assert cli("calibrate", "--robot", str(robot_file), "--port", snake.url, "--yes")[0] == 0

@@ -27,7 +27,7 @@ def test_apply_then_diff_then_run_on_a_scrambled_chain(cli: Cli) -> None:
         assert code == 0, err
         assert cli("config", "diff", "--robot", "snake12", "--port", port)[0] == 0
         code, out, err = cli("run", "--robot", "snake12", "--backend", "dynamixel", "--port",
-                             port, "--duration", "1", "--json")
+                             port, "--gait", "sidewinding", "--duration", "1", "--json")
         assert code == 0, err
         assert json.loads(out)["control_cycles"] > 50
 

@@ -28,7 +28,7 @@ IDS = [" ".join(path) for path, _ in LEAVES]
 OUTPUT_OPTIONS = ("--out", "--log", "--video", "--report", "--record")
 # Reads servos but writes and moves nothing: lists what answers before any robot file exists.
 NO_ROBOT_NEEDED = {("scan",)}
-VALUES = {"to": "3", "id": "1"}
+VALUES = {"to": "3", "id": "1", "torque": "off", "angle": "10"}
 
 
 def options(parser: argparse.ArgumentParser) -> dict[str, argparse.Action]:
@@ -218,8 +218,10 @@ def snake12_bus() -> EmulatedChain:
         ["servo", "reboot", "--all"],
         ["servo", "reset", "--id", "4"],
         ["config", "assign-id", "--from", "4", "--to", "20"],
+        ["servo", "torque", "off"],
+        ["servo", "jog", "4", "15"],
     ],
-    ids=["servo reboot", "servo reset", "config assign-id"],
+    ids=["servo reboot", "servo reset", "config assign-id", "servo torque", "servo jog"],
 )
 def test_dry_run_on_servos_writes_no_register(
     argv: list[str], capsys: pytest.CaptureFixture[str]

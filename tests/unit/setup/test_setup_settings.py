@@ -26,7 +26,7 @@ def test_shipped_robots_have_valid_settings(name: str) -> None:
     assert first["return_delay_time"] == 0
     assert first["baud_rate"] == 3  # 1 Mbps, from [bus] baud
     assert (first["operating_mode"], first["drive_mode"], first["homing_offset"]) == (3, 0, 0)
-    assert (first["min_position_limit"], first["max_position_limit"]) == (910, 3186)
+    assert (first["min_position_limit"], first["max_position_limit"]) == (796, 3300)  # ±110 deg
     # [gains] holds registers; loaded into SI and turned back into the same registers.
     gains = (first["position_p_gain"], first["position_i_gain"], first["position_d_gain"])
     assert gains == (640, 0, 4000)
@@ -76,7 +76,7 @@ def test_bad_robot_settings_name_file_and_key(
     [
         ("drive_mode = 0 ", "drive_mode = 1 ", "reverse bit"),
         ("operating_mode = 3 ", "operating_mode = 4 ", "needs 3"),
-        ("max_position_limit_deg = 100", "max_position_limit_deg = 80", "do not cover joint 0"),
+        ("max_position_limit_deg = 110", "max_position_limit_deg = 80", "do not cover joint 0"),
     ],
 )
 def test_settings_that_run_would_refuse_are_rejected(
