@@ -121,7 +121,7 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     def number(table: Table, key: str, default: float | None = None) -> float:
         return table.number(key, default, within=limits[f"{table.path}.{key}"])
 
-    name = root.text("name", path.stem)
+    name = root.name("name", path.stem)
     servo = load_servo_model(root.text("servo"), path)
     control_table = servo_table(servo.name, servo.source)
 

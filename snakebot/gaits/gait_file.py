@@ -5,12 +5,12 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from snakebot.config.fields import read_toml, shown_key
 from snakebot.errors import ConfigError, GaitError
 from snakebot.gaits.registry import gait_names, get_spec
 from snakebot.gaits.spec import coerce_value
@@ -31,20 +31,15 @@ _ESCAPES = {
 def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, object]]:
     """Read (gait name, typed params, meta) from a gait file; ConfigError names file and key."""
     source = Path(path)
-    try:
-        data = tomllib.loads(source.read_bytes().decode("utf-8"))
-    except OSError as exc:
-        raise ConfigError(source, "", f"cannot read gait file: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigError(source, "", f"not UTF-8 text ({exc.reason})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(source, "", f"invalid TOML: {exc}") from exc
+    data = read_toml(source)
     for key in data:
         if key not in _TOP_KEYS:
-            raise ConfigError(source, key, "unknown key; a gait file has gait, [params] and [meta]")
+            raise ConfigError(source, shown_key(key),
+                              "unknown key; a gait file has gait, [params] and [meta]")
     name = data.get("gait")
     if not isinstance(name, str) or name not in gait_names():
-        problem = "missing" if name is None else f"unknown gait {name!r}"
+        shown = name[:100] if isinstance(name, str) else name
+        problem = "missing" if name is None else f"unknown gait {shown!r}"
         raise ConfigError(source, "gait", f"{problem}; expected one of {', '.join(gait_names())}")
     raw_params = data.get("params", {})
     if not isinstance(raw_params, dict):
@@ -55,7 +50,7 @@ def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, 
         try:
             params[key] = coerce_value(name, spec.param(key), value)
         except GaitError as exc:
-            raise ConfigError(source, f"params.{key}", str(exc)) from exc
+            raise ConfigError(source, f"params.{shown_key(key)}", str(exc)) from exc
     meta = data.get("meta", {})
     if not isinstance(meta, dict):
         raise ConfigError(source, "meta", "expected a [meta] table")
