@@ -35,7 +35,7 @@ def read_input(path: str | Path, *, what: str, limit_bytes: int) -> bytes:
         # O_NONBLOCK: opening a FIFO for reading must not wait for a writer.
         fd = os.open(source, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
-        raise ConfigError(source, "", f"cannot read the {what}: {exc.strerror or exc}") from exc
+        raise ConfigError(source, "", f"cannot read {what}: {exc.strerror or exc}") from exc
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
@@ -53,7 +53,7 @@ def read_input(path: str | Path, *, what: str, limit_bytes: int) -> bytes:
             chunks.append(chunk)
             left -= len(chunk)
     except OSError as exc:
-        raise ConfigError(source, "", f"cannot read the {what}: {exc.strerror or exc}") from exc
+        raise ConfigError(source, "", f"cannot read {what}: {exc.strerror or exc}") from exc
     finally:
         os.close(fd)
     data = b"".join(chunks)
