@@ -8,6 +8,7 @@ robots first, then bodies.
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 from snakebot.config.body import (
@@ -45,12 +46,12 @@ def resolve_body_path(name_or_path: str | Path) -> Path:
     """A body file from a path, or a name looked up in ``bodies/`` on the search path."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
-        if not candidate.is_file():
+        if not os.path.lexists(candidate):  # anything else there is refused when read
             raise ConfigError(candidate, "", "body file not found")
         return candidate
     for folder in config_search_path():
         path = folder / "bodies" / f"{name_or_path}.toml"
-        if path.is_file():
+        if os.path.lexists(path):
             return path
     known = ", ".join(body_names()) or "none found"
     raise ConfigError(

@@ -16,6 +16,8 @@ from snakebot.gaits.registry import gait_names, get_spec
 from snakebot.gaits.spec import coerce_value
 
 _TOP_KEYS = ("gait", "params", "meta")
+MAX_GAIT_VALUE = 1e6
+"""Largest magnitude of a number in a gait file's [params]: 1e308 there is a typo."""
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 _ESCAPES = {
     '"': '\\"',
@@ -47,10 +49,18 @@ def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, 
     spec = get_spec(name)
     params: dict[str, object] = {}
     for key, value in raw_params.items():
+        where = f"params.{shown_key(key)}"
+        if isinstance(value, bool):
+            raise ConfigError(source, where, f"expected a number, got {value!r}")
         try:
             params[key] = coerce_value(name, spec.param(key), value)
         except GaitError as exc:
-            raise ConfigError(source, f"params.{shown_key(key)}", str(exc)) from exc
+            raise ConfigError(source, where, str(exc)) from exc
+        typed = params[key]
+        numbers = typed if isinstance(typed, tuple) else (typed,)
+        if any(isinstance(v, float) and abs(v) > MAX_GAIT_VALUE for v in numbers):
+            raise ConfigError(source, where, f"expected numbers within +-{MAX_GAIT_VALUE:g} (no "
+                              f"angle, rate or length of a gait comes near), got {value!r}")
     meta = data.get("meta", {})
     if not isinstance(meta, dict):
         raise ConfigError(source, "meta", "expected a [meta] table")
