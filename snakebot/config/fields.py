@@ -150,7 +150,7 @@ class Table:
         if not isinstance(value, str):
             raise self.error(key, f"expected a string, got {_short(value)}")
         if not value.strip():
-            raise self.error(key, f"expected a non-empty string, got {value!r}")
+            raise self.error(key, f"expected a non-empty string, got {_short(value)}")
         problem = text_problem(value, max_chars=max_chars)
         if problem is not None:
             raise self.error(key, problem)
