@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from snakebot.config.input_file import MAX_TEXT_CHARS, text_problem
 from snakebot.config.ports import check_port
 from snakebot.errors import ConfigError, OutputError, OutputExistsError, UsageError
 
@@ -77,6 +78,15 @@ def port_arg(text: str) -> str:
         raise argparse.ArgumentTypeError(exc.reason) from None
 
 
+def robot_arg(text: str) -> str:
+    """argparse type of ``--robot``: a robot name or file path without control or
+    bidirectional characters (they would be printed back), at most MAX_TEXT_CHARS long."""
+    problem = text_problem(text, max_chars=MAX_TEXT_CHARS)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"a robot name or file: {problem}")
+    return text
+
+
 SIM_ROBOT = "snake8"
 """The robot the twin commands use when ``--robot`` is not given; hardware commands have none."""
 
@@ -95,6 +105,7 @@ def add_robot_option(parser: argparse.ArgumentParser, *, hardware: str = "") -> 
         default = f"default {SIM_ROBOT}"
     parser.add_argument(
         "--robot",
+        type=robot_arg,
         help=f"robot name from firmware_configs/robots/ or a path to a robot .toml ({default})",
     )
 

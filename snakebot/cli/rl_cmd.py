@@ -11,7 +11,13 @@ import math
 from pathlib import Path
 from typing import Any
 
-from snakebot.cli.common import add_dry_run, positive_int, print_json, report_dry_run
+from snakebot.cli.common import (
+    add_dry_run,
+    positive_int,
+    print_json,
+    report_dry_run,
+    robot_arg,
+)
 from snakebot.errors import ConfigError, UsageError
 
 ENV_CHOICES = ("snakebot/SnakeGoal-v0", "snakebot/SnakeVelocity-v0")
@@ -60,7 +66,8 @@ def add_parser(subparsers: Any) -> None:
     compare.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0])
     compare.add_argument("--encodings", default="simple,sinusoid,dft,dft_shift",
                          help="comma-separated encodings (default the seed's four)")
-    compare.add_argument("--robot", default="snake8", help="robot name or file (default snake8)")
+    compare.add_argument("--robot", default="snake8", type=robot_arg,
+                         help="robot name or file (default snake8)")
     compare.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                          help="env setting for every run (repeatable)")
     compare.add_argument("--steps", type=positive_int, default=100_000,
@@ -79,7 +86,8 @@ def _env_options(parser: argparse.ArgumentParser) -> None:
                         help="environment (default snakebot/SnakeGoal-v0)")
     parser.add_argument("--encoding", choices=ENCODING_CHOICES, default="dft_shift",
                         help="action encoding (default dft_shift)")
-    parser.add_argument("--robot", default="snake8", help="robot name or file (default snake8)")
+    parser.add_argument("--robot", default="snake8", type=robot_arg,
+                         help="robot name or file (default snake8)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="env setting (repeatable), e.g. --set episode_s=20 "
                         "--set goal_distance_bl=2,3; see docs/learning.md")

@@ -12,7 +12,7 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from snakebot.cli.common import baud_arg, port_arg, print_json
+from snakebot.cli.common import baud_arg, port_arg, print_json, robot_arg
 from snakebot.config.loader import BAUD_RATES
 from snakebot.errors import BusError, SnakebotError, UsageError
 
@@ -28,7 +28,7 @@ def add_parser(subparsers: Any) -> None:
     """Register the ``scan`` command."""
     parser = subparsers.add_parser("scan", help="list the servos that answer on a port")
     parser.add_argument(
-        "--robot",
+        "--robot", type=robot_arg,
         help="a robot name or file whose bus.port and bus.baud fill in --port and --baud "
         "(optional: scan reads, it moves and writes nothing)",
     )

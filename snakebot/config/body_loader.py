@@ -8,6 +8,7 @@ robots first, then bodies.
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 from snakebot.config.body import (
@@ -21,13 +22,14 @@ from snakebot.config.body import (
     MuscleConfig,
     SpringConfig,
 )
+from snakebot.config.bounds import BODY
 from snakebot.config.fields import Table, read_toml
 from snakebot.config.loader import config_search_path, load_robot, resolve_robot_path, robot_names
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
 
 BODY_KIND = "mass-spring"
-MAX_SEGMENTS = 64
+MAX_SEGMENTS = int(BODY["lattice.segments"].high)
 # A point touches about nine springs; explicit spring forces need h * sqrt(9 k / m) well below 2.
 _STABLE_STEP = 1.0
 
@@ -44,12 +46,12 @@ def resolve_body_path(name_or_path: str | Path) -> Path:
     """A body file from a path, or a name looked up in ``bodies/`` on the search path."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
-        if not candidate.is_file():
+        if not os.path.lexists(candidate):  # anything else there is refused when read
             raise ConfigError(candidate, "", "body file not found")
         return candidate
     for folder in config_search_path():
         path = folder / "bodies" / f"{name_or_path}.toml"
-        if path.is_file():
+        if os.path.lexists(path):
             return path
     known = ", ".join(body_names()) or "none found"
     raise ConfigError(
@@ -88,24 +90,24 @@ def load_body(name_or_path: str | Path) -> BodyConfig:
     root = Table(path, read_toml(path))
     kind = root.text("kind", choices=(BODY_KIND,))
     assert kind == BODY_KIND
-    name = root.text("name", path.stem)
+    name = root.name("name", path.stem)
     lattice = _lattice(root.table("lattice"))
     springs = _springs(root.table("springs"))
     muscles = _muscles(root.table("muscles", required=False))
     ground_t = root.table("ground", required=False)
     ground = GroundConfig(
-        friction=ground_t.number("friction", 0.3, minimum=0.0, maximum=10.0),
+        friction=_number(ground_t, "friction", 0.3),
         directional=_boolean(ground_t, "directional", True),
     )
     ground_t.done()
     safety_t = root.table("safety", required=False)
     safety = BodySafety(
-        ramp_s=safety_t.number("ramp_s", 1.0, minimum=0.0),
+        ramp_s=_number(safety_t, "ramp_s", 1.0),
         stop_policy=safety_t.text("stop_policy", "hold", choices=("hold", "limp")),  # type: ignore[arg-type]
     )
     safety_t.done()
     twin_t = root.table("twin", required=False)
-    timestep = twin_t.number("timestep_s", 0.001, positive=True, maximum=0.005)
+    timestep = _number(twin_t, "timestep_s", 0.001)
     body = BodyConfig(name, path, lattice, springs, muscles, ground, safety, timestep)
     stiffness = body.stiffness_n_per_m
     longest = _STABLE_STEP / math.sqrt(9.0 * stiffness / lattice.point_mass_kg)
@@ -122,12 +124,12 @@ def load_body(name_or_path: str | Path) -> BodyConfig:
 
 def _lattice(table: Table) -> LatticeConfig:
     lattice = LatticeConfig(
-        segments=table.integer("segments", minimum=1, maximum=MAX_SEGMENTS),
-        segment_length_m=table.number("segment_length_m", positive=True, maximum=1.0),
-        width_m=table.number("width_m", positive=True, maximum=1.0),
-        height_m=table.number("height_m", positive=True, maximum=1.0),
-        point_mass_kg=table.number("point_mass_kg", positive=True, maximum=10.0),
-        point_radius_m=table.number("point_radius_m", positive=True),
+        segments=table.integer("segments", within=BODY["lattice.segments"]),
+        segment_length_m=_number(table, "segment_length_m"),
+        width_m=_number(table, "width_m"),
+        height_m=_number(table, "height_m"),
+        point_mass_kg=_number(table, "point_mass_kg"),
+        point_radius_m=_number(table, "point_radius_m"),
     )
     smallest = min(lattice.segment_length_m, lattice.width_m, lattice.height_m)
     if 2 * lattice.point_radius_m >= smallest:
@@ -141,7 +143,7 @@ def _lattice(table: Table) -> LatticeConfig:
 
 
 def _springs(table: Table) -> SpringConfig:
-    time_unit = table.number("time_unit_s", 0.005, positive=True, maximum=1.0)
+    time_unit = _number(table, "time_unit_s", 0.005)
     if table.has("preset"):
         preset = table.text("preset", choices=tuple(MILLER_TABLE))
         for key in ("k", "damping"):
@@ -158,8 +160,8 @@ def _springs(table: Table) -> SpringConfig:
                 f"missing: give preset (one of {', '.join(MILLER_TABLE)}) or k and damping",
             )
         springs = SpringConfig(
-            table.number("k", positive=True, maximum=1e3),
-            table.number("damping", minimum=0.0, maximum=1e3),
+            _number(table, "k"),
+            _number(table, "damping"),
             time_unit,
         )
     table.done()
@@ -170,13 +172,18 @@ def _muscles(table: Table) -> MuscleConfig:
     channels = _channels(table)
     muscles = MuscleConfig(
         channels=channels,
-        max_bend_rad=table.number("max_bend_rad", 0.6, positive=True, maximum=math.pi / 2),
-        max_contraction=table.number("max_contraction", 0.4, positive=True, maximum=0.8),
-        max_rate_per_s=table.number("max_rate_per_s", 20.0, positive=True, maximum=1e3),
+        max_bend_rad=_number(table, "max_bend_rad", 0.6),
+        max_contraction=_number(table, "max_contraction", 0.4),
+        max_rate_per_s=_number(table, "max_rate_per_s", 20.0),
         volume_preservation=_boolean(table, "volume_preservation", False),
     )
     table.done()
     return muscles
+
+
+def _number(table: Table, key: str, default: float | None = None) -> float:
+    """A number of a body table within its range in snakebot.config.bounds.BODY."""
+    return table.number(key, default, within=BODY[f"{table.path}.{key}"])
 
 
 def _channels(table: Table) -> tuple[ChannelAxis, ...]:

@@ -1,4 +1,4 @@
-"""The physically sensible range of every number in a robot or servo file.
+"""The physically sensible range of every number in a robot, servo or body file.
 
 The loader refuses a value outside its range with a ConfigError naming the file and the key, and
 docs/config.md lists the same table (a test keeps the two in step). The ranges are wide enough
@@ -91,6 +91,29 @@ SERVO: dict[str, Bounds] = {
     ),
 }
 """Servo-file (``servos/<model>.toml``) keys and their ranges."""
+
+BODY: dict[str, Bounds] = {
+    "lattice.segments": Bounds(1, 64, "", "cubes, head to tail"),
+    "lattice.segment_length_m": Bounds(0.001, 1, "m", "the relaxed cube's side along the body"),
+    "lattice.width_m": Bounds(0.001, 1, "m", "the relaxed cube's side across the body"),
+    "lattice.height_m": Bounds(0.001, 1, "m", "the relaxed cube's height"),
+    "lattice.point_mass_kg": Bounds(0.0001, 10, "kg", "each point; also Miller's mass unit"),
+    "lattice.point_radius_m": Bounds(
+        0.0001, 0.5, "m", "contact sphere; also 2 × point_radius_m < the shortest side"
+    ),
+    "springs.k": Bounds(0.001, 1000, "", "Miller's spring strength (0.3 to 1.5 in his table)"),
+    "springs.damping": Bounds(0, 1000, "", "Miller's damping (0.6 to 3.5 in his table)"),
+    "springs.time_unit_s": Bounds(0.001, 1, "s", "Miller's time unit T"),
+    "muscles.max_bend_rad": Bounds(0, math.pi / 2, "rad", "yaw and pitch limit", low_open=True),
+    "muscles.max_contraction": Bounds(0, 0.8, "", "axial strain, both ways", low_open=True),
+    "muscles.max_rate_per_s": Bounds(0.01, 1000, "", "slew limit of every channel (rad/s, 1/s)"),
+    "ground.friction": FRICTION,
+    "safety.ramp_s": ROBOT["safety.ramp_s"],
+    "twin.timestep_s": Bounds(
+        0.00001, 0.005, "s", "physics step; also timestep_s · √(9k/m) < 1 (explicit springs)"
+    ),
+}
+"""Mass-spring body-file (``bodies/<name>.toml``) keys and their ranges."""
 
 JOINT_COUNT = (2, 64)
 """Fewest and most joints a robot may have (the twin's builder is checked over this range)."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -59,12 +60,12 @@ def resolve_robot_path(name_or_path: str | Path) -> Path:
     name (listing the known robots) when there is none."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
-        if not candidate.is_file():
+        if not os.path.lexists(candidate):  # anything else there is refused when read
             raise ConfigError(candidate, "", "robot file not found")
         return candidate
     for folder in config_search_path():
         path = folder / "robots" / f"{name_or_path}.toml"
-        if path.is_file():
+        if os.path.lexists(path):
             return path
     known = ", ".join(robot_names()) or "none found"
     raise ConfigError(
@@ -121,7 +122,7 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     def number(table: Table, key: str, default: float | None = None) -> float:
         return table.number(key, default, within=limits[f"{table.path}.{key}"])
 
-    name = root.text("name", path.stem)
+    name = root.name("name", path.stem)
     servo = load_servo_model(root.text("servo"), path)
     control_table = servo_table(servo.name, servo.source)
 

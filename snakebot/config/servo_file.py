@@ -8,6 +8,7 @@ Every key is checked: ranges from snakebot.config.bounds, the model against its 
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import replace
 from pathlib import Path
@@ -39,7 +40,7 @@ def find_servo_file(model: str, folders: list[Path], robot_path: Path) -> Path:
     stem = servo_file_name(model)
     for folder in folders:
         path = folder / "servos" / f"{stem}.toml"
-        if path.is_file():
+        if os.path.lexists(path):  # a directory or FIFO there is refused when read, not skipped
             return path
     raise ConfigError(robot_path, "servo", f"no servo file servos/{stem}.toml for model {model!r}")
 

@@ -6,7 +6,7 @@ Format (``version`` 1)::
      "servos": {"3": {"model_number": 1060, "eeprom": "<hex of control-table bytes 0..63>"}}}
 
 Only EEPROM (addresses below the model's ``eeprom_end``) is kept; RAM comes back at its power-up
-defaults, as on a real servo. Files are replaced atomically.
+defaults, as on a real servo. Files are replaced atomically (temporary file, fsync, rename).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pathlib import Path
 
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.servo import VirtualServo
+from snakebot.errors import OutputError
 
 FORMAT = "snakebot-emulator-state"
 VERSION = 1
@@ -39,31 +40,63 @@ def eeprom_image(servo: VirtualServo) -> SavedServo:
     return SavedServo(servo.table.model_number, bytes(servo.memory.data[:end]))
 
 
+MAX_STATE_BYTES = 16 << 20
+"""Largest state file read (16 MiB; 253 servos' EEPROM take about 40 kB)."""
+
+
 def save_state(path: Path, servos: Iterable[VirtualServo]) -> dict[int, SavedServo]:
-    """Write every servo's EEPROM to ``path`` (atomically); returns what was written."""
+    """Write every servo's EEPROM to ``path`` atomically; returns what was written.
+
+    The new state goes to a temporary file beside ``path``, is flushed to the disk, and only
+    then replaces ``path``: a full disk or a read-only folder leaves the previous state file as
+    it was. OutputError naming ``path`` when it cannot be written, or is not a regular file
+    (a device such as /dev/full must not be replaced by a state file).
+    """
     images = {s.serial_number: eeprom_image(s) for s in servos}
     payload = {
         "format": FORMAT, "version": VERSION,
         "servos": {str(serial): {"model_number": image.model_number, "eeprom": image.eeprom.hex()}
                    for serial, image in sorted(images.items())},
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    data = (json.dumps(payload, indent=1) + "\n").encode("utf-8")
+    kept = " (the previous state file is kept)" if path.is_file() else ""
+    if os.path.lexists(path) and not path.is_file():
+        raise OutputError(path, "cannot save the emulated servos' EEPROM here: not a regular "
+                          "file; give a state file path")
+    temp: Path | None = None
     try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            json.dump(payload, out, indent=1)
-            out.write("\n")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, name = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        temp = Path(name)
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(handle, view):]
+            os.fsync(handle)
+        finally:
+            os.close(handle)
         os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
+        temp = None
+    except OSError as exc:
+        raise OutputError(path, f"cannot save the emulated servos' EEPROM: "
+                          f"{exc.strerror or exc}{kept}") from exc
+    finally:
+        if temp is not None:
+            temp.unlink(missing_ok=True)
     return images
 
 
 def load_state(path: Path) -> dict[int, SavedServo]:
-    """``{serial: SavedServo}`` from a state file; EmulationError saying what is wrong with it."""
+    """``{serial: SavedServo}`` from a state file; EmulationError saying what is wrong with it
+    (not a regular file of at most MAX_STATE_BYTES, not JSON, not a state file)."""
     try:
+        if not path.is_file():
+            raise ValueError("not a regular file")
+        if path.stat().st_size > MAX_STATE_BYTES:
+            raise ValueError(f"larger than {MAX_STATE_BYTES} bytes")
         data = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(data, Mapping):
+            raise ValueError("expected a JSON object")
         if data.get("format") != FORMAT or data.get("version") != VERSION:
             raise ValueError(f"expected format {FORMAT!r} version {VERSION}")
         servos = data["servos"]
@@ -71,7 +104,7 @@ def load_state(path: Path) -> dict[int, SavedServo]:
             raise ValueError("'servos' must be an object keyed by serial number")
         return {int(serial): SavedServo(int(entry["model_number"]), bytes.fromhex(entry["eeprom"]))
                 for serial, entry in servos.items()}
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
         raise EmulationError(f"{path}: not a usable emulator state file: {exc}") from exc
 
 

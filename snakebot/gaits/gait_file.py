@@ -5,17 +5,19 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from snakebot.config.fields import read_toml, shown_key
 from snakebot.errors import ConfigError, GaitError
 from snakebot.gaits.registry import gait_names, get_spec
 from snakebot.gaits.spec import coerce_value
 
 _TOP_KEYS = ("gait", "params", "meta")
+MAX_GAIT_VALUE = 1e6
+"""Largest magnitude of a number in a gait file's [params]: 1e308 there is a typo."""
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 _ESCAPES = {
     '"': '\\"',
@@ -31,20 +33,15 @@ _ESCAPES = {
 def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, object]]:
     """Read (gait name, typed params, meta) from a gait file; ConfigError names file and key."""
     source = Path(path)
-    try:
-        data = tomllib.loads(source.read_bytes().decode("utf-8"))
-    except OSError as exc:
-        raise ConfigError(source, "", f"cannot read gait file: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigError(source, "", f"not UTF-8 text ({exc.reason})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(source, "", f"invalid TOML: {exc}") from exc
+    data = read_toml(source)
     for key in data:
         if key not in _TOP_KEYS:
-            raise ConfigError(source, key, "unknown key; a gait file has gait, [params] and [meta]")
+            raise ConfigError(source, shown_key(key),
+                              "unknown key; a gait file has gait, [params] and [meta]")
     name = data.get("gait")
     if not isinstance(name, str) or name not in gait_names():
-        problem = "missing" if name is None else f"unknown gait {name!r}"
+        shown = name[:100] if isinstance(name, str) else name
+        problem = "missing" if name is None else f"unknown gait {shown!r}"
         raise ConfigError(source, "gait", f"{problem}; expected one of {', '.join(gait_names())}")
     raw_params = data.get("params", {})
     if not isinstance(raw_params, dict):
@@ -52,10 +49,18 @@ def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, 
     spec = get_spec(name)
     params: dict[str, object] = {}
     for key, value in raw_params.items():
+        where = f"params.{shown_key(key)}"
+        if isinstance(value, bool):
+            raise ConfigError(source, where, f"expected a number, got {value!r}")
         try:
             params[key] = coerce_value(name, spec.param(key), value)
         except GaitError as exc:
-            raise ConfigError(source, f"params.{key}", str(exc)) from exc
+            raise ConfigError(source, where, str(exc)) from exc
+        typed = params[key]
+        numbers = typed if isinstance(typed, tuple) else (typed,)
+        if any(isinstance(v, float) and abs(v) > MAX_GAIT_VALUE for v in numbers):
+            raise ConfigError(source, where, f"expected numbers within +-{MAX_GAIT_VALUE:g} (no "
+                              f"angle, rate or length of a gait comes near), got {value!r}")
     meta = data.get("meta", {})
     if not isinstance(meta, dict):
         raise ConfigError(source, "meta", "expected a [meta] table")

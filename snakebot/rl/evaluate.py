@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 
 from snakebot.control.metrics import GRAVITY_M_S2
-from snakebot.errors import OutputError
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.policy_file import load_policy
 from snakebot.rl.settings import GOAL_ENV_ID
@@ -159,18 +158,13 @@ def _hold_commands(task: Any) -> Any:
 
 
 def write_video(path: Path, frames: list[np.ndarray], fps: int) -> None:
-    """Encode RGB frames to ``path`` (imageio + ffmpeg, the ``video`` extra)."""
-    from snakebot.backends.twin.video import require_video_writer
+    """Encode RGB frames to ``path`` (imageio + ffmpeg, the ``video`` extra); OutputError
+    naming it when it cannot be written or does not read back whole (VideoWriter)."""
+    from snakebot.backends.twin.video import VideoWriter
 
-    imageio = require_video_writer()
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        writer: Any = imageio.get_writer(str(path), fps=fps, macro_block_size=8)
-        with writer:
-            for frame in frames:
-                writer.append_data(frame)
-    except (OSError, ValueError, RuntimeError) as exc:
-        raise OutputError(path, f"cannot write the video: {exc}") from exc
+    with VideoWriter(path, fps) as writer:
+        for frame in frames:
+            writer.append(frame)
 
 
 def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:

@@ -20,6 +20,7 @@ from types import TracebackType
 
 import numpy as np
 
+from snakebot.config.input_file import MAX_NAME_CHARS, read_input, text_problem
 from snakebot.errors import ConfigError, OutputError
 
 
@@ -155,17 +156,29 @@ class TelemetryLog:
         return self.values[:, index]
 
 
+MAX_LOG_BYTES = 1 << 30
+"""Largest telemetry CSV read (1 GiB: about six hours of a 12-joint snake at 100 Hz)."""
+
+MAX_LOG_VALUE = 1e9
+"""Largest magnitude of a logged value: no angle, speed, torque, position or time comes near it;
+1e308 in a log is corruption, and would overflow the summaries' squares to inf."""
+
+NAN_FREE_COLUMNS = ("time_s", "cycle")
+"""Columns that are never empty (NaN); the centre of mass is NaN on hardware, for example."""
+
+
 def read_log(path: str | Path) -> TelemetryLog:
     """Read a telemetry CSV, dropping a torn last line left by a killed writer.
 
-    ConfigError naming the file (and the line and column) if it cannot be read, is not UTF-8
-    text, or holds a value that is not a number.
+    ConfigError naming the file (and the line and column) if it is not a regular file of at
+    most MAX_LOG_BYTES, is not UTF-8 text, has a header with empty, repeated or unprintable
+    names, holds a value that is not a number, is infinite or beyond +-MAX_LOG_VALUE, a NaN in
+    ``time_s`` or ``cycle``, or a ``time_s`` that runs backwards.
     """
     source = str(path)
+    data = read_input(path, what="telemetry log", limit_bytes=MAX_LOG_BYTES)
     try:
-        text = Path(path).read_bytes().decode("utf-8")
-    except OSError as exc:
-        raise ConfigError(source, "", f"cannot read telemetry log: {_reason(exc)}") from exc
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(
             source, "", f"not a telemetry log: not UTF-8 text (byte {exc.start}: {exc.reason})"
@@ -174,6 +187,7 @@ def read_log(path: str | Path) -> TelemetryLog:
     if not lines[0]:
         raise ConfigError(source, "", "empty telemetry log (no header)")
     columns = lines[0].split(",")
+    _check_header(source, columns)
     # The last element is "" after a complete file, or a line torn by a kill: drop it either way.
     rows = [(number, line.split(",")) for number, line in enumerate(lines[1:-1], 2) if line]
     rows = [(number, cells) for number, cells in rows if len(cells) == len(columns)]
@@ -186,9 +200,51 @@ def read_log(path: str | Path) -> TelemetryLog:
                 (c, v) for c, v in zip(columns, cells, strict=True) if not _is_number(v)
             )
             raise ConfigError(
-                source, f"line {number}, column {column}", f"expected a number, got {cell!r}"
+                source, f"line {number}, column {column}", f"expected a number, got {cell[:40]!r}"
             ) from None
+    _check_values(source, columns, values, [number for number, _ in rows])
     return TelemetryLog(columns, values, source)
+
+
+def _check_header(source: str, columns: list[str]) -> None:
+    for index, name in enumerate(columns):
+        problem = text_problem(name, max_chars=MAX_NAME_CHARS) if name else "an empty name"
+        if problem is not None:
+            raise ConfigError(source, f"line 1, column {index + 1}",
+                              f"not a column name: {problem}")
+        if name in columns[:index]:
+            raise ConfigError(source, f"line 1, column {name}", "the column appears twice")
+
+
+def _check_values(
+    source: str, columns: list[str], values: np.ndarray, lines: list[int]
+) -> None:
+    def refuse(row: int, col: int, why: str) -> None:
+        raise ConfigError(source, f"line {lines[row]}, column {columns[col]}",
+                          f"{why}, got {float(values[row, col])!r}")
+
+    with np.errstate(invalid="ignore"):
+        bad = np.isinf(values) | (np.abs(values) > MAX_LOG_VALUE)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        refuse(row, col, f"expected a finite number within +-{MAX_LOG_VALUE:g}")
+    for name in NAN_FREE_COLUMNS:
+        if name not in columns:
+            continue
+        col = columns.index(name)
+        missing = np.isnan(values[:, col])
+        if missing.any():
+            refuse(int(np.argmax(missing)), col, "expected a number (never empty or NaN here)")
+    if "time_s" in columns and len(values) > 1:
+        col = columns.index("time_s")
+        backwards = np.diff(values[:, col]) < 0
+        if backwards.any():
+            row = int(np.argmax(backwards)) + 1
+            raise ConfigError(
+                source, f"line {lines[row]}, column time_s",
+                f"time runs backwards: {float(values[row, col])!r} s after "
+                f"{float(values[row - 1, col])!r} s",
+            )
 
 
 def _is_number(text: str) -> bool:

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot import __version__
+from snakebot.config.input_file import MAX_TEXT_CHARS, read_input, text_problem
 from snakebot.errors import ConfigError, OutputError
 
 FORMAT = "snakebot-telemetry-csv"
@@ -137,23 +138,101 @@ def write_sidecar(
     return path
 
 
+MAX_SIDECAR_BYTES = 16 << 20
+"""Largest sidecar read (16 MiB; snakebot writes a few kB)."""
+
+
 def read_sidecar(log_path: str | Path) -> dict[str, Any] | None:
-    """The sidecar of ``log_path``, or None when there is none; ConfigError naming it when it
-    is not a snakebot sidecar (not JSON, not an object)."""
+    """The sidecar of ``log_path``, or None when there is none.
+
+    ConfigError naming the sidecar and the key when it is not a snakebot sidecar: not a regular
+    file of at most MAX_SIDECAR_BYTES, not UTF-8 JSON (or nested too deeply to parse), not an
+    object, or a field the log commands read (``rate_hz``, ``robot``, ``gait``, ...) of the
+    wrong type or out of range.
+    """
     path = sidecar_path(log_path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
+    if not os.path.lexists(path):
         return None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(path, "", f"cannot read the log's sidecar: {exc}") from exc
+    data = read_input(path, what="log sidecar", limit_bytes=MAX_SIDECAR_BYTES)
     try:
-        payload = json.loads(text)
+        payload = json.loads(data.decode("utf-8"), parse_constant=_no_constant)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})") from None
     except json.JSONDecodeError as exc:
         raise ConfigError(path, f"line {exc.lineno}", f"not JSON: {exc.msg}") from None
+    except RecursionError:
+        raise ConfigError(path, "", "not a sidecar: JSON nested too deeply to read") from None
+    except ValueError as exc:  # NaN/Infinity, or an integer of more digits than Python converts
+        raise ConfigError(path, "", f"not a sidecar: {exc}") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise ConfigError(path, "format", f"expected a {FORMAT!r} sidecar")
+    _check_fields(path, payload)
     return payload
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+_TEXT_FIELDS = ("command", "backend", "created_utc", "snakebot_version", "log")
+
+
+def _check_fields(path: Path, payload: dict[str, Any]) -> None:
+    """The fields the log commands read have the types snakebot writes them with."""
+
+    def refuse(key: str, expected: str, value: Any) -> None:
+        shown = repr(value)
+        shown = shown if len(shown) <= 80 else shown[:80] + "..."
+        raise ConfigError(path, key, f"expected {expected}, got {shown}")
+
+    def text(key: str, value: Any) -> None:
+        if not isinstance(value, str) or text_problem(value, max_chars=MAX_TEXT_CHARS):
+            refuse(key, "a string without control or bidirectional characters", value)
+
+    def number(key: str, value: Any, low: float, high: float) -> None:
+        if isinstance(value, bool) or not isinstance(value, int | float) or not (
+            low <= value <= high
+        ):
+            refuse(key, f"a number in [{low:g}, {high:g}]", value)
+
+    for key in _TEXT_FIELDS:
+        if key in payload:
+            text(key, payload[key])
+    if "rate_hz" in payload:
+        number("rate_hz", payload["rate_hz"], 1e-3, 1e5)
+    if "duration_s" in payload and payload["duration_s"] is not None:
+        number("duration_s", payload["duration_s"], 0, 1e9)
+    robot = payload.get("robot", {})
+    if not isinstance(robot, dict):
+        refuse("robot", "an object", robot)
+    for key in ("name", "source", "servo_model"):
+        if key in robot:
+            text(f"robot.{key}", robot[key])
+    if "joint_count" in robot and (
+        isinstance(robot["joint_count"], bool) or not isinstance(robot["joint_count"], int)
+        or not 0 <= robot["joint_count"] <= 10_000
+    ):
+        refuse("robot.joint_count", "an integer in [0, 10000]", robot["joint_count"])
+    ids = robot.get("servo_ids", [])
+    if not isinstance(ids, list) or not all(
+        isinstance(i, int) and not isinstance(i, bool) and 0 <= i <= 252 for i in ids
+    ):
+        refuse("robot.servo_ids", "a list of servo IDs (0 to 252)", ids)
+    link = robot.get("link", {})
+    if not isinstance(link, dict):
+        refuse("robot.link", "an object", link)
+    if "mass_kg" in link:
+        number("robot.link.mass_kg", link["mass_kg"], 0, 1e6)
+    gaits = [payload["gait"]] if "gait" in payload else []
+    if "gaits" in payload:
+        if not isinstance(payload["gaits"], list):
+            refuse("gaits", "a list of objects", payload["gaits"])
+        gaits += payload["gaits"]
+    for gait in gaits:
+        if not isinstance(gait, dict):
+            refuse("gait", "an object with the gait's name and params", gait)
+        if "name" in gait:
+            text("gait.name", gait["name"])
 
 
 def _jsonable(value: Any) -> Any:

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import os
+import resource
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -125,3 +127,25 @@ def test_video_without_imageio_leaves_an_existing_log_untouched(
     assert "pip install 'snakebot[video]'" in err
     assert log.read_text() == "time_s,joint\n0.0,0.1\n"
     assert not (tmp_path / "run.mp4").exists()
+
+
+def _file_size_limit(limit: int) -> Callable[[], None]:
+    def apply() -> None:  # in the child: a disk that is full after ``limit`` bytes of a file
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return apply
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_FSIZE, EGL")
+def test_a_video_the_disk_cannot_finish_is_exit_1_not_wrote_n_frames(tmp_path: Path) -> None:
+    # The campaign's full disk: ffmpeg says "Error writing trailer", the file is unreadable.
+    # RLIMIT_FSIZE makes the same failure honestly: writes past 4 kB fail (EFBIG), as ENOSPC.
+    video = tmp_path / "run.mp4"
+    done = subprocess.run(
+        [sys.executable, "-m", "snakebot", "run", "--duration", "1", "--video", str(video)],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path,
+        preexec_fn=_file_size_limit(4096),
+    )
+    assert done.returncode == 1, done.stderr
+    assert f"snakebot: error: {video}: " in done.stderr
+    assert "wrote" not in done.stderr and "internal error" not in done.stderr

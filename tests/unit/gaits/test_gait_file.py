@@ -81,7 +81,7 @@ def _write(tmp_path: Path, text: str) -> Path:
         ('gait = "serpenoid"\nparams = 3\n', "params", "[params] table"),
         ('gait = "serpenoid"\nmeta = 3\n', "meta", "[meta] table"),
         ('gait = "serpenoid"\nparms = {}\n', "parms", "unknown key"),
-        ('gait = "serpenoid\n', "", "invalid TOML"),
+        ('gait = "serpenoid\n', "", "not valid TOML"),
     ],
 )
 def test_bad_file_raises_config_error_naming_the_key(

@@ -118,3 +118,68 @@ def test_a_missing_column_names_file_and_column(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="missing column") as info:
         read_log(path).column("time_s")
     assert (info.value.source, info.value.key) == (str(path), "time_s")
+
+
+def _log(tmp_path: Path, rows: int = 4) -> Path:
+    path = tmp_path / "run.csv"
+    with CsvTelemetryWriter(path, 2) as log:
+        for cycle in range(rows):
+            q = np.full(2, 0.1 * cycle)
+            log.write(cycle * 0.01, cycle, q, q, q, q, np.zeros(3))
+    return path
+
+
+def _set_cell(path: Path, line: int, column: str, value: str) -> None:
+    lines = path.read_text().split("\n")
+    index = lines[0].split(",").index(column)
+    cells = lines[line - 1].split(",")
+    cells[index] = value
+    lines[line - 1] = ",".join(cells)
+    path.write_text("\n".join(lines))
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "reason"),
+    [
+        ("time_s", "nan", "never empty or NaN"),
+        ("cycle", "nan", "never empty or NaN"),
+        ("position_rad_1", "1e308", "finite number within"),
+        ("effort_nm_0", "-inf", "finite number within"),
+        ("time_s", "inf", "finite number within"),
+        ("time_s", "0.0", "time runs backwards"),
+    ],
+)
+def test_a_corrupt_value_names_file_line_and_column(
+    tmp_path: Path, column: str, value: str, reason: str
+) -> None:
+    path = _log(tmp_path)
+    _set_cell(path, 4, column, value)  # line 4: the third row, time 0.02 s
+    with pytest.raises(ConfigError) as info:
+        read_log(path)
+    assert (info.value.source, info.value.key) == (str(path), f"line 4, column {column}")
+    assert reason in info.value.reason
+
+
+def test_nan_where_the_hardware_has_no_value_still_reads(tmp_path: Path) -> None:
+    path = _log(tmp_path)
+    _set_cell(path, 3, "com_x_m", "nan")
+    assert np.isnan(read_log(path).column("com_x_m")[1])
+
+
+@pytest.mark.parametrize("header", ["time_s,,cycle", "time_s,time_s", "time_s,cy\u202ecle"])
+def test_a_header_that_is_not_column_names_is_refused(tmp_path: Path, header: str) -> None:
+    path = tmp_path / "run.csv"
+    path.write_text(header + "\n")
+    with pytest.raises(ConfigError) as info:
+        read_log(path)
+    assert info.value.source == str(path) and info.value.key.startswith("line 1, column ")
+
+
+def test_only_a_regular_file_is_read(tmp_path: Path) -> None:
+    # /dev/zero would be read without end; a FIFO with no writer would block for ever.
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    for path in (Path("/dev/zero"), fifo, tmp_path):
+        with pytest.raises(ConfigError, match="not a regular file") as info:
+            read_log(path)
+        assert info.value.source == str(path)
