@@ -190,8 +190,8 @@ def refuse_replacing_in(folder: Path, names: Sequence[str], what: str, *, force:
     if found:
         raise OutputExistsError(
             folder,
-            f"holds a {what} ({', '.join(found)}) that would be replaced: pass --force to "
-            "replace it, or name another folder",
+            f"holds the {what} files {', '.join(found)}, which would be replaced: pass --force "
+            "to replace them, or name another folder",
         )
 
 

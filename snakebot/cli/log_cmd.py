@@ -73,7 +73,7 @@ def run_plot(args: argparse.Namespace) -> int:
     pyplot()  # a missing matplotlib is said before the log is read
     log, sidecar = _load(args.log)
     folder = args.out or args.log.with_name(args.log.stem + "_plots")
-    check_folder(folder, "plots", replaces=PLOT_FILES, force=args.force)
+    check_folder(folder, "plot", replaces=PLOT_FILES, force=args.force)
     if args.dry_run:
         return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": folder})
     make_folder(folder, "plots")
@@ -125,6 +125,9 @@ def run_info(args: argparse.Namespace) -> int:
     return 0
 
 
+FORMAT_NAMES = {"mcap": "MCAP", "parquet": "Parquet"}
+
+
 def export_path(log: Path, fmt: str) -> Path:
     """``log export``'s default output: the log's name with ``.export.FORMAT``
     (``drive.csv`` -> ``drive.export.mcap``), never the ``drive.mcap`` a ``--mcap`` recording
@@ -144,7 +147,7 @@ def run_export(args: argparse.Namespace) -> int:
     if out.resolve() == args.log.resolve():
         raise ConfigError("--out", "", f"{out} is the log itself; name another file")
     log, sidecar = _load(args.log)
-    check_writable(out, f"{args.format} file", force=args.force)
+    check_writable(out, f"{FORMAT_NAMES[args.format]} file", force=args.force)
     if args.dry_run:
         return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": out,
                                      "format": args.format})
