@@ -9,8 +9,9 @@ from typing import Any
 
 from snakebot.cli.common import (
     add_bus_options,
+    add_force_option,
     add_robot_option,
-    check_writable,
+    check_robot_copy,
     copy_for_write,
     positive_float,
     print_json,
@@ -39,6 +40,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--dry-run", action="store_true", help="show the offsets, write nothing")
     parser.add_argument("--out", type=Path, metavar="FILE",
                         help="write a copy of the robot file with the new offsets here")
+    add_force_option(parser)
     parser.add_argument("--yes", action="store_true", help="write without asking")
     parser.add_argument("--json", action="store_true", help="print the offsets as JSON")
     parser.set_defaults(handler=run, writes=True)
@@ -54,8 +56,7 @@ def run(args: argparse.Namespace) -> int:
             "(--robot FILE.toml) or give --out FILE; a robot named by name may be a file "
             "installed with snakebot, which it never writes"
         )
-    if args.out is not None:
-        check_writable(args.out, "robot file")
+    check_robot_copy(args, robot.source)
     chain = load_settings(robot)
     port = args.port or robot.bus.port
     with Link(port, chain.baud, model=robot.servo.name) as link:

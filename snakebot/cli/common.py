@@ -132,15 +132,21 @@ def print_json(payload: object) -> None:
     sys.stdout.flush()
 
 
-def check_writable(path: Path, what: str) -> None:
+def check_writable(path: Path, what: str, *, force: bool) -> None:
     """OutputError now if file ``path`` cannot be written (its writer opens it only later).
 
-    Creates the file's folder; leaves the file as it was (absent stays absent).
+    The output rule comes first: an existing file at ``path`` is refused (OutputExistsError)
+    unless ``force``. The file's folder must exist: a typo in a folder name is refused, not
+    made. Leaves everything as it was (absent stays absent).
     """
+    refuse_replacing(path, what, force=force)
     try:
         if path.is_dir():
             raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
-        _make_folder(path.parent)
+        missing = _missing_folder(path.parent)
+        if missing is not None:
+            raise OutputError(path, f"cannot write the {what}: folder {missing} does not exist "
+                              "(create it first, or name another)")
         existed = path.exists()
         with path.open("ab"):
             pass
@@ -148,6 +154,17 @@ def check_writable(path: Path, what: str) -> None:
             path.unlink()
     except OSError as exc:
         raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def _missing_folder(folder: Path) -> Path | None:
+    """The outermost folder of ``folder``'s path that does not exist (None: it all exists);
+    NotADirectoryError for a file in the way."""
+    for above in (folder, *folder.parents):
+        if above.exists():
+            if not above.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(above))
+            break
+    return next((f for f in reversed((folder, *folder.parents)) if not f.exists()), None)
 
 
 def add_force_option(parser: argparse.ArgumentParser) -> None:
@@ -166,7 +183,7 @@ def refuse_replacing(path: Path, what: str, *, force: bool) -> None:
     The rule for every output: no command replaces an existing file unless told to. Call it
     before anything is written or any servo moves, so a refused run changes nothing.
     """
-    if force or not (path.exists() or path.is_symlink()):
+    if force or not path.is_file():  # a device (/dev/null) or a pipe holds nothing to lose
         return
     raise OutputExistsError(
         path,
@@ -184,17 +201,37 @@ def refuse_replacing_in(folder: Path, names: Sequence[str], what: str, *, force:
     if found:
         raise OutputExistsError(
             folder,
-            f"holds a {what} ({', '.join(found)}) that would be replaced: pass --force to "
-            "replace it, or name another folder",
+            f"holds the {what} files {', '.join(found)}, which would be replaced: pass --force "
+            "to replace them, or name another folder",
         )
 
 
-def check_folder(path: Path, what: str) -> None:
-    """OutputError now if files cannot be written into folder ``path`` (created if missing)."""
+def check_folder(path: Path, what: str, *, replaces: Sequence[str], force: bool) -> None:
+    """OutputError now if files cannot be written into folder ``path``.
+
+    The output rule first: OutputExistsError when the folder holds any of ``replaces`` (the
+    files the command writes there) unless ``force``. A missing folder is fine (the command
+    makes it when it writes; it is snakebot's output folder, not a user's file) as long as the
+    nearest existing folder above it can be written; nothing is created now.
+    """
+    refuse_replacing_in(path, replaces, what, force=force)
+    try:
+        above = next(f for f in (path, *path.parents) if f.exists())
+        if not above.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(above))
+        if above == path:
+            with tempfile.TemporaryFile(dir=path):
+                pass
+        elif not os.access(above, os.W_OK | os.X_OK):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(above))
+    except OSError as exc:
+        raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
+
+
+def make_folder(path: Path, what: str) -> None:
+    """Create output folder ``path`` (and the folders above it); OutputError naming it."""
     try:
         _make_folder(path)
-        with tempfile.TemporaryFile(dir=path):
-            pass
     except OSError as exc:
         raise OutputError(path, f"cannot write the {what}: {os_reason(exc)}") from exc
 
@@ -254,6 +291,17 @@ def robot_write_target(args: argparse.Namespace, source: Path, what: str) -> Pat
             "--out FILE (a copy) and use --robot FILE from then on"
         )
     return target
+
+
+def check_robot_copy(args: argparse.Namespace, source: Path) -> None:
+    """Check ``--out FILE`` (a copy of robot file ``source`` with new values) before any work:
+    an existing FILE is refused without ``--force``. ``--out`` naming the robot file itself
+    writes into it, as ``--robot FILE`` alone does (the name says so)."""
+    out: Path | None = getattr(args, "out", None)
+    if out is None:
+        return
+    same = out.exists() and out.resolve() == source.resolve()
+    check_writable(out, "robot file", force=same or args.force)
 
 
 def copy_for_write(source: Path, target: Path) -> None:

@@ -23,14 +23,18 @@ from snakebot.cli.backend_options import (
 from snakebot.cli.common import (
     add_dry_run,
     add_robot_option,
-    check_writable,
     gait_list_arg,
     positive_float,
     print_json,
     report_dry_run,
     robot_name,
 )
-from snakebot.cli.telemetry_options import add_telemetry_options, drive_observer, open_telemetry
+from snakebot.cli.telemetry_options import (
+    add_telemetry_options,
+    check_outputs,
+    drive_observer,
+    open_telemetry,
+)
 from snakebot.config import RobotConfig, load_robot
 from snakebot.drive.controller import DriveController, GaitChoice
 from snakebot.drive.loop import DriveObserver, DriveResult
@@ -195,10 +199,8 @@ def run(args: argparse.Namespace) -> int:
     source = make_source(args)
     if args.script is None or args.foxglove is not None:  # a person drives or watches
         given = watched(spec, given)
+    check_outputs(args, (args.record, "recording"))  # before anything is written or moves
     if args.dry_run:
-        for path, what in ((args.log, "log"), (args.record, "script")):
-            if path is not None:
-                check_writable(path, what)
         return report_dry_run(args, {
             "robot": robot.name, "gaits": ",".join(c.name for c in choices),
             "backend": spec.name, "log": args.log, "record": args.record,

@@ -10,8 +10,10 @@ from typing import Any
 
 from snakebot.cli.common import (
     add_dry_run,
+    add_force_option,
     check_folder,
     check_writable,
+    make_folder,
     print_json,
     report_dry_run,
 )
@@ -35,6 +37,7 @@ def add_parser(subparsers: Any) -> None:
     plot.add_argument("--out", type=Path, help="folder for the PNGs (default: LOG without "
                       ".csv, plus _plots)")
     plot.add_argument("--json", action="store_true", help="list the PNGs as JSON")
+    add_force_option(plot)
     add_dry_run(plot, "no PNGs")
     plot.set_defaults(handler=run_plot, writes=True)
 
@@ -46,8 +49,9 @@ def add_parser(subparsers: Any) -> None:
     export = actions.add_parser("export", help="write the log as MCAP (Foxglove) or Parquet")
     export.add_argument("log", type=Path, help="telemetry CSV")
     export.add_argument("--format", choices=("mcap", "parquet"), required=True)
-    export.add_argument("--out", type=Path, help="output file (default: LOG with the "
-                        "format's suffix)")
+    export.add_argument("--out", type=Path, help="output file (default: LOG's name with "
+                        ".export.mcap or .export.parquet: drive.csv -> drive.export.mcap)")
+    add_force_option(export)
     export.add_argument("--json", action="store_true", help="print what was written as JSON")
     add_dry_run(export, "no output file")
     export.set_defaults(handler=run_export, writes=True)
@@ -64,14 +68,15 @@ def _load(path: Path) -> tuple[TelemetryLog, dict[str, Any] | None]:
 
 def run_plot(args: argparse.Namespace) -> int:
     """Write the PNGs and list them."""
-    from snakebot.telemetry.plots import plot_log, pyplot
+    from snakebot.telemetry.plots import PLOT_FILES, plot_log, pyplot
 
     pyplot()  # a missing matplotlib is said before the log is read
     log, sidecar = _load(args.log)
     folder = args.out or args.log.with_name(args.log.stem + "_plots")
+    check_folder(folder, "plot", replaces=PLOT_FILES, force=args.force)
     if args.dry_run:
         return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": folder})
-    check_folder(folder, "plots")
+    make_folder(folder, "plots")
     start = time.perf_counter()
     paths = plot_log(log, sidecar, folder)
     if args.json:
@@ -120,6 +125,16 @@ def run_info(args: argparse.Namespace) -> int:
     return 0
 
 
+FORMAT_NAMES = {"mcap": "MCAP", "parquet": "Parquet"}
+
+
+def export_path(log: Path, fmt: str) -> Path:
+    """``log export``'s default output: the log's name with ``.export.FORMAT``
+    (``drive.csv`` -> ``drive.export.mcap``), never the ``drive.mcap`` a ``--mcap`` recording
+    beside it is usually called."""
+    return log.with_name(f"{log.stem}.export.{fmt}")
+
+
 def run_export(args: argparse.Namespace) -> int:
     """Write the MCAP or Parquet file."""
     from snakebot.telemetry.export import export_mcap, export_parquet
@@ -128,14 +143,14 @@ def run_export(args: argparse.Namespace) -> int:
         from snakebot.telemetry.foxglove_live import foxglove_module
 
         foxglove_module()  # a missing SDK is said before the log is read
-    out = args.out or args.log.with_suffix(f".{args.format}")
+    out = args.out or export_path(args.log, args.format)
     if out.resolve() == args.log.resolve():
         raise ConfigError("--out", "", f"{out} is the log itself; name another file")
     log, sidecar = _load(args.log)
+    check_writable(out, f"{FORMAT_NAMES[args.format]} file", force=args.force)
     if args.dry_run:
         return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": out,
                                      "format": args.format})
-    check_writable(out, f"{args.format} file")
     export = export_mcap if args.format == "mcap" else export_parquet
     rows = export(log, sidecar, out)
     if args.json:

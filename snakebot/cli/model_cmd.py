@@ -14,6 +14,7 @@ from snakebot.backends.twin.model_builder import (
 )
 from snakebot.cli.common import (
     add_dry_run,
+    add_force_option,
     add_robot_option,
     check_writable,
     os_reason,
@@ -44,6 +45,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--terrain", metavar="NAME[:KEY=VALUE,...]", help=TERRAIN_HELP)
     add_terrain_options(parser, terrain=False)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    add_force_option(parser)
     add_dry_run(parser, "no MJCF file")
     parser.set_defaults(handler=run, writes=True)
 
@@ -51,7 +53,7 @@ def add_parser(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Build the model exactly as the twin does and write it as XML."""
     robot = load_robot_or_body(robot_name(args, hardware=False, what="model"))
-    check_writable(args.out, "model")
+    check_writable(args.out, "model", force=args.force)
     if isinstance(robot, BodyConfig):
         from snakebot.cli.softbody_options import describe_body, softbody_spec
 

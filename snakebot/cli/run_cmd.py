@@ -26,14 +26,13 @@ from snakebot.cli.common import (
     RATE_HZ,
     add_dry_run,
     add_robot_option,
-    check_writable,
     gait_arg,
     positive_float,
     print_json,
     report_dry_run,
     robot_name,
 )
-from snakebot.cli.telemetry_options import add_telemetry_options, open_telemetry
+from snakebot.cli.telemetry_options import add_telemetry_options, check_outputs, open_telemetry
 from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, TERRAIN_HELP
 from snakebot.errors import ConfigError, OutputError, UsageError
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
@@ -187,13 +186,14 @@ def run(args: argparse.Namespace) -> int:
             "",
             f"renders the simulation: it needs a simulated backend, not {spec.name}",
         )
-    # Outputs open before the backend connects: one that cannot be written stops the run before
-    # a servo moves. Written rows stay on disk whatever ends the run.
+    # Outputs are checked before anything opens and open before the backend connects: one
+    # that exists (without --force) or cannot be written stops the run before a file is
+    # touched or a servo moves. Written rows stay on disk whatever ends the run.
+    if args.video and args.video.suffix.lower() not in VIDEO_SUFFIXES:
+        raise ConfigError("--video", str(args.video), "expected a video file name ending in "
+                          f"{', '.join(VIDEO_SUFFIXES)}")
+    check_outputs(args, (args.video, "video"))
     if args.video:
-        if args.video.suffix.lower() not in VIDEO_SUFFIXES:
-            raise ConfigError("--video", str(args.video), "expected a video file name ending in "
-                              f"{', '.join(VIDEO_SUFFIXES)}")
-        check_writable(args.video, "video")
         from snakebot.backends.twin.video import require_video_writer
 
         require_video_writer()  # before --log opens, like every other check
@@ -202,8 +202,6 @@ def run(args: argparse.Namespace) -> int:
 
         check_display()  # before --log opens: a refused run leaves an existing log as it was
     if args.dry_run:
-        if args.log:
-            check_writable(args.log, "log")
         return report_dry_run(args, {
             "robot": snake.robot.name, "gait": gait_name, "backend": spec.name,
             "duration_s": args.duration, "rate_hz": args.rate, "log": args.log,

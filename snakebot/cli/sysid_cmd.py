@@ -15,9 +15,11 @@ from snakebot.cli.backend_options import (
     given_options,
 )
 from snakebot.cli.common import (
+    add_force_option,
     add_robot_option,
     add_write_back_options,
     check_folder,
+    check_robot_copy,
     check_writable,
     copy_for_write,
     finite_float,
@@ -35,6 +37,8 @@ from snakebot.config.schema import MAX_ACTUATOR_DELAY_S
 from snakebot.errors import UsageError
 
 RECORD_BACKEND_OPTIONS = ("port", "baud")
+REPORT_FILES = ("summary.json", "replay.png")
+"""What ``--report DIR`` writes into DIR."""
 
 
 def add_parser(subparsers: Any) -> None:
@@ -61,6 +65,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--max-evaluations", type=positive_int, default=40, metavar="N")
     add_write_back_options(parser, "servo parameters")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
+    add_force_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     group = parser.add_argument_group("recording a log (--record)")
     group.add_argument("--record", type=Path, metavar="LOG", help="record a chirp log and exit")
@@ -94,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         robot_name(args, hardware=hardware, what=f"sysid --record --backend {args.backend}")
     )
     if args.record is not None:
-        check_writable(args.record, "log")
+        check_writable(args.record, "log", force=args.force)
         if args.dry_run:
             return report_dry_run(args, {
                 "robot": robot.name, "backend": args.backend, "record": args.record,
@@ -102,10 +107,9 @@ def run(args: argparse.Namespace) -> int:
                 "duration_s": args.duration,
             })
         return _record(robot, args)
+    check_robot_copy(args, robot.source)
     if args.report is not None:
-        check_folder(args.report, "report")
-    if args.out is not None:
-        check_writable(args.out, "robot file")
+        check_folder(args.report, "report", replaces=REPORT_FILES, force=args.force)
     target = robot_write_target(args, robot.source, "the servo parameters")
     if not args.logs:
         raise UsageError("give one or more telemetry logs (LOG ...), or --record LOG")

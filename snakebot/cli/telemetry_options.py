@@ -13,7 +13,7 @@ from typing import Any
 
 from snakebot.backends.base import Backend
 from snakebot.cli.backend_options import backend_spec
-from snakebot.cli.common import check_writable
+from snakebot.cli.common import add_force_option, check_writable
 from snakebot.errors import OutputError
 from snakebot.telemetry import CsvTelemetryWriter, column_names
 from snakebot.telemetry.sink import CycleLog, combine
@@ -53,6 +53,22 @@ def add_telemetry_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--mcap", type=Path, metavar="FILE", help="record the Foxglove channels to an MCAP file"
     )
+    add_force_option(parser)
+
+
+def check_outputs(args: argparse.Namespace, *others: tuple[Path | None, str]) -> None:
+    """Refuse, before anything is written or moves, every output of ``run``/``drive`` that
+    exists (without ``--force``) or cannot be written: ``--log`` and its JSON sidecar,
+    ``--mcap``, and ``others`` (path or None, what it is)."""
+    from snakebot.telemetry.sidecar import sidecar_path
+
+    outputs: list[tuple[Path | None, str]] = [(args.log, "log")]
+    if args.log:
+        outputs.append((sidecar_path(args.log), "log's JSON sidecar"))
+    outputs += [(args.mcap, "MCAP file"), *others]
+    for path, what in outputs:
+        if path is not None:
+            check_writable(path, what, force=args.force)
 
 
 @dataclass
@@ -77,8 +93,8 @@ def open_telemetry(
 ) -> Telemetry:
     """Open what ``--log``, ``--foxglove`` and ``--mcap`` ask for, closed by ``stack``.
 
-    Call before the backend connects: a file that cannot be written, a port that cannot be
-    bound, or a missing extra stops the run before a servo moves.
+    Call before the backend connects, after :func:`check_outputs`: a port that cannot be bound
+    or a missing extra stops the run before a servo moves.
     """
     telemetry = Telemetry()
     if args.log:
@@ -114,8 +130,6 @@ def _open_foxglove(
     from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, SlowReadings, TelemetryOptions
     from snakebot.telemetry.robot_scene import robot_geometry
 
-    if args.mcap is not None:
-        check_writable(args.mcap, "MCAP file")
     options = TelemetryOptions(port=args.foxglove, host=args.foxglove_host, mcap_path=args.mcap)
     health, alerts = backend_readings(backend)
     readings = SlowReadings(health=health, alerts=alerts, overruns=lambda: backend.stats.overruns)

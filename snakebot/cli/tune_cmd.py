@@ -18,10 +18,12 @@ from snakebot.cli.backend_options import (
 )
 from snakebot.cli.common import (
     RATE_HZ,
+    add_force_option,
     add_robot_option,
     add_write_back_options,
     bounded_float,
     check_folder,
+    check_robot_copy,
     check_writable,
     copy_for_write,
     finite_float,
@@ -130,6 +132,7 @@ def _add_gait_parser(commands: Any) -> None:
     )
     parser.add_argument("--out", type=Path, help="write the best gait to this gait file (TOML)")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
+    add_force_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     parser.add_argument(
@@ -154,7 +157,7 @@ def run_gait(args: argparse.Namespace) -> int:
     from snakebot.tuning.tuner import DEFAULT_BUDGET, save_best_gait, tune_gait
 
     robot = load_robot_or_body(robot_name(args, hardware=False, what="tune gait"))
-    _check_outputs(args)
+    _check_outputs(args, robot)
     fixed = parse_set_options(args.gait, args.set)
     base = tuning_base(args.gait, robot.joint_count, fixed)
     names = [p.strip() for p in args.params.split(",")] if args.params else None
@@ -286,6 +289,7 @@ def _add_gains_parser(commands: Any) -> None:
     parser.add_argument("--no-chirp", action="store_true", help="skip the chirp measurements")
     add_write_back_options(parser, "gains")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
+    add_force_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.set_defaults(writes=True)
 
@@ -302,7 +306,7 @@ def run_gains(args: argparse.Namespace) -> int:
         robot_name(args, hardware=hardware, what=f"tune gains --backend {args.backend}")
     )
     given_options(args, spec, GAIN_BACKEND_OPTIONS)
-    _check_outputs(args)
+    _check_outputs(args, robot)
     target = robot_write_target(args, robot.source, "the gains")
     joints = tuple(range(robot.joint_count))
     if args.joints:
@@ -382,9 +386,20 @@ def _indices(option: str, text: str, count: int) -> list[int]:
     return values
 
 
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Refuse an unwritable --out or --report before any tuning (which takes minutes)."""
-    if getattr(args, "out", None) is not None:
-        check_writable(args.out, "gait file" if args.tune_command == "gait" else "robot file")
+REPORT_FILES = {
+    "gait": ("summary.json", "convergence.png", "heatmap.png"),
+    "gains": ("summary.json", "steps.png", "chirp.png"),
+}
+"""What ``--report DIR`` writes into DIR, per subcommand."""
+
+
+def _check_outputs(args: argparse.Namespace, robot: Any) -> None:
+    """Refuse an existing (without --force) or unwritable --out or --report before any tuning
+    (which takes minutes)."""
+    if args.tune_command == "gains":
+        check_robot_copy(args, robot.source)
+    elif args.out is not None:
+        check_writable(args.out, "gait file", force=args.force)
     if args.report is not None:
-        check_folder(args.report, "report")
+        check_folder(args.report, "report", replaces=REPORT_FILES[args.tune_command],
+                     force=args.force)

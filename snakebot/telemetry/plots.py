@@ -9,6 +9,7 @@ efforts.png, com_path.png (the centre of mass seen from above; twin logs only) a
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,10 @@ def pyplot() -> Any:
     import matplotlib.pyplot as plt
 
     return plt
+
+
+PLOT_FILES = ("joints.png", "tracking.png", "efforts.png", "com_path.png", "timing.png")
+"""The PNGs :func:`plot_log` writes (com_path.png only for a log with the centre of mass)."""
 
 
 def plot_log(log: TelemetryLog, sidecar: dict[str, Any] | None, folder: Path) -> list[Path]:
@@ -66,8 +71,13 @@ def _title(log: TelemetryLog, sidecar: dict[str, Any] | None) -> str:
     return f"{name}: {robot} / {what} on {sidecar.get('backend', '?')}"
 
 
+def _wrap(title: str, width_in: float) -> str:
+    """``title`` in lines that fit a figure ``width_in`` inches wide at font size 9."""
+    return textwrap.fill(title, width=int(width_in * 12), break_on_hyphens=False)
+
+
 def _save(plt: Any, fig: Any, path: Path) -> Path:
-    fig.savefig(path, dpi=DPI)
+    fig.savefig(path, dpi=DPI, bbox_inches="tight")  # labels and titles never clipped
     plt.close(fig)
     return path
 
@@ -121,18 +131,20 @@ def _per_joint(
 
 
 def _com(plt: Any, com: np.ndarray, title: str, path: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(6, 6))
+    # Square and narrow: the title wraps, and the layout makes room for it and the tick labels.
+    fig, ax = plt.subplots(figsize=(6, 6), layout="constrained")
     ax.plot(com[:, 0], com[:, 1], lw=1.5, color="tab:blue")
     ax.plot(*com[0, :2], "o", color="tab:green", label="start")
     ax.plot(*com[-1, :2], "s", color="tab:red", label="end")
     ax.set_aspect("equal", adjustable="datalim")
+    ax.locator_params(nbins=5)  # a few metres' path leaves room for five tick labels, not ten
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     distance = float(np.hypot(*(com[-1, :2] - com[0, :2])))
-    ax.set_title(f"{title}\ncentre of mass from above: {distance:.3f} m start to end", fontsize=9)
-    fig.subplots_adjust(**_MARGINS)
+    ax.set_title(f"{_wrap(title, 6)}\ncentre of mass from above: {distance:.3f} m start to end",
+                 fontsize=9)
     return _save(plt, fig, path)
 
 

@@ -134,6 +134,7 @@ def test_a_robot_named_by_name_is_never_written_out_writes_a_copy(
     assert code == 2 and out == ""
     assert "--robot FILE.toml" in err and "--out FILE" in err
     copy = tmp_path / "mine" / "snake12.toml"
+    copy.parent.mkdir()  # a file's folder must exist (cli.md: outputs)
     code, out, err = cli("calibrate", "--robot", "snake12", "--port", snake.url, "--yes",
                          "--out", str(copy))
     assert code == 0, err

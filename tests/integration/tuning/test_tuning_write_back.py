@@ -42,6 +42,7 @@ def test_tune_gains_out_writes_a_copy_and_text_says_where(
 ) -> None:
     before = shipped_digest()
     out = tmp_path / "mine" / "snake8.toml"
+    out.parent.mkdir()  # a file's folder must exist (cli.md: outputs)
     assert main([*GAINS[:-1], "--robot", "snake8", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert f"written to {out}" in text

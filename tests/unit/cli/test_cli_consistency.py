@@ -25,7 +25,7 @@ from snakebot.emulation.registry import registered
 PARSER = build_parser()
 LEAVES = list(leaf_parsers(PARSER))
 IDS = [" ".join(path) for path, _ in LEAVES]
-OUTPUT_OPTIONS = ("--out", "--log", "--video", "--report", "--record")
+OUTPUT_OPTIONS = ("--out", "--log", "--video", "--report", "--record", "--mcap")
 # Reads servos but writes and moves nothing: lists what answers before any robot file exists.
 NO_ROBOT_NEEDED = {("scan",)}
 VALUES = {"to": "3", "id": "1", "torque": "off", "angle": "10"}

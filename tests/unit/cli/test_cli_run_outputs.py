@@ -38,7 +38,8 @@ def test_a_log_on_a_full_device(capsys: pytest.CaptureFixture[str]) -> None:
 def test_a_log_under_a_file(capsys: pytest.CaptureFixture[str], blocker: Path) -> None:
     code, _, err = run(capsys, "--log", str(blocker / "run.csv"))
     assert code == 1
-    assert err == f"snakebot: error: {blocker}/run.csv: cannot write log file: Not a directory\n"
+    assert err == (f"snakebot: error: {blocker}/run.csv: cannot write the log: Not a directory "
+                   f"({blocker})\n")
 
 
 @pytest.mark.parametrize(
@@ -108,7 +109,7 @@ def test_viewer_without_a_display_leaves_an_existing_log_untouched(
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     log = tmp_path / "yesterday.csv"
     log.write_text("time_s,joint\n0.0,0.1\n")
-    code, out, err = run(capsys, "--viewer", "--log", str(log))
+    code, out, err = run(capsys, "--viewer", "--log", str(log), "--force")
     assert code == 1 and out == ""
     assert "the live viewer needs a display" in err
     assert log.read_text() == "time_s,joint\n0.0,0.1\n"
@@ -122,7 +123,8 @@ def test_video_without_imageio_leaves_an_existing_log_untouched(
     monkeypatch.setitem(sys.modules, "imageio.v2", None)
     log = tmp_path / "yesterday.csv"
     log.write_text("time_s,joint\n0.0,0.1\n")
-    code, out, err = run(capsys, "--video", str(tmp_path / "run.mp4"), "--log", str(log))
+    code, out, err = run(capsys, "--video", str(tmp_path / "run.mp4"), "--log", str(log),
+                         "--force")
     assert code == 1 and out == ""
     assert "pip install 'snakebot[video]'" in err
     assert log.read_text() == "time_s,joint\n0.0,0.1\n"
