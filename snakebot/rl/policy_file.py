@@ -162,6 +162,7 @@ META_KEYS: dict[str, Callable[[object], bool]] = {
     "final_success_rate": _number_or_null,
     "versions": lambda v: isinstance(v, dict),
     "resumed_from": lambda v: v is None or isinstance(v, dict),
+    "action": lambda v: isinstance(v, list),  # tools/rl_open_loop.py: its one constant action
 }
 MAX_DEPTH = 8  # policy.json nests two levels; far deeper is not a file training wrote
 

@@ -155,6 +155,7 @@ def test_a_good_folder_passes_the_same_checks(
 ) -> None:
     folder = good_policy(tmp_path / "policy")
     (folder / "policy.zip").write_bytes(b"not read by eval or run")  # kept only to train on
+    top("action", [0, 1, 0, 0, 0])(folder)  # what tools/rl_open_loop.py records
     for argv in COMMANDS.values():
         if "--dry-run" in argv:
             assert main([a.replace("{dir}", str(folder)) for a in argv]) == 0
