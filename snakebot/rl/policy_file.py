@@ -18,11 +18,13 @@ from typing import Any
 
 import numpy as np
 
+from snakebot.config import load_robot
 from snakebot.errors import ConfigError, OutputError
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.settings import (
     ENV_IDS,
     GOAL_ENV_ID,
+    EnvSettings,
     GoalSettings,
     VelocitySettings,
     split_kwargs,
@@ -226,6 +228,10 @@ def read_settings(folder: Path) -> tuple[str, dict[str, Any], dict[str, Any]]:
         split_kwargs(kwargs, task)
     except ConfigError as exc:
         raise ConfigError(path, f"env_kwargs.{exc.source}", exc.reason) from None
+    try:
+        load_robot(kwargs.get("robot", EnvSettings.robot))
+    except ConfigError as exc:
+        raise ConfigError(path, "env_kwargs.robot", str(exc)) from None
     return env_id, dict(kwargs), meta
 
 

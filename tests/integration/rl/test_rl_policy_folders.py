@@ -90,6 +90,7 @@ CASES: list[tuple[str, Callable[[Path], None], str, str]] = [
     ("a render_mode", setting("render_mode", "human"), "policy.json", "env_kwargs.render_mode"),
     ("an unknown setting", setting("speed", 1), "policy.json", "env_kwargs.speed"),
     ("robot a number", setting("robot", 5), "policy.json", "env_kwargs.robot"),
+    ("robot unknown", setting("robot", "no-such-robot"), "policy.json", "env_kwargs.robot"),
     ("encoding a list", setting("encoding", ["dft"]), "policy.json", "env_kwargs.encoding"),
     ("dft_bins 2.5", setting("dft_bins", 2.5), "policy.json", "env_kwargs.dft_bins"),
     ("timestep_s 1e-300", setting("timestep_s", 1e-300), "policy.json",
