@@ -188,3 +188,14 @@ def test_nothing_named_in_a_policy_folder_is_imported(tmp_path: Path) -> None:
         assert done.returncode == 1, (name, done.stderr)
         assert "shared/policy.json: env_id: expected one of snakebot/SnakeGoal-v0" in done.stderr
         assert not marker.exists(), f"{name} imported the payload"
+
+
+@pytest.mark.parametrize(("item", "key"), [("episode_s=1e308", "episode_s"),
+                                           ("timestep_s=1e-300", "timestep_s"),
+                                           ("action_hz=1e9", "action_hz")])
+def test_the_same_ranges_hold_for_a_new_training_run(
+    item: str, key: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: accepted, and episode_s=1e308 overflowed in the first episode (exit 3)
+    assert main(["rl", "train", "--set", item, "--dry-run", "--out", str(tmp_path / "x")]) == 1
+    assert f"{key}: expected" in capsys.readouterr().err
