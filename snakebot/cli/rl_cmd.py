@@ -182,7 +182,7 @@ def _check_out(out: Path) -> None:
 
 def parse_ppo(items: list[str]) -> dict[str, Any]:
     """--ppo KEY=VALUE as PPO settings, each checked (ConfigError naming --ppo and the item)."""
-    from snakebot.rl.train import check_ppo
+    from snakebot.rl.resume import check_ppo
 
     values = parse_settings(items)
     for item in items:
@@ -197,7 +197,9 @@ def parse_ppo(items: list[str]) -> dict[str, Any]:
 def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
     """The TrainSettings of ``rl train`` and its output folder (and whether it is the resumed
     policy's own); every check done, nothing written."""
-    from snakebot.rl.train import TRAIN_FILES, TrainSettings, resume_point
+    from snakebot.rl.policy_file import TRAIN_FILES
+    from snakebot.rl.resume import resume_point
+    from snakebot.rl.train import TrainSettings
 
     ppo = parse_ppo(args.ppo)
     resume = None
@@ -300,7 +302,7 @@ def run_compare(args: argparse.Namespace) -> int:
 
     runs = {e: env_kwargs(args, e) for e in encodings}
     _check_out(args.out)
-    from snakebot.rl.train import TRAIN_FILES
+    from snakebot.rl.policy_file import TRAIN_FILES
 
     refuse_replacing_in(args.out, ("compare.png", "compare.json"), "comparison",
                         force=args.force)

@@ -33,6 +33,11 @@ from snakebot.rl.settings import (
 SETTINGS_FILE = "policy.json"
 ACTOR_FILE = "actor.npz"
 MODEL_FILE = "policy.zip"
+CURVE_FILE = "learning_curve.csv"
+CURVE_FIELDS = ("steps", "wall_s", "episodes", "mean_return", "success_rate",
+                "mean_episode_steps", "steps_per_s")
+# Every file `rl train` writes into its folder: what a second run there would replace.
+TRAIN_FILES = (SETTINGS_FILE, ACTOR_FILE, MODEL_FILE, CURVE_FILE, "learning_curve.png")
 FORMAT = 1
 ACTIVATIONS = ("tanh", "relu")
 

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from snakebot.rl.policy_file import TRAIN_FILES
 from snakebot.rl.settings import GOAL_ENV_ID
-from snakebot.rl.train import TRAIN_FILES, TrainSettings, train
+from snakebot.rl.train import TrainSettings, train
 
 pytestmark = pytest.mark.slow
 # 25 Hz actions, one control cycle each, 4 s episodes (100 steps): cheap steps, episodes end.
