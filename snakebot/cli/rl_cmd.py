@@ -13,8 +13,11 @@ from typing import Any
 
 from snakebot.cli.common import (
     add_dry_run,
+    add_force_option,
     positive_int,
     print_json,
+    refuse_replacing,
+    refuse_replacing_in,
     report_dry_run,
     robot_arg,
 )
@@ -26,6 +29,8 @@ ENCODING_CHOICES = ("simple", "sinusoid", "dft", "dft_shift", "compound")
 # vectorisation"): the fastest setting is the default.
 DEFAULT_N_ENVS = 2
 DEFAULT_VEC = "subproc"
+DEFAULT_ENV = {"env": ENV_CHOICES[0], "encoding": "dft_shift", "robot": "snake8"}
+DEFAULT_ROLLOUT = 2048
 
 
 def add_parser(subparsers: Any) -> None:
@@ -43,10 +48,20 @@ def add_parser(subparsers: Any) -> None:
     train.add_argument("--steps", type=positive_int, default=200_000,
                        help="env steps to train (default 200000)")
     _vec_options(train)
-    train.add_argument("--rollout", type=positive_int, default=2048,
-                       help="env steps per PPO update, over all envs (default 2048)")
+    train.add_argument("--rollout", type=positive_int,
+                       help="env steps per PPO update, over all envs (default 2048; with "
+                       "--resume: the saved policy's)")
+    train.add_argument("--ppo", action="append", default=[], metavar="KEY=VALUE",
+                       help="PPO setting (repeatable), e.g. --ppo learning_rate=1e-4: "
+                       "learning_rate, batch_size, n_epochs, gamma, gae_lambda, clip_range, "
+                       "ent_coef, vf_coef, max_grad_norm (default SB3's; with --resume: the "
+                       "saved policy's)")
+    train.add_argument("--resume", type=Path, metavar="DIR",
+                       help="go on training the policy in DIR (its env and PPO settings) for "
+                       "--steps more steps; writes into DIR unless --out names another folder")
     train.add_argument("--out", type=Path, help="policy folder (default rl-runs/ENV-ENCODING)")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_force_option(train)
     add_dry_run(train, "no training, no policy folder")
     train.set_defaults(handler=run_train, writes=True)
 
@@ -59,6 +74,7 @@ def add_parser(subparsers: Any) -> None:
                           help="also run a zero and a random policy on the same seeds")
     evaluate.add_argument("--video", type=Path, help="render the first episode to an MP4")
     evaluate.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_force_option(evaluate)
     add_dry_run(evaluate, "no episodes, no video")
     evaluate.set_defaults(handler=run_eval, writes=True)  # --video
 
@@ -77,17 +93,19 @@ def add_parser(subparsers: Any) -> None:
     compare.add_argument("--out", type=Path, default=Path("rl-runs/compare"),
                          help="folder: one policy folder per encoding and compare.png")
     compare.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_force_option(compare)
     add_dry_run(compare, "no training, no policy folders, no plot")
     compare.set_defaults(handler=run_compare, writes=True)
 
 
 def _env_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0],
+    # No argparse defaults: --resume takes all three from the saved policy (run_train fills in
+    # DEFAULT_ENV otherwise), and one given with it is refused rather than ignored.
+    parser.add_argument("--env", choices=ENV_CHOICES,
                         help="environment (default snakebot/SnakeGoal-v0)")
-    parser.add_argument("--encoding", choices=ENCODING_CHOICES, default="dft_shift",
+    parser.add_argument("--encoding", choices=ENCODING_CHOICES,
                         help="action encoding (default dft_shift)")
-    parser.add_argument("--robot", default="snake8", type=robot_arg,
-                         help="robot name or file (default snake8)")
+    parser.add_argument("--robot", type=robot_arg, help="robot name or file (default snake8)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="env setting (repeatable), e.g. --set episode_s=20 "
                         "--set goal_distance_bl=2,3; see docs/learning.md")
@@ -164,22 +182,80 @@ def _check_out(out: Path) -> None:
             raise OutputError(folder, "is a file, not a folder: cannot write the policy there")
 
 
-def run_train(args: argparse.Namespace) -> int:
-    """Train one policy, print where it went."""
-    from snakebot.rl.train import TrainSettings, dump_json, train
+def parse_ppo(items: list[str]) -> dict[str, Any]:
+    """--ppo KEY=VALUE as PPO settings, each checked (ConfigError naming --ppo and the item)."""
+    from snakebot.rl.resume import check_ppo
 
-    kwargs = env_kwargs(args, args.encoding)
-    out = args.out or Path("rl-runs") / f"{args.env.split('/')[-1]}-{args.encoding}"
+    values = parse_settings(items)
+    for item in items:
+        key = item.partition("=")[0].strip()
+        try:
+            check_ppo({key: values[key]}, "--ppo")
+        except ConfigError as exc:
+            raise ConfigError("--ppo", item, exc.reason) from None
+    return values
+
+
+def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
+    """The TrainSettings of ``rl train`` and its output folder (and whether it is the resumed
+    policy's own); every check done, nothing written."""
+    from snakebot.rl.policy_file import TRAIN_FILES
+    from snakebot.rl.resume import resume_point
+    from snakebot.rl.train import TrainSettings
+
+    ppo = parse_ppo(args.ppo)
+    resume = None
+    if args.resume is not None:
+        given = [f"--{key}" for key in DEFAULT_ENV if getattr(args, key) is not None]
+        given += ["--set"] if args.set else []
+        if given:
+            raise UsageError(f"--resume trains on in the saved policy's environment: drop "
+                             f"{', '.join(given)} (or train a new policy without --resume)")
+        resume = resume_point(args.resume)
+        _check_robot(resume.env_kwargs["robot"])
+        env_id, kwargs = resume.env_id, resume.env_kwargs
+        ppo = {**resume.ppo, **ppo}
+        rollout = args.rollout or resume.rollout_steps
+        out = args.out or args.resume
+    else:
+        for key, default in DEFAULT_ENV.items():
+            setattr(args, key, getattr(args, key) or default)
+        env_id, kwargs = args.env, env_kwargs(args, args.encoding)
+        rollout = args.rollout or DEFAULT_ROLLOUT
+        out = args.out or Path("rl-runs") / f"{args.env.split('/')[-1]}-{args.encoding}"
+    _check_out(out)
+    in_place = resume is not None and out.resolve() == resume.folder.resolve()
+    if not in_place:  # resuming in place is what --resume asks for
+        refuse_replacing_in(out, TRAIN_FILES, "trained policy", force=args.force)
+    settings = TrainSettings(env_id, kwargs, args.steps, seed=args.seed, n_envs=args.n_envs,
+                             vec=args.vec, algo=args.algo, rollout_steps=rollout, ppo=ppo,
+                             resume=resume)
+    return settings, out, in_place
+
+
+def run_train(args: argparse.Namespace) -> int:
+    """Train one policy (or go on training a saved one), print where it went."""
+    from snakebot.rl.train import dump_json, train
+
+    settings, out, in_place = _train_plan(args)
+    resume = settings.resume
+    kwargs = settings.env_kwargs
     if args.dry_run:
-        _check_out(out)
-        return report_dry_run(args, {"env": args.env, "encoding": args.encoding,
-                                     "robot": args.robot, "steps": args.steps, "out": str(out),
-                                     "env_kwargs": kwargs})
-    settings = TrainSettings(args.env, kwargs, args.steps, seed=args.seed, n_envs=args.n_envs,
-                             vec=args.vec, algo=args.algo, rollout_steps=args.rollout)
+        plan = {"env": settings.env_id, "encoding": kwargs["encoding"], "robot": kwargs["robot"],
+                "steps": args.steps, "out": str(out), "env_kwargs": kwargs,
+                "ppo": settings.ppo, "rollout": settings.rollout_steps}
+        if resume is not None:
+            plan["resume"] = {"folder": str(resume.folder), "steps": resume.steps}
+        return report_dry_run(args, plan)
     if not args.json:
-        print(f"training {args.env} ({args.encoding}, {args.robot}) for {args.steps} steps on "
-              f"{args.n_envs} {args.vec} env(s) -> {out}")
+        what = f"{settings.env_id} ({kwargs['encoding']}, {kwargs['robot']})"
+        if resume is not None:
+            where = "in place" if in_place else f"-> {out}"
+            print(f"resuming {what} from {resume.steps} steps in {resume.folder} for "
+                  f"{args.steps} more on {args.n_envs} {args.vec} env(s) {where}")
+        else:
+            print(f"training {what} for {args.steps} steps on {args.n_envs} {args.vec} "
+                  f"env(s) -> {out}")
     result = train(settings, out)
     summary = dump_json(result)
     if args.json:
@@ -197,6 +273,8 @@ def run_eval(args: argparse.Namespace) -> int:
     """Evaluate a policy folder against zero and random policies on the same seeds."""
     from snakebot.rl.evaluate import evaluate_folder, print_table
 
+    if args.video is not None:
+        refuse_replacing(args.video, "video", force=args.force)
     if args.dry_run:
         from snakebot.rl.policy_file import load_policy
 
@@ -225,8 +303,15 @@ def run_compare(args: argparse.Namespace) -> int:
     from snakebot.rl.compare import compare
 
     runs = {e: env_kwargs(args, e) for e in encodings}
+    _check_out(args.out)
+    from snakebot.rl.policy_file import TRAIN_FILES
+
+    refuse_replacing_in(args.out, ("compare.png", "compare.json"), "comparison",
+                        force=args.force)
+    for encoding in encodings:
+        refuse_replacing_in(args.out / encoding, TRAIN_FILES, "trained policy",
+                            force=args.force)
     if args.dry_run:
-        _check_out(args.out)
         return report_dry_run(args, {"env": args.env, "encodings": encodings,
                                      "robot": args.robot, "steps": args.steps,
                                      "out": str(args.out)})

@@ -17,7 +17,7 @@ from snakebot.rl.deps import require
 from snakebot.rl.encodings import ENCODINGS, SEED_ENCODINGS
 from snakebot.rl.settings import ENV_IDS, GOAL_ENV_ID, VELOCITY_ENV_ID
 
-gymnasium = require("gymnasium", "the learning environments (snakebot.rl)")
+gymnasium = require("gymnasium", "snakebot.rl (the learning environments)")
 
 
 def register_envs() -> None:

@@ -1,7 +1,8 @@
 """Evaluate a policy folder against a zero and a random policy on the same episode seeds.
 
 Goal task: success rate, time to goal (successful episodes), speed (COM path / time) and cost
-of transport (positive joint work / (m g path)). Velocity task: the commanded and the achieved
+of transport (positive joint work / (m g path); none when the COM travelled under 1 mm per
+episode, three significant figures in the table). Velocity task: the commanded and the achieved
 speed and turn rate. Needs only the ``rl`` extra: the saved actor is plain numpy.
 """
 
@@ -22,6 +23,7 @@ from snakebot.rl.policy_file import load_policy
 from snakebot.rl.settings import GOAL_ENV_ID
 
 Policy = Callable[[np.ndarray], FloatArray]
+MIN_PATH_M = 1e-3  # mean COM path per episode below which a policy did not travel
 
 
 @dataclass
@@ -64,8 +66,10 @@ class EvalResult:
             "successes": len(successes),
             "time_to_goal_s": _mean([e.duration_s for e in successes]),
             "speed_mps": path / time_s if time_s > 0 else None,
-            "cost_of_transport": work / (self.mass_kg * GRAVITY_M_S2 * path) if path > 1e-9
-            else None,
+            # A snake that stayed put has no cost of transport (work over numerical drift
+            # gave 1.6e-21 for a zero policy): defined from MIN_PATH_M per episode on.
+            "cost_of_transport": work / (self.mass_kg * GRAVITY_M_S2 * path)
+            if eps and path >= MIN_PATH_M * len(eps) else None,
         }
         if any(e.command is not None for e in eps):
             out["speed_error_mps"] = _mean([e.speed_error_mps for e in eps])
@@ -183,7 +187,7 @@ def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
         out.write(
             f"{name:8s} {s['episodes']:8d} {fmt(rate, '7.0f', '%')} "
             f"{fmt(s['time_to_goal_s'], '7.1f', ' s')} {fmt(s['speed_mps'], '6.3f', ' m/s')} "
-            f"{fmt(s['cost_of_transport'], '7.2f')} "
+            f"{fmt(s['cost_of_transport'], '7.3g')} "
             f"{fmt(s['mean_return'], '9.2f')}\n"
         )
         if "speed_error_mps" in s:

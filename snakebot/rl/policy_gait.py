@@ -29,7 +29,7 @@ from snakebot.gaits import Gait, PhasedGait
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.encodings import GaitClock, make_encoding
 from snakebot.rl.observe import goal_observation, velocity_observation
-from snakebot.rl.policy_file import PolicyFile
+from snakebot.rl.policy_file import PolicyFile, check_env_id
 from snakebot.rl.settings import (
     GOAL_ENV_ID,
     VELOCITY_ENV_ID,
@@ -86,8 +86,7 @@ class PolicyGait(Gait):
     ) -> None:
         source = policy.folder
         self.goal_task = policy.env_id == GOAL_ENV_ID
-        if policy.env_id not in (GOAL_ENV_ID, VELOCITY_ENV_ID):
-            raise ConfigError(source, "env_id", f"unknown environment {policy.env_id!r}")
+        check_env_id(source, policy.env_id)
         task_class = GoalSettings if self.goal_task else VelocitySettings
         settings, task = split_kwargs(dict(policy.env_kwargs), task_class)
         self.settings: EnvSettings = settings

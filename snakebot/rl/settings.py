@@ -13,6 +13,9 @@ from snakebot.rl.encodings import ENCODINGS
 GOAL_ENV_ID = "snakebot/SnakeGoal-v0"
 VELOCITY_ENV_ID = "snakebot/SnakeVelocity-v0"
 ENV_IDS = (GOAL_ENV_ID, VELOCITY_ENV_ID)
+# The largest clock settings that make sense for a twin episode: beyond them a policy folder (or a
+# --set) would ask for a day of simulation per episode or a step no servo can follow.
+MOST = {"action_hz": 1000.0, "control_hz": 10_000.0, "episode_s": 86_400.0, "phase_hz": 100.0}
 
 
 @dataclass(frozen=True)
@@ -40,11 +43,24 @@ class EnvSettings:
     friction_model: str | None = None
 
     def __post_init__(self) -> None:
+        for key in ("robot", "terrain"):
+            if not isinstance(getattr(self, key), str):
+                raise ConfigError(key, "", f"expected a name (text), got {getattr(self, key)!r}")
         if self.encoding not in ENCODINGS:
             raise ConfigError("encoding", "", f"unknown encoding {self.encoding!r}; expected "
                               f"one of {', '.join(ENCODINGS)}")
-        for key in ("action_hz", "control_hz", "episode_s", "phase_hz"):
-            _positive(key, getattr(self, key))
+        if self.friction_model is not None and not isinstance(self.friction_model, str):
+            raise ConfigError("friction_model", "", f"expected auto, pairs, scale or null, got "
+                              f"{self.friction_model!r}")
+        for key, most in MOST.items():
+            _positive(key, getattr(self, key), most)
+        if self.timestep_s is not None:
+            _positive("timestep_s", self.timestep_s, 0.1)
+            if self.timestep_s < 1e-5:  # 100,000 physics steps per simulated second at most
+                raise ConfigError("timestep_s", "", f"expected at least 1e-05 s, got "
+                                  f"{self.timestep_s!r}")
+        if isinstance(self.dft_bins, bool) or not isinstance(self.dft_bins, int):
+            raise ConfigError("dft_bins", "", f"expected a whole number, got {self.dft_bins!r}")
         ratio = self.control_hz / self.action_hz
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError("control_hz", "", f"expected a whole multiple of action_hz "
@@ -81,6 +97,7 @@ class GoalSettings:
     goal_bonus: float = 10.0
 
     def __post_init__(self) -> None:
+        _finite_fields(self)
         _range("goal_distance_bl", self.goal_distance_bl, 0.0)
         _range("goal_bearing_rad", self.goal_bearing_rad, -math.inf)
         _positive("goal_radius_bl", self.goal_radius_bl)
@@ -101,15 +118,32 @@ class VelocitySettings:
     effort_weight: float = 0.05
 
     def __post_init__(self) -> None:
+        _finite_fields(self)
         _range("speed_range_mps", self.speed_range_mps, -math.inf)
         _range("turn_range_rad_s", self.turn_range_rad_s, -math.inf)
-        for key in ("command_period_s", "speed_sigma_mps", "turn_sigma_rad_s"):
+        _positive("command_period_s", self.command_period_s, 1e9)  # 1e9: one command (eval)
+        for key in ("speed_sigma_mps", "turn_sigma_rad_s"):
             _positive(key, getattr(self, key))
 
 
-def _positive(key: str, value: object) -> None:
-    if not isinstance(value, int | float) or not (value > 0 and math.isfinite(value)):
-        raise ConfigError(key, "", f"expected a positive number, got {value!r}")
+def _positive(key: str, value: object, most: float = math.inf) -> None:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not (
+        0 < value <= most and math.isfinite(value)
+    ):
+        bound = "" if math.isinf(most) else f" up to {most:g}"
+        raise ConfigError(key, "", f"expected a positive number{bound}, got {value!r}")
+
+
+def _finite_fields(settings: object) -> None:
+    """ConfigError naming the first field that is not a finite number (or pair of them)."""
+    for item in dataclasses.fields(settings):  # type: ignore[arg-type]
+        value = getattr(settings, item.name)
+        values = value if isinstance(value, tuple | list) else (value,)
+        if not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in values
+        ):
+            raise ConfigError(item.name, "", f"expected a finite number, got {value!r}")
 
 
 def _range(key: str, value: object, minimum: float) -> None:
@@ -155,6 +189,6 @@ def settings_dict(*settings: object) -> dict[str, Any]:
 
 
 __all__ = [
-    "ENV_IDS", "GOAL_ENV_ID", "VELOCITY_ENV_ID", "EnvSettings", "GoalSettings",
+    "ENV_IDS", "GOAL_ENV_ID", "MOST", "VELOCITY_ENV_ID", "EnvSettings", "GoalSettings",
     "VelocitySettings", "settings_dict", "split_kwargs",
 ]

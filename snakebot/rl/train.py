@@ -13,6 +13,7 @@ import math
 import resource
 import sys
 import time
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,15 +24,17 @@ import numpy as np
 from snakebot.errors import ConfigError, OutputError
 from snakebot.rl.deps import require
 from snakebot.rl.policy_file import (
+    ACTOR_FILE,
+    CURVE_FIELDS,
+    CURVE_FILE,
     MODEL_FILE,
     NumpyActor,
     save_actor,
     write_settings,
 )
+from snakebot.rl.resume import ResumePoint, check_ppo, ppo_defaults
 
 VECTORISATIONS = ("dummy", "subproc")
-CURVE_FIELDS = ("steps", "wall_s", "episodes", "mean_return", "success_rate",
-                "mean_episode_steps", "steps_per_s")
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,7 @@ class TrainSettings:
     rollout_steps: int = 2048
     algo: str = "ppo"
     ppo: dict[str, Any] = field(default_factory=dict)
+    resume: ResumePoint | None = None
 
     def __post_init__(self) -> None:
         if self.algo != "ppo":
@@ -60,6 +64,11 @@ class TrainSettings:
                               f"({self.rollout_steps} steps), got {self.n_envs}")
         if self.steps < 1:
             raise ConfigError("steps", "", f"expected a positive count, got {self.steps}")
+        check_ppo(self.ppo, "ppo")
+        batch = self.ppo.get("batch_size", 2)
+        if batch > self.rollout_steps:
+            raise ConfigError("ppo", "batch_size", f"expected at most the rollout "
+                              f"({self.rollout_steps} steps), got {batch}")
 
 
 @dataclass
@@ -85,11 +94,13 @@ class TrainResult:
     folder: Path
     cpu_s: float = math.nan
     interrupted: bool = False
+    new_steps: int | None = None  # this run's steps (a resumed run counts on from saved ones)
 
     @property
     def steps_per_s(self) -> float:
-        """Env steps per second of wall time, PPO updates included."""
-        return self.steps / self.wall_s if self.wall_s > 0 else 0.0
+        """Env steps per second of wall time this run, PPO updates included."""
+        taken = self.steps if self.new_steps is None else self.new_steps
+        return taken / self.wall_s if self.wall_s > 0 else 0.0
 
 
 def make_vec_env(env_id: str, env_kwargs: dict[str, Any], n_envs: int, vec: str,
@@ -108,16 +119,33 @@ def _env_fn(env_id: str, env_kwargs: dict[str, Any]) -> Callable[[], Any]:
 
         import snakebot.rl  # noqa: F401  (registers the envs in a fresh worker process)
 
-        return gymnasium.make(env_id, **env_kwargs)
+        class CpuClock(gymnasium.Wrapper):
+            """Answers the CPU time of the process it runs in (a subproc worker's own)."""
+
+            def process_cpu_s(self) -> float:
+                usage = resource.getrusage(resource.RUSAGE_SELF)
+                return usage.ru_utime + usage.ru_stime
+
+        return CpuClock(gymnasium.make(env_id, **env_kwargs))
 
     return make
+
+
+def _workers_cpu_s(venv: Any) -> float:
+    """The subproc workers' CPU seconds so far, asked of each worker (they are children of
+    multiprocessing's forkserver, so this process's rusage never counts them); NaN when a worker
+    is gone (Ctrl-C reaches the workers too)."""
+    try:
+        return float(sum(venv.env_method("process_cpu_s")))
+    except (EOFError, OSError):  # BrokenPipeError, ConnectionResetError included
+        return math.nan
 
 
 class _Tracker:
     """Episode returns and successes per env, and the curve rows written as they come."""
 
     def __init__(self, n_envs: int, csv_file: TextIO, progress: TextIO | None,
-                 total: int) -> None:
+                 total: int, previous: list[list[str]] | None = None) -> None:
         self.returns = np.zeros(n_envs)
         self.lengths = np.zeros(n_envs, dtype=int)
         self.done_returns: list[float] = []
@@ -127,6 +155,9 @@ class _Tracker:
         self.curve: list[CurvePoint] = []
         self.writer = csv.writer(csv_file)
         self.writer.writerow(CURVE_FIELDS)
+        self.writer.writerows(previous or [])
+        # A resumed run's rows go on from the saved curve's wall time
+        self.wall_offset_s = _last_wall_s(previous or [])
         self.csv_file = csv_file
         self.progress = progress
         self.total = total
@@ -145,7 +176,7 @@ class _Tracker:
             self.episodes += 1
 
     def on_rollout(self, steps: int) -> None:
-        wall = time.monotonic() - self.start
+        wall = time.monotonic() - self.start + self.wall_offset_s
         returns, success = self.done_returns, self.done_success
         point = CurvePoint(
             steps=steps, wall_s=round(wall, 3), episodes=self.episodes,
@@ -159,10 +190,12 @@ class _Tracker:
         self.writer.writerow([getattr(point, name) for name in CURVE_FIELDS])
         self.csv_file.flush()
         if self.progress is not None:
+            ended = f"({point.episodes} episodes)" if point.episodes else \
+                "(no episode ended yet)"
             self.progress.write(
                 f"  {steps:>9d}/{self.total} steps  {wall:7.0f} s  {point.steps_per_s:6.0f} "
-                f"steps/s  return {point.mean_return:8.2f}  success "
-                f"{_percent(point.success_rate)}  ({point.episodes} episodes)\n"
+                f"steps/s  return {_number(point.mean_return, '8.2f')}  success "
+                f"{_percent(point.success_rate)}  {ended}\n"
             )
             self.progress.flush()
 
@@ -171,29 +204,47 @@ def _percent(value: float) -> str:
     return "  n/a" if math.isnan(value) else f"{100 * value:4.0f}%"
 
 
+def _number(value: float, spec: str) -> str:
+    """``value`` formatted, or "n/a" in its width when it is undefined (no episode ended)."""
+    text = format(value, spec)
+    return "n/a".rjust(len(text)) if math.isnan(value) else text
+
+
+def _last_wall_s(rows: list[list[str]]) -> float:
+    return float(rows[-1][CURVE_FIELDS.index("wall_s")]) if rows else 0.0
+
+
 def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sys.stderr,
           plot: bool = True) -> TrainResult:
     """Train, then save policy.json, actor.npz, policy.zip, learning_curve.csv (+ .png).
 
-    Ctrl-C ends training early and still saves the policy learned so far (``interrupted``).
-    The curve CSV is written row by row, so an interrupted run keeps what it measured. Raises
-    MissingDependencyError naming the ``rl-train`` extra, ConfigError for bad settings,
-    OutputError when the folder cannot be written.
+    With ``settings.resume`` it goes on from that saved model's weights (and optimiser state)
+    for ``settings.steps`` more steps, counting on from the steps it had; the curve keeps the
+    saved rows. policy.json records every PPO setting used (stable-baselines3's defaults filled
+    in). Ctrl-C ends training early and still saves the policy learned so far
+    (``interrupted``). The curve CSV is written row by row, so an interrupted run keeps what it
+    measured. Raises MissingDependencyError naming the ``rl-train`` extra, ConfigError for bad
+    settings or a saved model that cannot be trained on, OutputError when the folder cannot be
+    written.
     """
     torch = require("torch", "rl train")
     sb3 = require("stable_baselines3", "rl train")
     callbacks = require("stable_baselines3.common.callbacks", "rl train")
     torch.set_num_threads(1)  # one core per env process; PPO's small MLP gains nothing more
+    resume = settings.resume
+    ppo_kwargs = {"n_steps": settings.rollout_steps // settings.n_envs, **ppo_defaults(),
+                  **settings.ppo}
+    previous = resume.curve_rows if resume is not None else []
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        csv_file = (folder / "learning_curve.csv").open("w", newline="")
+        csv_file = (folder / CURVE_FILE).open("w", newline="")
     except OSError as exc:
         reason = exc.strerror or str(exc)
         raise OutputError(folder, f"cannot write the training output: {reason}") from exc
     cpu_start = _cpu_s()
-    venv = make_vec_env(settings.env_id, settings.env_kwargs, settings.n_envs, settings.vec,
-                        settings.seed)
-    tracker = _Tracker(settings.n_envs, csv_file, progress, settings.steps)
+    start_steps = resume.steps if resume is not None else 0
+    tracker = _Tracker(settings.n_envs, csv_file, progress, start_steps + settings.steps,
+                       previous)
 
     class Callback(callbacks.BaseCallback):  # type: ignore[misc,name-defined]
         def _on_step(self) -> bool:
@@ -203,25 +254,33 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         def _on_rollout_end(self) -> None:
             tracker.on_rollout(int(self.num_timesteps))
 
-    ppo_kwargs = {"n_steps": settings.rollout_steps // settings.n_envs, **settings.ppo}
     interrupted = False
+    workers_cpu = 0.0
     try:
-        model = sb3.PPO("MlpPolicy", venv, seed=settings.seed, verbose=0, device="cpu",
-                        **ppo_kwargs)
+        venv = make_vec_env(settings.env_id, settings.env_kwargs, settings.n_envs, settings.vec,
+                            settings.seed)
         try:
-            model.learn(total_timesteps=settings.steps, callback=Callback())
-        except KeyboardInterrupt:  # Ctrl-C: keep the policy learned so far
-            interrupted = True
+            model = sb3.PPO("MlpPolicy", venv, seed=settings.seed, verbose=0, device="cpu",
+                            **ppo_kwargs)
+            if resume is not None:
+                _load_weights(model, resume.model_path)
+                model.num_timesteps = resume.steps
+            try:
+                model.learn(total_timesteps=settings.steps, callback=Callback(),
+                            reset_num_timesteps=resume is None)
+            except KeyboardInterrupt:  # Ctrl-C: keep the policy learned so far
+                interrupted = True
+            if settings.vec == "subproc":
+                workers_cpu = _workers_cpu_s(venv)
+        finally:
+            venv.close()
     finally:
-        venv.close()
         csv_file.close()
     wall = time.monotonic() - tracker.start
-    # subproc workers are children of multiprocessing's forkserver, not of this process: their
-    # CPU time cannot be counted here, so none is reported rather than a part of it.
-    cpu = _cpu_s() - cpu_start if settings.vec == "dummy" else math.nan
+    cpu = _cpu_s() - cpu_start + workers_cpu
     steps = int(model.num_timesteps)
     model.save(folder / MODEL_FILE)
-    save_actor(actor_from_sb3(model), folder / "actor.npz")
+    save_actor(actor_from_sb3(model), folder / ACTOR_FILE)
     last = tracker.curve[-1] if tracker.curve else None
     meta = {
         "algo": settings.algo,
@@ -233,24 +292,41 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         "ppo": ppo_kwargs,
         "wall_s": round(wall, 2),
         "cpu_s": _finite(round(cpu, 2)),
-        "steps_per_s": round(steps / wall, 2) if wall > 0 else None,
+        "steps_per_s": round((steps - start_steps) / wall, 2) if wall > 0 else None,
         "final_mean_return": None if last is None else _finite(last.mean_return),
         "final_success_rate": None if last is None else _finite(last.success_rate),
         "versions": {"stable_baselines3": sb3.__version__, "torch": torch.__version__},
+        "resumed_from": None if resume is None else {"folder": str(resume.folder),
+                                                     "steps": resume.steps},
     }
     write_settings(folder, settings.env_id, settings.env_kwargs, meta)
-    result = TrainResult(tracker.curve, wall, steps, folder, cpu, interrupted)
+    result = TrainResult(tracker.curve, wall, steps, folder, cpu, interrupted,
+                         steps - start_steps)
     if plot:
         from snakebot.rl.plots import curve_plot
 
-        curve_plot({_label(settings): tracker.curve}, folder / "learning_curve.png",
+        rows = read_curve(folder / CURVE_FILE)  # the saved rows of a resumed run too
+        curve_plot({_label(settings): rows}, folder / "learning_curve.png",
                    title=f"{settings.env_id} ({settings.env_kwargs.get('encoding', '')})")
     return result
 
 
+def _load_weights(model: Any, path: Path) -> None:
+    """The saved model's weights and optimiser state into ``model``: tensors only
+    (``torch.load(weights_only=True)``), none of the zip's pickled objects."""
+    import pickle
+
+    try:
+        model.set_parameters(str(path), exact_match=True, device="cpu")
+    except (ValueError, RuntimeError, KeyError, OSError, EOFError, pickle.UnpicklingError,
+            zipfile.BadZipFile) as exc:
+        raise ConfigError(path, "", f"cannot train on this model (not the network this "
+                          f"policy's settings make): {str(exc).splitlines()[0]}") from None
+
+
 def _cpu_s() -> float:
-    """CPU seconds of this process and its waited-for children: what a dummy-vectorised run
-    cost whatever else the machine was doing."""
+    """CPU seconds of this process and its waited-for children: all a dummy-vectorised run
+    costs whatever else the machine was doing (subproc workers are asked for theirs)."""
     own = resource.getrusage(resource.RUSAGE_SELF)
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime

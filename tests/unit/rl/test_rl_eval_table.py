@@ -36,3 +36,20 @@ def test_a_velocity_policy_has_no_success_rate_to_show() -> None:
     out = io.StringIO()
     print_table({"policy": EvalResult("policy", 1.0, [episode])}, out)
     assert "0%" not in out.getvalue() and "mean |speed - command| 0.050 m/s" in out.getvalue()
+
+
+def test_a_policy_that_stayed_put_has_no_cost_of_transport_and_a_small_one_is_not_zero() -> None:
+    # Measured: a zero policy's COM drifted microns and its CoT printed as 0.00 (1.6e-21).
+    still = EpisodeStats(0, -12.0, 300, success=False, duration_s=30.0, path_m=2e-6,
+                         positive_work_j=3e-20)
+    frugal = EpisodeStats(0, 1.0, 300, success=False, duration_s=30.0, path_m=5.0,
+                          positive_work_j=0.2)
+    results = {"zero": EvalResult("zero", 1.0, [still, still]),
+               "frugal": EvalResult("frugal", 1.0, [frugal])}
+    assert results["zero"].summary()["cost_of_transport"] is None
+    out = io.StringIO()
+    print_table(results, out)
+    header, zero, small = out.getvalue().splitlines()
+    cot = slice(header.index("CoT") - 4, header.index("CoT") + 3)
+    assert zero[cot].strip() == "n/a"
+    assert small[cot].strip() == "0.00408"  # 0.2 / (1 kg * 9.81 * 5 m), not 0.00
