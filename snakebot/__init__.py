@@ -13,8 +13,12 @@ docs/api.md describes every name below.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from snakebot import signals as _signals
+
+_signals.guard_start_up()  # first: a Ctrl-C from here on is a clean exit 130, not a traceback
+
+import importlib  # noqa: E402
+from typing import TYPE_CHECKING, Any  # noqa: E402
 
 __version__ = "0.1.0"
 

@@ -1,4 +1,4 @@
-"""Hold stop signals back while a stop goes out; the one list of signals that mean "stop".
+"""Hold the stop signals (``snakebot.signals.STOP_SIGNALS``) back while a stop goes out.
 
 A signal handler that raises (Python's SIGINT handler, the CLI's SIGTERM/SIGHUP one) can land
 between any two bytecodes, inside the SDK's packet code included. During a stop that would leave
@@ -15,10 +15,7 @@ import threading
 from types import FrameType, TracebackType
 from typing import Any
 
-STOP_SIGNALS: tuple[signal.Signals, ...] = tuple(
-    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
-)
-"""Ctrl-C, a kill, a hang-up (the terminal or SSH session went away): each asks for a stop."""
+from snakebot.signals import STOP_SIGNALS
 
 
 class DeferredInterrupts:
