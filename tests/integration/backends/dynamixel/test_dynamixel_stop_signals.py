@@ -73,7 +73,7 @@ class Points:
 
 def stopping_backend(chain: EmulatedChain, url: str, policy: str, points: Points,
                      ramp_s: float = 0.2) -> DynamixelBackend:
-    """Connected, bent away from the safe pose, the emulator reporting every moment to ``points``."""
+    """Connected, bent away from the safe pose; every moment of the bus goes to ``points``."""
 
     def clock() -> float:
         points.at("between")
@@ -107,14 +107,17 @@ def assert_goals_inside_limits(chain: EmulatedChain, backend: DynamixelBackend) 
         assert low <= servo.peek("goal_position") <= high, servo.servo_id
 
 
-def plans(total: dict[str, int], signals: int) -> Iterator[dict[tuple[str, int], list[signal.Signals]]]:
+Plan = dict[tuple[str, int], list[signal.Signals]]
+
+
+def plans(total: dict[str, int], signals: int) -> Iterator[Plan]:
     """>= 20 moments inside transactions and some between them, spread over the whole path;
     the signals come all at once, or one per moment, or 5 moments apart, in turn."""
     moments = [("inside", k) for k in np.linspace(1, total["inside"], 22).round().astype(int)]
     moments += [("between", k) for k in np.linspace(1, total["between"], 8).round().astype(int)]
     for n, (where, k) in enumerate(moments):
         gap = (0, 1, 5)[n % 3]
-        plan: dict[tuple[str, int], list[signal.Signals]] = {}
+        plan: Plan = {}
         for i in range(signals):
             plan.setdefault((where, int(k) + i * gap), []).append(KINDS[(n + i) % len(KINDS)])
         yield plan

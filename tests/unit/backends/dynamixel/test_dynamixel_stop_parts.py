@@ -86,12 +86,11 @@ def test_deferred_signals_are_counted_and_go_to_the_handler_they_were_meant_for(
 
     previous = {s: signal.signal(s, terminate) for s in (signal.SIGTERM, signal.SIGHUP)}
     try:
-        with pytest.raises(SystemExit, match=f"terminated by {int(signal.SIGHUP)}"):
-            with deferred_interrupts() as signals:
-                for signum in (signal.SIGHUP, signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
-                    os.kill(os.getpid(), signum)
-                assert signals.caught == [signal.SIGHUP, signal.SIGTERM, signal.SIGINT,
-                                          signal.SIGHUP]
+        first = f"terminated by {int(signal.SIGHUP)}"
+        with pytest.raises(SystemExit, match=first), deferred_interrupts() as signals:
+            for signum in (signal.SIGHUP, signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+                os.kill(os.getpid(), signum)
+            assert signals.caught == [signal.SIGHUP, signal.SIGTERM, signal.SIGINT, signal.SIGHUP]
         assert signal.getsignal(signal.SIGTERM) is terminate
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     finally:
