@@ -18,7 +18,7 @@ import pytest
 
 from snakebot.telemetry import read_log
 from tests.conftest import edit_robot
-from tests.pty_emulator import emulator
+from tests.pty_emulator import emulator, patient
 
 pytestmark = [
     pytest.mark.pty,
@@ -27,8 +27,8 @@ pytestmark = [
 
 
 def read_all(port: str, address: int, size: int, ids: range, signed: bool = False) -> list[int]:
-    """One register of every servo with the bare SDK; a few tries each, as the emulator may be
-    starved of CPU for a moment on a loaded machine."""
+    """One register of every servo with the bare SDK, asking again while a loaded machine keeps
+    the emulator from answering in time (``patient``)."""
     handler = dynamixel_sdk.PortHandler(port)
     assert handler.openPort() and handler.setBaudRate(1_000_000)
     packets = dynamixel_sdk.PacketHandler(2.0)
@@ -36,10 +36,12 @@ def read_all(port: str, address: int, size: int, ids: range, signed: bool = Fals
     try:
         values = []
         for servo_id in ids:
-            for _ in range(5):
-                value, result, _ = read(handler, servo_id, address)
-                if result == dynamixel_sdk.COMM_SUCCESS:
-                    break
+
+            def one(servo_id: int = servo_id) -> tuple[int, int, int]:
+                outcome: tuple[int, int, int] = read(handler, servo_id, address)
+                return outcome
+
+            value, result, _ = patient(one)
             assert result == dynamixel_sdk.COMM_SUCCESS
             if signed and value >= 1 << (8 * size - 1):
                 value -= 1 << (8 * size)
@@ -90,7 +92,7 @@ def start_run(robot: Path, port: str, log: Path) -> subprocess.Popen[bytes]:
 
 
 def wait_for_rows(log: Path, rows: int, run: subprocess.Popen[bytes]) -> None:
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 150  # start-up imports MuJoCo: a minute beside two CPU hogs
     while time.monotonic() < deadline and run.poll() is None:
         if log.exists() and log.read_text().count("\n") > rows:
             return
