@@ -21,9 +21,10 @@ from collections.abc import Iterator, Sequence
 from typing import Any, NoReturn, TextIO
 
 from snakebot import __version__
+from snakebot import _interrupted_at_start_up as interrupted_at_start_up
 from snakebot.backends.offscreen_gl import choose_offscreen_gl
 from snakebot.errors import ConfigError, SnakebotError, UsageError
-from snakebot.signals import STOP_SIGNALS, interrupted_at_start_up
+from snakebot.signals import STOP_SIGNALS
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
 COMMANDS: tuple[str, ...] = (

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from snakebot.signals import started_as_command
+from snakebot import _started_as_command as started_as_command
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child needs POSIX")
 
