@@ -10,6 +10,7 @@ way a user adds servos one at a time. ``power`` on stdin power-cycles every serv
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import queue
 import signal
@@ -37,7 +38,8 @@ def add_parser(subparsers: Any) -> None:
         "emulate",
         help="serve an emulated Dynamixel chain on a pseudo-terminal",
         description="Create a pseudo-terminal that answers like the robot's servo chain (Protocol "
-        "2.0, byte for byte). Prints the device path first; serves until Ctrl-C or SIGTERM. "
+        "2.0, byte for byte). Prints the device path first; serves until Ctrl-C, SIGTERM or "
+        "SIGHUP, or until its stdin (a pipe) ends once the process that started it has exited. "
         "Stdin commands: 'plug' (also SIGUSR1) connects the next --fresh servo, 'power' "
         "power-cycles every servo.",
     )
@@ -103,13 +105,41 @@ def _bench(
     return bench, motion
 
 
-def _read_commands(commands: queue.Queue[str]) -> None:
+def _read_commands(commands: queue.Queue[str], piped_input_ended: threading.Event) -> None:
     for line in sys.stdin:
         commands.put(line.strip().lower() or "plug")
+    if _stdin_is_a_pipe():  # a terminal's Ctrl-D or /dev/null's end means nothing
+        piped_input_ended.set()
+
+
+def _stdin_is_a_pipe() -> bool:
+    import stat
+
+    try:
+        mode = os.fstat(sys.stdin.fileno()).st_mode
+    except (OSError, ValueError, AttributeError):
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
+
+
+class Orphaned:
+    """Whether nobody is left to stop the emulator: the pipe on its stdin ended and the process
+    that started it exited (it was re-parented). A closed pipe alone is not enough (``echo plug
+    | snakebot emulate`` keeps serving), nor is a vanished parent with stdin from a terminal or
+    /dev/null (``nohup``, ``setsid``, a job left in the background)."""
+
+    def __init__(self) -> None:
+        self.parent_pid = os.getppid()
+        self.piped_input_ended = threading.Event()
+
+    def __call__(self) -> bool:
+        """True once the emulator is orphaned."""
+        return self.piped_input_ended.is_set() and os.getppid() != self.parent_pid
 
 
 def run(args: argparse.Namespace) -> int:
-    """Serve until SIGINT or SIGTERM, then stop cleanly (saving the state file)."""
+    """Serve until SIGINT, SIGTERM or SIGHUP, or until orphaned (see :class:`Orphaned`), then
+    stop cleanly (saving the state file)."""
     from snakebot.emulation.errors import EmulationError
     from snakebot.emulation.pty_server import PtyServer
 
@@ -132,10 +162,17 @@ def run(args: argparse.Namespace) -> int:
     handlers: dict[signal.Signals, Any] = {signal.SIGINT: on_signal, signal.SIGTERM: on_signal}
     if os.name == "posix":
         handlers[signal.SIGUSR1] = on_plug
+        handlers[signal.SIGHUP] = on_signal  # the terminal it ran in closed
     previous = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
     server = PtyServer(bench.chain)
-    threading.Thread(target=_read_commands, args=(commands,), daemon=True).start()
+    orphaned = Orphaned()
+    threading.Thread(target=_read_commands, args=(commands, orphaned.piped_input_ended),
+                     daemon=True).start()
     def tick() -> None:
+        if orphaned():
+            _say(f"emulate: stdin closed and the process that started it (PID "
+                 f"{orphaned.parent_pid}) exited: stopping")
+            stop.set()
         while plugs:
             _command(args, bench, plugs.pop())
         while not commands.empty():
@@ -156,6 +193,11 @@ def run(args: argparse.Namespace) -> int:
     if motion is not None:
         _summary(args, robot, motion, bench)
     return 0
+
+
+def _say(text: str) -> None:
+    with contextlib.suppress(OSError):  # stderr may have gone with the parent
+        print(text, file=sys.stderr, flush=True)
 
 
 def serve_until(stop: threading.Event, server: PtyServer, tick: Callable[[], None]) -> None:

@@ -21,8 +21,10 @@ from collections.abc import Iterator, Sequence
 from typing import Any, NoReturn, TextIO
 
 from snakebot import __version__
+from snakebot import _interrupted_at_start_up as interrupted_at_start_up
 from snakebot.backends.offscreen_gl import choose_offscreen_gl
 from snakebot.errors import ConfigError, SnakebotError, UsageError
+from snakebot.signals import STOP_SIGNALS
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
 COMMANDS: tuple[str, ...] = (
@@ -153,17 +155,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = _main(argv)
     except KeyboardInterrupt:
         _decided_exit_code = EXIT_INTERRUPTED
-        print("snakebot: interrupted", file=sys.stderr)
+        print(_interrupted_message(), file=sys.stderr)
         return EXIT_INTERRUPTED
     except ImportError as exc:
         # Ctrl-C while a C extension (MuJoCo) initialises reaches us as "initialization failed".
         if not _caused_by_interrupt(exc):
             raise
         _decided_exit_code = EXIT_INTERRUPTED
-        print("snakebot: interrupted", file=sys.stderr)
+        print(_interrupted_message(), file=sys.stderr)
         return EXIT_INTERRUPTED
     _decided_exit_code = code
     return code
+
+
+def _interrupted_message() -> str:
+    """``snakebot: interrupted``, naming the signal when it was not Ctrl-C."""
+    if _interrupt_signal is None or _interrupt_signal == signal.SIGINT:
+        return "snakebot: interrupted"
+    name = signal.Signals(_interrupt_signal).name
+    if name == "SIGHUP":
+        return "snakebot: interrupted (SIGHUP: the terminal or SSH session hung up)"
+    return f"snakebot: interrupted ({name})"
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:
@@ -289,11 +301,12 @@ def _fail(message: str, code: int, as_json: bool) -> int:
 def entry_point() -> None:
     """The ``snakebot`` console script and ``python -m snakebot``: warnings as plain advice.
 
-    SIGTERM is treated like Ctrl-C (a killed run still ramps out and applies the stop policy).
-    Once the command is over, SIGINT and SIGTERM are ignored: the servos are as the stop policy
-    left them, and an impatient user's third Ctrl-C must not turn the command's exit code into
-    a death by signal while the interpreter shuts down (which takes a second on a loaded machine,
-    after Python has put the default handlers back).
+    SIGTERM and SIGHUP (a closed terminal, a dropped SSH session) are treated like Ctrl-C: a
+    killed or hung-up run still ramps out and applies the stop policy. Once the command is over,
+    those signals are ignored: the servos are as the stop policy left them, and an impatient
+    user's third Ctrl-C must not turn the command's exit code into a death by signal while the
+    interpreter shuts down (which takes a second on a loaded machine, after Python has put the
+    default handlers back).
     """
     global _decided_exit_code
     _install_signal_handlers()
@@ -302,33 +315,39 @@ def entry_point() -> None:
         code = main()
     except KeyboardInterrupt:
         _decided_exit_code = code = EXIT_INTERRUPTED
-        print("snakebot: interrupted", file=sys.stderr)
+        print(_interrupted_message(), file=sys.stderr)
     _ignore_signals_from_now_on()
     sys.exit(code)
 
 
 _interrupt_seen = False
-"""A SIGINT/SIGTERM arrived while the command was still running (even if it was swallowed)."""
+"""A stop signal arrived while the command was still running (even if it was swallowed)."""
+_interrupt_signal: int | None = None
+"""The first stop signal that arrived while the command was running."""
 
 
 def _on_signal(signum: int, frame: object) -> None:
-    global _interrupt_seen
+    global _interrupt_seen, _interrupt_signal
     if _decided_exit_code is None:
         _interrupt_seen = True
+        if _interrupt_signal is None:
+            _interrupt_signal = signum
         raise KeyboardInterrupt
     # The command is over; the exit code it decided stands.
 
 
 def _install_signal_handlers() -> None:
-    # SIGINT only where Python's own handler is in place (a background job keeps ignoring it).
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-        signal.signal(signal.SIGINT, _on_signal)
-    if hasattr(signal, "SIGTERM") and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
-        signal.signal(signal.SIGTERM, _on_signal)
+    # Each stop signal raises KeyboardInterrupt, but only where its default action is in place
+    # (Python's own SIGINT handler, or the start-up one): a background job keeps ignoring
+    # SIGINT, and `nohup` keeps ignoring SIGHUP.
+    replaceable = (signal.default_int_handler, interrupted_at_start_up, signal.SIG_DFL)
+    for signum in STOP_SIGNALS:
+        if signal.getsignal(signum) in replaceable:
+            signal.signal(signum, _on_signal)
 
 
 def _ignore_signals_from_now_on() -> None:
     # SIG_IGN, unlike a Python handler, survives the interpreter's shutdown.
-    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
-        if signum is not None and signal.getsignal(signum) is _on_signal:
+    for signum in STOP_SIGNALS:
+        if signal.getsignal(signum) is _on_signal:
             signal.signal(signum, signal.SIG_IGN)

@@ -1,9 +1,11 @@
 """Signals as stop requests: the drive loop asks every cycle instead of being interrupted.
 
-An exception raised inside a bus transaction can leave the SDK's port flagged busy; a flag read
-at the top of the next cycle cannot. SIGINT and SIGTERM ask for a stop (rest pose, then the stop
-policy); SIGHUP (the terminal closed) reports the input lost. A second SIGINT while stopping
-raises KeyboardInterrupt, for a loop that no longer answers; the backend still closes safely.
+The same stop signals as every other command (``snakebot.signals.STOP_SIGNALS``), asked for
+instead of raised: an exception raised inside a bus transaction can leave the SDK's port flagged
+busy; a flag read at the top of the next cycle cannot. SIGINT and SIGTERM ask for a stop (rest
+pose, then the stop policy); SIGHUP (the terminal closed) reports the input lost. A second SIGINT
+while stopping raises KeyboardInterrupt, for a loop that no longer answers; the backend still
+closes safely (its stop defers every stop signal until the stop policy is out).
 """
 
 from __future__ import annotations
@@ -12,12 +14,13 @@ import signal
 from types import FrameType, TracebackType
 from typing import Any
 
+from snakebot.signals import STOP_SIGNALS
+
 _REASONS = {
-    signal.SIGINT: "interrupted (SIGINT)",
-    signal.SIGTERM: "interrupted (SIGTERM)",
+    sig: "input lost: the terminal hung up (SIGHUP)" if sig.name == "SIGHUP"
+    else f"interrupted ({sig.name})"
+    for sig in STOP_SIGNALS
 }
-if hasattr(signal, "SIGHUP"):
-    _REASONS[signal.SIGHUP] = "input lost: the terminal hung up (SIGHUP)"
 
 
 class StopSignals:

@@ -4,10 +4,11 @@ Once any servo may have torque on, every exit applies the stop policy to the ser
 answer: ``close`` ramps to the safe pose first (hold: torque on, Bus Watchdog disarmed; limp:
 torque off), a failed ``connect`` applies it where the servos stand (nothing has moved yet).
 
-- Ctrl-C or SIGTERM during the ramp finishes it at the joint speed limit; a second one skips to
-  the final state. A KeyboardInterrupt already on its way out when ``close`` starts (a second
-  Ctrl-C during the runner's ramp-out) starts with the fast ramp. The final writes run with those
-  signals deferred (``interrupts.py``); the KeyboardInterrupt is raised after them.
+- The whole stop, from its first transaction to the last, runs with the stop signals (SIGINT,
+  SIGTERM, SIGHUP) deferred (``interrupts.py``): none can cut a transaction or skip the policy.
+  One during the ramp finishes it at the joint speed limit; a second one skips to the final state.
+  A KeyboardInterrupt already on its way out when ``close`` starts (a second Ctrl-C during the
+  runner's ramp-out) starts with the fast ramp. The signals are raised after the policy.
 - Any other exception in the ramp still ends in the policy, then is raised; a BusError in the
   ramp (a servo gone) is logged, and the policy goes to the servos that answer.
 - A tripped Bus Watchdog refuses goals (e-Manual control_table_buswatchdog): it is cleared before
@@ -30,7 +31,7 @@ from snakebot.backends.dynamixel.faults import (
     TrackingError,
     WatchdogTripError,
 )
-from snakebot.backends.dynamixel.interrupts import deferred_interrupts
+from snakebot.backends.dynamixel.interrupts import DeferredInterrupts, deferred_interrupts
 from snakebot.backends.dynamixel.shutdown import (
     fastest_ramp_s,
     ramp_duration_s,
@@ -48,6 +49,9 @@ log = logging.getLogger(__name__)
 SETTLED_RAD = 0.005
 """A stop that starts this close to the safe pose writes it at once instead of ramping."""
 
+POLICY_TRIES = 3
+"""How often the policy writes start again after a KeyboardInterrupt raised inside them."""
+
 
 class StopSequence:
     """The stop path and the watchdog/tracking recoveries of one backend (its friend class)."""
@@ -61,24 +65,37 @@ class StopSequence:
     def abort_connect(self) -> None:
         """A connect failed (or was interrupted): apply the policy where the servos stand, close.
 
-        Errors here are logged: the exception that failed the connect is the one to report.
+        Errors here are logged, and a signal during it is not raised: the exception that failed
+        the connect is the one to report.
         """
         b = self.b
         try:
-            if b.torque_may_be_on:
-                with deferred_interrupts():
-                    error = self.apply_policy()
-                if error is not None:
-                    log.warning("%s: stop policy after the failed connect: %s", b.port, error)
+            with deferred_interrupts() as signals:
+                try:
+                    if b.torque_may_be_on:
+                        error = self._policy(signals)
+                        if error is not None:
+                            log.warning("%s: stop policy after the failed connect: %s", b.port,
+                                        error)
+                finally:
+                    b.bus.close()
         except KeyboardInterrupt:
             pass  # the connect's own exception is already on its way out
-        finally:
-            b.bus.close()
 
     def close(self, *, hurry: bool) -> None:
-        """Ramp out (fast if ``hurry``), apply the policy, close the port; see the module doc."""
+        """Ramp out (fast if ``hurry``), apply the policy, close the port; see the module doc.
+
+        From the first transaction to the last the stop signals are deferred: they shorten the
+        ramp and are raised after the policy went out, so no number of them skips it.
+        """
+        with deferred_interrupts() as signals:
+            error = self._stop(hurry, signals)
+        if error is not None:
+            raise error
+
+    def _stop(self, hurry: bool, signals: DeferredInterrupts) -> Exception | None:
+        """The whole stop; returns the error to raise once the signals are delivered."""
         b = self.b
-        interrupt: KeyboardInterrupt | None = None
         failure: Exception | None = None
         unreached: list[int] = []
         policy_error: BusError | None = None
@@ -86,32 +103,37 @@ class StopSequence:
             if b.torque_may_be_on and b.bus.vanished is None:
                 b.catch_up = None
                 try:
-                    interrupt, unreached = self._ramp_out(hurry)
+                    unreached = self._ramp_out(hurry, signals)
                 except BusError as exc:  # a servo or the port is gone: the policy still goes out
                     if b.bus.vanished is None:
                         log.warning("%s: stop ramp interrupted: %s", b.port, exc)
                 except Exception as exc:
                     failure = exc
             if b.torque_may_be_on and b.bus.vanished is None:
-                try:
-                    with deferred_interrupts():
-                        policy_error = self.apply_policy()
-                except KeyboardInterrupt as exc:
-                    interrupt = interrupt or exc
+                policy_error = self._policy(signals)
             if b.torque_may_be_on and b.bus.vanished is not None:
                 policy_error = self._vanished_error()
         finally:
             b.bus.close()
-        if interrupt is not None:
-            raise interrupt
         if failure is not None:
-            raise failure
+            return failure
         if policy_error is not None:
-            raise policy_error
+            return policy_error
         if unreached and b.stop_policy == "hold":
-            raise StopIncompleteError(
+            return StopIncompleteError(
                 b.port, unreached, "their Goal Position is not the safe pose after the ramp "
                 "(a Bus Watchdog that keeps tripping, or a servo refusing goals)")
+        return None
+
+    def _policy(self, signals: DeferredInterrupts) -> BusError | None:
+        """:meth:`apply_policy`, started again if a KeyboardInterrupt is raised inside it (not by
+        a deferred signal: by hand, or from a thread), a few times at most."""
+        for _ in range(POLICY_TRIES - 1):
+            try:
+                return self.apply_policy()
+            except KeyboardInterrupt as exc:
+                signals.note(exc)
+        return self.apply_policy()
 
     def _vanished_error(self) -> BusError:
         b = self.b
@@ -161,28 +183,47 @@ class StopSequence:
             return dict(exc.partial)
 
     # -- the ramp --------------------------------------------------------------------------------
-    def _ramp_out(self, hurry: bool) -> tuple[KeyboardInterrupt | None, list[int]]:
-        """Ramp to the safe pose and check every servo took it; (interrupt, IDs that did not)."""
+    def _ramp_out(self, hurry: bool, signals: DeferredInterrupts) -> list[int]:
+        """Ramp to the safe pose and check every servo took it; the IDs that did not.
+
+        Urgency is ``hurry`` plus the interruptions so far: 1 ramps at the joint speed limit, 2
+        skips to the final state. A KeyboardInterrupt raised inside counts as one and starts
+        the ramp again from where the servos are.
+        """
+        while True:
+            try:
+                return self._ramp_out_once(hurry, signals)
+            except KeyboardInterrupt as exc:
+                signals.note(exc)
+
+    def _skipping(self, hurry: bool, signals: DeferredInterrupts) -> bool:
+        if hurry + signals.count < 2:
+            return False
+        log.warning("%s: interrupted again: skipping the rest of the stop ramp, applying the "
+                    "stop policy (%s)", self.b.port, self.b.stop_policy)
+        return True
+
+    def _ramp_out_once(self, hurry: bool, signals: DeferredInterrupts) -> list[int]:
         b = self.b
         target = safe_pose(b.robot)
         want = b.converter.goal_ticks(target, b.goal_terms)[0]
-        interrupt: KeyboardInterrupt | None = None
         unreached: list[int] = []
-        for _ in range(2):
+        for attempt in range(2):
+            if self._skipping(hurry, signals):
+                return []
+            before = signals.count
             self._clear_tripped()
-            try:
-                interrupt = self._ramp(self._start_pose(), target, hurry) or interrupt
-            except KeyboardInterrupt as exc:  # a second one: skip to the final state
-                return exc, []
+            if not self._ramp(self._start_pose(), target, hurry, signals):
+                return []
             goals = self._read_answering("goal_position")
             unreached = [i for j, i in enumerate(b.ids)
                          if i in goals and goals[i]["goal_position"] != want[j]]
-            if not unreached or interrupt is not None:
+            if not unreached or signals.count > before or attempt:
                 break
             log.warning("%s: servo(s) %s did not take the stop ramp's goals; ramping again",
                         b.port, ", ".join(map(str, unreached)))
             hurry = True
-        return interrupt, unreached
+        return unreached
 
     def _start_pose(self) -> np.ndarray:
         b = self.b
@@ -196,38 +237,38 @@ class StopSequence:
             raise
 
     def _ramp(
-        self, start: np.ndarray, target: np.ndarray, hurry: bool
-    ) -> KeyboardInterrupt | None:
-        """Cosine ramp of goals; the first KeyboardInterrupt hurries it (returned at the end), a
-        second one (or one while hurrying) propagates."""
+        self, start: np.ndarray, target: np.ndarray, hurry: bool, signals: DeferredInterrupts
+    ) -> bool:
+        """Cosine ramp of goals; a signal hurries it (the rest at the joint speed limit), one
+        more stops it. False if it stopped short."""
         b = self.b
         vmax = b.robot.max_speed_rad_s
         span = float(np.max(np.abs(target - start)))
         if span < SETTLED_RAD:
             b.write_goals(b.converter.goal_ticks(target, b.goal_terms)[0])
-            return None
-        duration = fastest_ramp_s(span, vmax) if hurry else ramp_duration_s(
+            return True
+        urgency = hurry + signals.count
+        duration = fastest_ramp_s(span, vmax) if urgency else ramp_duration_s(
             span, vmax, b.robot.safety.ramp_s)
-        poses, interrupt, last = ramp_poses(start, target, duration), None, start
+        poses, last = ramp_poses(start, target, duration), start
         t0, k = b.clock(), 0
         while k < len(poses):
-            try:
-                at_s, pose = poses[k]
-                b.write_goals(b.converter.goal_ticks(pose, b.goal_terms)[0])
-                last = pose
-                remaining = t0 + at_s - b.clock()
-                if remaining > 0:
-                    b.sleep(remaining)
-                k += 1
-            except KeyboardInterrupt as exc:
-                if hurry:
-                    raise
-                hurry, interrupt = True, exc
+            if hurry + signals.count > urgency:
+                if self._skipping(hurry, signals):
+                    return False
+                urgency = hurry + signals.count
                 log.warning("%s: interrupted again: finishing the stop ramp at the joint speed "
                             "limit", b.port)
                 span = float(np.max(np.abs(target - last)))
                 poses, t0, k = ramp_poses(last, target, fastest_ramp_s(span, vmax)), b.clock(), 0
-        return interrupt
+            at_s, pose = poses[k]
+            b.write_goals(b.converter.goal_ticks(pose, b.goal_terms)[0])
+            last = pose
+            remaining = t0 + at_s - b.clock()
+            if remaining > 0:
+                b.sleep(remaining)
+            k += 1
+        return True
 
     # -- the Bus Watchdog and tracking -----------------------------------------------------------
     def _clear_tripped(self) -> None:

@@ -9,6 +9,8 @@ import sys
 
 import pytest
 
+from snakebot import _started_as_command as started_as_command
+
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="SIGINT to a child needs POSIX")
 
 
@@ -20,6 +22,8 @@ def imported(line: str) -> str:
 @pytest.mark.parametrize(
     "marker",
     [
+        # the package is imported: Python's runpy goes on to find snakebot.__main__ (issue 18.8)
+        "snakebot",
         "snakebot.cli",  # importing snakebot.cli.main (python -m snakebot's own import)
         "snakebot.cli.main",  # main() about to build the parser: every command module imports
         "snakebot.control.runner",  # half way through those imports (run_cmd's)
@@ -83,3 +87,22 @@ def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(
     assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert proc.returncode == 0
     assert '"serpenoid"' in proc.stdout  # the gait list was printed, not lost
+
+
+@pytest.mark.parametrize(
+    ("argv", "orig_argv", "expected"),
+    [
+        (["-m", "run"], ["python3", "-m", "snakebot", "run"], True),
+        (["-m", "run"], ["python3", "-X", "importtime", "-msnakebot", "run"], True),
+        (["-m", "x"], ["python3", "-m", "snakebot.tools", "x"], False),  # another module
+        (["-m"], ["python3", "-m", "pytest"], False),  # a program that imports snakebot
+        (["/usr/local/bin/snakebot", "run"], ["python3", "/usr/local/bin/snakebot", "run"], True),
+        (["train.py"], ["python3", "train.py"], False),
+        ([], [], False),
+    ],
+)
+def test_the_start_up_guard_is_for_the_snakebot_command_only(
+    argv: list[str], orig_argv: list[str], expected: bool
+) -> None:
+    # A program that only imports snakebot keeps Python's own Ctrl-C.
+    assert started_as_command(argv, orig_argv) is expected

@@ -72,8 +72,35 @@ def test_the_stop_ramp_never_beats_the_speed_limit() -> None:
 @pytest.mark.skipif(os.name != "posix", reason="signals to self")
 def test_a_signal_during_the_final_writes_is_raised_after_them() -> None:
     done = []
-    with pytest.raises(KeyboardInterrupt), deferred_interrupts() as caught:
+    with pytest.raises(KeyboardInterrupt), deferred_interrupts() as signals:
         os.kill(os.getpid(), signal.SIGINT)
         done.append("still running")  # the block is not cut short
-    assert done == ["still running"] and caught == [signal.SIGINT]
+    assert done == ["still running"] and signals.caught == [signal.SIGINT]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.skipif(os.name != "posix", reason="signals to self")
+def test_deferred_signals_are_counted_and_go_to_the_handler_they_were_meant_for() -> None:
+    def terminate(signum: int, frame: object) -> None:
+        raise SystemExit(f"terminated by {signum}")
+
+    previous = {s: signal.signal(s, terminate) for s in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        first = f"terminated by {int(signal.SIGHUP)}"
+        with pytest.raises(SystemExit, match=first), deferred_interrupts() as signals:
+            for signum in (signal.SIGHUP, signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+                os.kill(os.getpid(), signum)
+            assert signals.caught == [signal.SIGHUP, signal.SIGTERM, signal.SIGINT, signal.SIGHUP]
+        assert signal.getsignal(signal.SIGTERM) is terminate
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def test_a_keyboard_interrupt_noted_inside_is_raised_as_it_was() -> None:
+    original = KeyboardInterrupt("by hand")
+    with pytest.raises(KeyboardInterrupt) as info, deferred_interrupts() as signals:
+        signals.note(original)
+        assert signals.count == 1
+    assert info.value is original
