@@ -29,6 +29,9 @@ STALL_S = 5.0  # a client that takes no byte for this long is gone
 HANDSHAKE_S = 5.0  # to send the upgrade request
 HEAD_LIMIT = 16 * 1024  # bytes of request line and headers
 CHUNK = 64 * 1024
+# What the kernel may hold for a client that does not read: small, so one that stops reading
+# is noticed in seconds (Linux grows a socket's default send buffer to megabytes).
+SEND_BUFFER = 64 * 1024
 
 
 @dataclass
@@ -197,6 +200,9 @@ class WebSocketGate:
         self._clients += 1
         try:
             self.counts.accepted += 1
+            sock = writer.get_extra_info("socket")
+            if sock is not None:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
             up_reader, up_writer = await asyncio.open_connection(
                 "127.0.0.1", self.upstream_port, limit=CHUNK
             )
