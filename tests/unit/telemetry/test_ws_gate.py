@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from snakebot.cli.main import main
 from snakebot.cli.telemetry_options import client_url
 from snakebot.telemetry.ws_gate import origin_allowed
 
@@ -46,3 +47,17 @@ def test_an_origin_the_user_names_may_connect_and_only_that_one() -> None:
 ])
 def test_the_printed_url_is_one_a_client_can_open(host: str, url: str) -> None:
     assert client_url(host, 8765) == url
+
+
+@pytest.mark.parametrize(("option", "value", "expected"), [
+    ("--foxglove-origin", "viz.example.org", "https://viz.example.org"),
+    ("--foxglove-origin", "https://viz.example.org/page", "scheme://host"),
+    ("--foxglove-max-clients", "0", "1-1000"),
+    ("--foxglove-max-clients", "many", "number of clients"),
+])
+def test_a_bad_access_option_is_a_usage_error_naming_it(
+    option: str, value: str, expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["run", "--duration", "1", "--foxglove=0", option, value]) == 2
+    err = capsys.readouterr().err
+    assert option in err and expected in err
