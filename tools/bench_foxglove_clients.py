@@ -56,13 +56,15 @@ GAP_S = 0.05
 @dataclass(frozen=True)
 class RunResult:
     """One bus run: its arm, the achieved rate (Hz), gaps over 50 ms, the longest gap (s), the
-    CPU seconds of the ``snakebot run`` process (all its threads, up to its last 0.2 s), the
-    load average before it, the exit status and what the server did with its clients."""
+    rate in each quarter of the run (Hz), the CPU seconds of the ``snakebot run`` process (all
+    its threads, up to its last 0.2 s), the load average before it, the exit status and what
+    the server did with its clients."""
 
     arm: str
     rate_hz: float
     gaps_over_50ms: int
     max_gap_s: float
+    rate_by_quarter_hz: list[float]
     cpu_s: float
     load_before: float
     returncode: int
@@ -163,9 +165,15 @@ def one_run(arm: str, port: str, args: argparse.Namespace, folder: Path, index: 
     times = read_log(log).column("time_s") if log.exists() else np.zeros(0)
     gaps = np.diff(times)
     rate = (len(times) - 1) / float(times[-1] - times[0]) if len(times) > 1 else 0.0
+    quarters = []
+    if len(times) > 8:
+        edges = np.linspace(times[0], times[-1], 5)
+        counts = np.histogram(times, edges)[0]
+        quarters = [round(float(c) / float(edges[1] - edges[0]), 1) for c in counts]
     return RunResult(
         arm, round(rate, 2), int(np.sum(gaps > GAP_S)),
-        round(float(gaps.max()), 4) if len(gaps) else 0.0, cpu.result(), round(load_before, 2),
+        round(float(gaps.max()), 4) if len(gaps) else 0.0, quarters, cpu.result(),
+        round(load_before, 2),
         proc.returncode, summary.get("foxglove_clients", {}),
     )
 
@@ -187,7 +195,8 @@ def bench(args: argparse.Namespace) -> list[RunResult]:
                     results.append(result)
                     print(f"run {len(results)} {arm:7s} {result.rate_hz:6.2f} Hz, "
                           f"{result.gaps_over_50ms} gaps > 50 ms, longest "
-                          f"{result.max_gap_s * 1e3:.0f} ms, {result.cpu_s:.1f} CPU s, "
+                          f"{result.max_gap_s * 1e3:.0f} ms, by quarter "
+                          f"{result.rate_by_quarter_hz} Hz, {result.cpu_s:.1f} CPU s, "
                           f"load {result.load_before:.1f}, "
                           f"exit {result.returncode}, clients {result.clients}", flush=True)
     return results
