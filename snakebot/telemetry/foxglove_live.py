@@ -113,7 +113,7 @@ def open_channels(context: Any, topics: Sequence[str]) -> dict[str, Any]:
 class FoxgloveTelemetry:
     """A :class:`~snakebot.telemetry.sink.CycleLog` streaming each cycle to Foxglove and MCAP.
 
-    Opening starts the server and creates the file: ConfigError naming ``--foxglove`` when the
+    Opening starts the server and creates the file: OutputError naming ``host:port`` when the
     port cannot be bound, OutputError naming the file when it cannot be created or finished,
     MissingDependencyError without the SDK.
     """
