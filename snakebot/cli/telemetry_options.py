@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import ipaddress
+import socket
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -17,6 +19,7 @@ from snakebot.cli.common import add_force_option, check_writable
 from snakebot.errors import OutputError
 from snakebot.telemetry import CsvTelemetryWriter, column_names
 from snakebot.telemetry.sink import CycleLog, combine
+from snakebot.telemetry.ws_gate import FOXGLOVE_ORIGINS, MAX_CLIENTS
 
 DEFAULT_PORT = 8765
 
@@ -29,6 +32,26 @@ def _port(text: str) -> int:
     if not 0 <= value <= 65535:
         raise argparse.ArgumentTypeError(f"expected a TCP port 0-65535 (0: any free), got {value}")
     return value
+
+
+def _client_limit(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of clients, got {text!r}") from None
+    if not 1 <= value <= 1000:
+        raise argparse.ArgumentTypeError(f"expected 1-1000 clients, got {value}")
+    return value
+
+
+def _origin(text: str) -> str:
+    origin = text.strip().rstrip("/")
+    scheme, sep, rest = origin.partition("://")
+    if not sep or scheme not in ("http", "https") or not rest or "/" in rest:
+        raise argparse.ArgumentTypeError(
+            f"expected an origin like https://viz.example.org (scheme://host[:port]), got {text!r}"
+        )
+    return origin
 
 
 def add_telemetry_options(parser: argparse.ArgumentParser) -> None:
@@ -48,7 +71,24 @@ def add_telemetry_options(parser: argparse.ArgumentParser) -> None:
         "--foxglove-host",
         default="127.0.0.1",
         metavar="HOST",
-        help="address the --foxglove server binds (default 127.0.0.1: this machine only)",
+        help="address the --foxglove server binds (default 127.0.0.1: this machine only; "
+        "0.0.0.0 or ::: every network, with a warning)",
+    )
+    parser.add_argument(
+        "--foxglove-origin",
+        action="append",
+        type=_origin,
+        default=[],
+        metavar="ORIGIN",
+        help=f"also let browser pages from ORIGIN connect (repeatable; always allowed: pages of "
+        f"this machine, {', '.join(FOXGLOVE_ORIGINS)} and clients that are not browsers)",
+    )
+    parser.add_argument(
+        "--foxglove-max-clients",
+        type=_client_limit,
+        default=MAX_CLIENTS,
+        metavar="N",
+        help=f"serve at most N Foxglove clients at once (default {MAX_CLIENTS})",
     )
     parser.add_argument(
         "--mcap", type=Path, metavar="FILE", help="record the Foxglove channels to an MCAP file"
@@ -111,7 +151,9 @@ def open_telemetry(
     if port is not None or args.mcap is not None:
         telemetry.foxglove = sink = _open_foxglove(stack, args, robot, backend, rate_hz, command)
         if sink.port is not None:
-            telemetry.summary["foxglove"] = f"ws://{args.foxglove_host}:{sink.port}"
+            telemetry.summary["foxglove"] = client_url(args.foxglove_host, sink.port)
+            # at the end of the run, just before the server closes
+            stack.callback(lambda: telemetry.summary.update(foxglove_clients=sink.client_counts()))
         if args.mcap is not None:
             telemetry.summary["mcap"] = str(args.mcap)
     telemetry.log = combine([telemetry.csv, telemetry.foxglove])
@@ -130,7 +172,11 @@ def _open_foxglove(
     from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, SlowReadings, TelemetryOptions
     from snakebot.telemetry.robot_scene import robot_geometry
 
-    options = TelemetryOptions(port=args.foxglove, host=args.foxglove_host, mcap_path=args.mcap)
+    options = TelemetryOptions(
+        port=args.foxglove, host=args.foxglove_host, mcap_path=args.mcap,
+        origins=tuple(getattr(args, "foxglove_origin", ())),
+        max_clients=getattr(args, "foxglove_max_clients", MAX_CLIENTS),
+    )
     health, alerts = backend_readings(backend)
     readings = SlowReadings(health=health, alerts=alerts, overruns=lambda: backend.stats.overruns)
     try:
@@ -150,10 +196,41 @@ def _open_foxglove(
         # the port is taken: say which option chose it
         raise OutputError(f"--foxglove={args.foxglove}", exc.reason) from exc
     if sink.port is not None:
-        url = f"ws://{options.host}:{sink.port}"
+        url = client_url(options.host, sink.port)
         print(f"snakebot: Foxglove: open connection {url} (layout: docs/foxglove/"
               "snakebot-layout.json)", file=sys.stderr, flush=True)
+        if not _loopback(options.host):
+            print(f"snakebot: warning: the Foxglove server on {options.host} is reachable from "
+                  f"the network (other machines: ws://{_bracket(socket.gethostname())}:"
+                  f"{sink.port}); anyone who reaches it sees the stream, the protocol has no "
+                  "password", file=sys.stderr, flush=True)
     return sink
+
+
+def client_url(host: str, port: int) -> str:
+    """A URL a client on this machine can open for a server bound to ``host``: a wildcard
+    (``0.0.0.0``, ``::``) becomes its loopback, an IPv6 address goes in brackets."""
+    address = _address(host)
+    if address is not None and address.is_unspecified:
+        host = "127.0.0.1" if address.version == 4 else "::1"
+    return f"ws://{_bracket(host)}:{port}"
+
+
+def _address(host: str) -> ipaddress.IPv4Address | ipaddress.IPv6Address | None:
+    try:
+        return ipaddress.ip_address(host.strip("[]"))
+    except ValueError:
+        return None
+
+
+def _bracket(host: str) -> str:
+    address = _address(host)
+    return f"[{address}]" if address is not None and address.version == 6 else host
+
+
+def _loopback(host: str) -> bool:
+    address = _address(host)
+    return host == "localhost" if address is None else address.is_loopback
 
 
 def drive_observer(telemetry: Telemetry) -> Any:

@@ -7,17 +7,20 @@ at ``scene_rate_hz``; servo health, servo errors and run metrics at ``status_rat
 are timed at the wall clock of the start plus robot time, so a twin run that is faster than real
 time plays back at robot speed.
 
-The SDK serialises and sends from its own threads (a slow client drops its oldest messages,
-never blocks the loop); a cycle costs the control thread about 0.1 ms
-(tools/bench_telemetry.py, docs/driving.md). The MCAP file is complete once closed; a killed run
-loses the open chunk, while the CSV log (``--log``) loses nothing and ``snakebot log export``
-rebuilds the MCAP from it.
+The SDK serialises and sends from its own threads; its server listens on a loopback port of its
+own behind a :class:`~snakebot.telemetry.ws_gate.WebSocketGate` on the address asked for, which
+checks each client's Origin, serves at most ``max_clients`` and disconnects a client that stops
+reading, so no number of clients costs the control loop its rate (tools/bench_foxglove_clients.py,
+docs/benchmarks.md). Failed sends are counted (:meth:`FoxgloveTelemetry.client_counts`), not
+printed. A cycle costs the control thread about 0.1 ms (tools/bench_telemetry.py).
+
+The MCAP file is complete once closed; a killed run loses the open chunk, while the CSV log
+(``--log``) loses nothing and ``snakebot log export`` rebuilds the MCAP from it.
 """
 
 from __future__ import annotations
 
 import contextlib
-import logging
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -30,6 +33,8 @@ import numpy as np
 from snakebot.errors import MissingDependencyError, OutputError
 from snakebot.telemetry import schemas
 from snakebot.telemetry.scene import LinkPoses, frame_transforms, scene_update
+from snakebot.telemetry.sdk_logs import SendErrors, quiet_sink_errors
+from snakebot.telemetry.ws_gate import MAX_CLIENTS, STALL_S, WebSocketGate
 
 INSTALL = "pip install 'snakebot[foxglove]'"
 LOCALHOST = "127.0.0.1"
@@ -40,11 +45,16 @@ MCAP_FLUSH_S = 1.0  # close the MCAP chunk: a killed run loses at most this much
 @dataclass(frozen=True)
 class TelemetryOptions:
     """Where the stream goes: a WebSocket server (``port`` None: none; 0: any free port) and/or
-    an MCAP file; how often the scene (Hz) and the slow channels (Hz) are sent."""
+    an MCAP file; how often the scene (Hz) and the slow channels (Hz) are sent; which browser
+    origins besides this machine's and Foxglove's may connect, how many clients at once, and how
+    long (s) one may take nothing before it is disconnected."""
 
     port: int | None = None
     host: str = LOCALHOST
     mcap_path: Path | None = None
+    origins: tuple[str, ...] = ()
+    max_clients: int = MAX_CLIENTS
+    stall_s: float = STALL_S
     scene_rate_hz: float = 30.0
     status_rate_hz: float = 4.0
 
@@ -103,7 +113,7 @@ def open_channels(context: Any, topics: Sequence[str]) -> dict[str, Any]:
 class FoxgloveTelemetry:
     """A :class:`~snakebot.telemetry.sink.CycleLog` streaming each cycle to Foxglove and MCAP.
 
-    Opening starts the server and creates the file: ConfigError naming ``--foxglove`` when the
+    Opening starts the server and creates the file: OutputError naming ``host:port`` when the
     port cannot be bound, OutputError naming the file when it cannot be created or finished,
     MissingDependencyError without the SDK.
     """
@@ -129,6 +139,8 @@ class FoxgloveTelemetry:
         self._epoch_ns = time.time_ns() if start_epoch_ns is None else start_epoch_ns
         self._context = foxglove.Context()
         self._server: Any = None
+        self._gate: WebSocketGate | None = None
+        self._send_errors: SendErrors | None = None
         self._writer: Any = None
         try:
             self._open_sinks(foxglove)
@@ -153,7 +165,7 @@ class FoxgloveTelemetry:
         options = self.options
         if options.mcap_path is not None:
             path = options.mcap_path
-            _quiet_sink_errors()
+            quiet_sink_errors()
             try:
                 self._writer = foxglove.open_mcap(
                     path, allow_overwrite=True, context=self._context
@@ -162,22 +174,47 @@ class FoxgloveTelemetry:
                 raise OutputError(path, f"cannot write the MCAP file: {exc.strerror}") from exc
             self._flush()  # the header: a full disk or a device that refuses it fails here
         if options.port is not None:
+            where = f"{options.host}:{options.port}"
+            self._send_errors = SendErrors.install()
             try:
                 self._server = foxglove.start_server(
-                    name="snakebot", host=options.host, port=options.port, context=self._context
+                    name="snakebot", host=LOCALHOST, port=0, context=self._context
                 )
             except RuntimeError as exc:
                 reason = str(exc).removeprefix("FoxgloveError: ")
+                raise OutputError(where, f"cannot start the Foxglove server: {reason}") from exc
+            try:
+                self._gate = WebSocketGate(
+                    options.host, options.port, int(self._server.port),
+                    origins=options.origins, max_clients=options.max_clients,
+                    stall_s=options.stall_s,
+                )
+            except OSError as exc:
                 raise OutputError(
-                    f"{options.host}:{options.port}",
-                    f"cannot serve Foxglove there: {reason} (another snakebot or Foxglove "
-                    "bridge there? pick another port)",
+                    where,
+                    f"cannot serve Foxglove there: {exc.strerror or exc} (another snakebot or "
+                    "Foxglove bridge there? pick another port)",
                 ) from exc
 
     @property
     def port(self) -> int | None:
         """The server's port (the one picked when asked for 0), or None without a server."""
-        return None if self._server is None else int(self._server.port)
+        return None if self._gate is None else self._gate.port
+
+    @property
+    def clients(self) -> int:
+        """WebSocket clients connected now (0 without a server)."""
+        return 0 if self._gate is None else self._gate.clients
+
+    def client_counts(self) -> dict[str, int]:
+        """What became of the WebSocket clients so far: accepted, refused_origin, refused_full,
+        dropped_slow, bad_request (see :class:`~snakebot.telemetry.ws_gate.GateCounts`) and
+        send_errors (messages the SDK failed to send); empty without a server."""
+        if self._gate is None:
+            return {}
+        counts = self._gate.counts.as_dict()
+        counts["send_errors"] = self._send_errors.count if self._send_errors is not None else 0
+        return counts
 
     def time_ns(self, time_s: float) -> int:
         """Message time for robot time ``time_s``: the start's wall clock plus robot time."""
@@ -216,10 +253,10 @@ class FoxgloveTelemetry:
         self.rows += 1
         self._window.add(time_s, error, com)
         if self._geometry is not None and time_s >= self._next_scene:
-            self._next_scene = time_s + 1.0 / self.options.scene_rate_hz
+            self._next_scene = _next_due(self._next_scene, time_s, self.options.scene_rate_hz)
             self._send_scene(now_ns, time_s, position)
         if time_s >= self._next_status:
-            self._next_status = time_s + 1.0 / self.options.status_rate_hz
+            self._next_status = _next_due(self._next_status, time_s, self.options.status_rate_hz)
             self._send_status(now_ns, time_s, com)
         if self._writer is not None and time_s - (self._t0 or 0.0) >= self._next_flush:
             self._next_flush += MCAP_FLUSH_S
@@ -289,8 +326,13 @@ class FoxgloveTelemetry:
         it cannot be finished (what was written before stays on disk)."""
         writer, self._writer = self._writer, None
         server, self._server = self._server, None
+        gate, self._gate = self._gate, None
+        if gate is not None:
+            gate.stop()
         if server is not None:
             server.stop()
+        if self._send_errors is not None:
+            self._send_errors.remove()
         if writer is not None:
             try:
                 writer.close()
@@ -306,26 +348,13 @@ class FoxgloveTelemetry:
         self.close()
 
 
-class _Once(logging.Filter):
-    """Lets each distinct message through once: a failed MCAP write is logged by the SDK for
-    every message after it; the flush that follows raises it as an OutputError."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.seen: set[str] = set()
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        text = record.getMessage()
-        if text in self.seen:
-            return False
-        self.seen.add(text)
-        return True
-
-
-def _quiet_sink_errors() -> None:
-    logger = logging.getLogger("foxglove.log_sink_set")
-    if not any(isinstance(f, _Once) for f in logger.filters):
-        logger.addFilter(_Once())
+def _next_due(due: float, time_s: float, rate_hz: float) -> float:
+    """When a channel sent at ``time_s`` (it was due at ``due``) is next due: one period after
+    ``due``, so a 30 Hz channel averages 30 Hz on a 100 Hz loop (one period after ``time_s``
+    would round every wait up to whole cycles: 25 Hz), unless that is already past."""
+    period = 1.0 / rate_hz
+    following = due + period
+    return following if following > time_s else time_s + period
 
 
 def _short(values: np.ndarray) -> list[float]:

@@ -123,3 +123,30 @@ def test_a_scripted_drive_streams_its_status_and_joints(tmp_path: Path) -> None:
     assert {m["gait"] for m in drive} == {"serpenoid"}
     assert all(len(m["target_rad"]) == 8 for m in drive)
     assert max(m["speed"] for m in drive) > 0.0  # the keys took effect on the stream
+
+
+@pytest.mark.parametrize(("host", "loopback"), [("0.0.0.0", "127.0.0.1"), ("::", r"\[::1\]")])
+def test_a_wildcard_host_warns_and_prints_a_url_that_works(host: str, loopback: str) -> None:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "snakebot", "run", "--duration", "1", "--foxglove=0",
+         "--foxglove-host", host, "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline()
+        match = re.search(rf"ws://{loopback}:(\d+)", line)
+        assert match, line
+        warning = proc.stderr.readline()
+        assert "reachable from the network" in warning
+        client = FoxgloveClient(match.group(0))  # the printed URL is one a client can open
+        client.read_advertisements({"/joints"})
+        client.close()
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert proc.returncode == 0, stderr
+    summary = json.loads(stdout)
+    assert summary["foxglove"] == match.group(0)
+    assert summary["foxglove_clients"]["accepted"] == 1
