@@ -31,7 +31,7 @@ from snakebot.backends.dynamixel.faults import (
     TrackingError,
     WatchdogTripError,
 )
-from snakebot.backends.dynamixel.interrupts import DeferredInterrupts, deferred_interrupts
+from snakebot.backends.dynamixel.interrupts import DeferredInterrupts
 from snakebot.backends.dynamixel.shutdown import (
     fastest_ramp_s,
     ramp_duration_s,
@@ -70,7 +70,7 @@ class StopSequence:
         """
         b = self.b
         try:
-            with deferred_interrupts() as signals:
+            with b.interrupts as signals:
                 try:
                     if b.torque_may_be_on:
                         error = self._policy(signals)
@@ -88,7 +88,7 @@ class StopSequence:
         From the first transaction to the last the stop signals are deferred: they shorten the
         ramp and are raised after the policy went out, so no number of them skips it.
         """
-        with deferred_interrupts() as signals:
+        with self.b.interrupts as signals:  # held back since the connect
             error = self._stop(hurry, signals)
         if error is not None:
             raise error
