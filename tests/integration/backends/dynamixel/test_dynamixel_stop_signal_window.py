@@ -30,7 +30,7 @@ from snakebot.control.safety import SafetyLayer
 from snakebot.emulation import registered
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.gaits import make_gait
-from snakebot.types import StopPolicy
+from snakebot.types import JointCommand, StopPolicy
 from tests.integration.backends.dynamixel.conftest import BAUD, make_bench, robot_variant
 from tests.integration.backends.dynamixel.test_dynamixel_stop_paths import assert_left_per_policy
 from tests.integration.backends.dynamixel.test_dynamixel_stop_signals import (
@@ -134,3 +134,28 @@ def test_a_ctrl_c_at_any_event_of_the_way_out_still_ends_in_the_stop_policy(poli
             except AssertionError as exc:
                 raise AssertionError(f"{signals} SIGINT(s) at event {k} of {dry.events}") from exc
             assert way_out.done, (signals, k)
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+def test_a_users_own_loop_gets_its_ctrl_c_from_the_next_backend_call(policy: str) -> None:
+    chain = make_bench(range(1, 13))
+    robot = robot_variant(ramp_s=0.1, stop_policy=policy)
+    ran_on: list[int] = []
+    with registered(chain) as url:
+        backend = DynamixelBackend(robot, port=url, baud=BAUD,
+                                   port_handler_factory=EmulatedPortHandler,
+                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        with pytest.raises(KeyboardInterrupt) as info, backend:
+            state = backend.read_state()
+            for cycle in range(100):
+                backend.send_command(JointCommand(state.position_rad + 0.02 * cycle))
+                backend.advance(0.01)
+                state = backend.read_state()
+                if cycle == 10:
+                    os.kill(os.getpid(), signal.SIGINT)
+                ran_on.append(cycle)  # the loop's own code is not cut where the signal lands
+        assert ran_on == list(range(11))
+        raised_in = [entry.name for entry in info.traceback][-4:]  # by the next call
+        assert raised_in == ["send_command", "_safe_point", "deliver", "deliver_to"]
+        assert_left_per_policy(chain, policy)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
