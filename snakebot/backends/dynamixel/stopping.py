@@ -4,8 +4,9 @@ Once any servo may have torque on, every exit applies the stop policy to the ser
 answer: ``close`` ramps to the safe pose first (hold: torque on, Bus Watchdog disarmed; limp:
 torque off), a failed ``connect`` applies it where the servos stand (nothing has moved yet).
 
-- The whole stop, from its first transaction to the last, runs with the stop signals (SIGINT,
-  SIGTERM, SIGHUP) deferred (``interrupts.py``): none can cut a transaction or skip the policy.
+- The stop signals (SIGINT, SIGTERM, SIGHUP) are held back from the connect's first torque
+  write (``interrupts.py``), so none can cut a transaction, the way into the stop, or skip the
+  policy; the stop counts those still waiting.
   One during the ramp finishes it at the joint speed limit; a second one skips to the final state.
   A KeyboardInterrupt already on its way out when ``close`` starts (a second Ctrl-C during the
   runner's ramp-out) starts with the fast ramp. The signals are raised after the policy.
