@@ -75,6 +75,11 @@ class Backend(abc.ABC):
         """True between a successful ``connect`` and ``close``."""
         return self._connected
 
+    def _safe_point(self) -> None:
+        """Called at the start of every cycle call: where a backend that holds the stop signals
+        back while connected raises the ones that came (the Dynamixel backend does)."""
+        return None
+
     def _require_connected(self) -> None:
         if not self._connected:
             state = "closed" if self._closed else "not connected"
@@ -104,11 +109,13 @@ class Backend(abc.ABC):
     def read_state(self) -> JointState:
         """Measured joint positions, velocities and efforts now."""
         self._require_connected()
+        self._safe_point()
         return self._read_state()
 
     def send_command(self, command: JointCommand) -> None:
         """Set goal positions (rad, shape (N,)); takes effect as time advances."""
         self._require_connected()
+        self._safe_point()
         position = np.asarray(command.position_rad, dtype=float)
         if position.shape != (self.joint_count,):
             raise ValueError(
@@ -122,17 +129,20 @@ class Backend(abc.ABC):
         Each backend realises them its own way (the twin as they are, a servo chain in its
         registers, rounded and clipped to what they reach)."""
         self._require_connected()
+        self._safe_point()
         self._set_gains(gains)
 
     def set_torque(self, enabled: bool) -> None:
         """Enable or disable the joints' torque (disabled joints go limp)."""
         self._require_connected()
+        self._safe_point()
         self._set_torque(enabled)
         self.torque_enabled = enabled
 
     def advance(self, dt_s: float) -> None:
         """Let ``dt_s`` seconds of robot time pass (the twin steps; hardware sleeps)."""
         self._require_connected()
+        self._safe_point()
         if not dt_s > 0:
             raise ValueError(f"advance needs a positive time step, got {dt_s!r} s")
         self._advance(dt_s)

@@ -5,13 +5,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import signal
 import sys
 import time
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from types import FrameType
 from typing import Any, cast
 
 from snakebot.backends.base import Backend
@@ -151,24 +149,6 @@ def build_gait(robot: Robot, args: argparse.Namespace) -> tuple[str, Gait]:
     return resolve_gait(robot, gait, params=params, gait_file=args.gait_file)
 
 
-@contextlib.contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """Treat SIGTERM like Ctrl-C so a killed run still ramps out and leaves servos safe."""
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        raise KeyboardInterrupt
-
-    try:
-        previous = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
     if args.policy is None and args.policy_command is not None:
@@ -214,7 +194,6 @@ def run(args: argparse.Namespace) -> int:
             gait={"gait": gait_facts(gait_name, gait, {}), "duration_s": args.duration},
         )
         log = telemetry.log
-        stack.enter_context(sigterm_as_interrupt())
         with flag_errors():
             stack.enter_context(snake)
         hooks = _cycle_hooks(stack, snake.backend, args)

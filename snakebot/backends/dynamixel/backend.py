@@ -37,6 +37,7 @@ from snakebot.backends.dynamixel.faults import (
     PoseOutsideLimitsError,
     ServoSettingsError,
 )
+from snakebot.backends.dynamixel.interrupts import deferred_interrupts
 from snakebot.backends.dynamixel.plans import Row
 from snakebot.backends.dynamixel.sdk import PortHandlerFactory
 from snakebot.backends.dynamixel.state import StateDecoder
@@ -144,6 +145,9 @@ class DynamixelBackend(Backend):
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
         self._goal_plan = self.bus.sync_write_plan("goal_position", self.ids)
         self.stopper = StopSequence(self, tracking or TrackingLimits())
+        self.interrupts = deferred_interrupts()
+        """Holds the stop signals back from before the first torque write until the stop policy
+        is out (``interrupts.py``); they raise at the start of the next cycle call instead."""
 
     @property
     def port(self) -> str:
@@ -160,6 +164,7 @@ class DynamixelBackend(Backend):
             self._check_settings()
             self.write_watchdog(0)  # clears a trip left by a dead session
             self._set_gains(self.robot.gains)
+            self.interrupts.arm()  # from here the servos may be energised
             torque = self.bus.sync_read("torque_enable", self.ids)
             on = [i for i, v in torque.items() if v["torque_enable"]]
             self.torque_may_be_on = bool(on)
@@ -172,6 +177,7 @@ class DynamixelBackend(Backend):
             self._read_state()
             assert self.last_rows is not None
             self._open_bounds([row[-1] for row in self.last_rows])
+            self.interrupts.deliver()  # a Ctrl-C during the connect fails it, policy applied
         except BaseException:
             self.stopper.abort_connect()
             raise
@@ -179,6 +185,9 @@ class DynamixelBackend(Backend):
     def _close(self) -> None:
         """Ramp to the safe pose, then hold or limp; with torque off nothing moves or energises."""
         self.stopper.close(hurry=self.hurry_stop)
+
+    def _safe_point(self) -> None:
+        self.interrupts.deliver()
 
     def _check_chain(self) -> None:
         """One broadcast ping finds every servo; IDs it missed (garbled replies) get pinged."""

@@ -4,8 +4,9 @@ Once any servo may have torque on, every exit applies the stop policy to the ser
 answer: ``close`` ramps to the safe pose first (hold: torque on, Bus Watchdog disarmed; limp:
 torque off), a failed ``connect`` applies it where the servos stand (nothing has moved yet).
 
-- The whole stop, from its first transaction to the last, runs with the stop signals (SIGINT,
-  SIGTERM, SIGHUP) deferred (``interrupts.py``): none can cut a transaction or skip the policy.
+- The stop signals (SIGINT, SIGTERM, SIGHUP) are held back from the connect's first torque
+  write (``interrupts.py``), so none can cut a transaction, the way into the stop, or skip the
+  policy; the stop counts those still waiting.
   One during the ramp finishes it at the joint speed limit; a second one skips to the final state.
   A KeyboardInterrupt already on its way out when ``close`` starts (a second Ctrl-C during the
   runner's ramp-out) starts with the fast ramp. The signals are raised after the policy.
@@ -31,7 +32,7 @@ from snakebot.backends.dynamixel.faults import (
     TrackingError,
     WatchdogTripError,
 )
-from snakebot.backends.dynamixel.interrupts import DeferredInterrupts, deferred_interrupts
+from snakebot.backends.dynamixel.interrupts import DeferredInterrupts
 from snakebot.backends.dynamixel.shutdown import (
     fastest_ramp_s,
     ramp_duration_s,
@@ -70,7 +71,7 @@ class StopSequence:
         """
         b = self.b
         try:
-            with deferred_interrupts() as signals:
+            with b.interrupts as signals:
                 try:
                     if b.torque_may_be_on:
                         error = self._policy(signals)
@@ -88,7 +89,7 @@ class StopSequence:
         From the first transaction to the last the stop signals are deferred: they shorten the
         ramp and are raised after the policy went out, so no number of them skips it.
         """
-        with deferred_interrupts() as signals:
+        with self.b.interrupts as signals:  # held back since the connect
             error = self._stop(hurry, signals)
         if error is not None:
             raise error

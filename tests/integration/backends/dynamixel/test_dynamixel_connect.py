@@ -94,6 +94,7 @@ def test_a_tripped_watchdog_from_a_dead_session_is_cleared(bench: Bench) -> None
     bench.chain.advance(0.5)  # the host "dies": no packets for 500 ms
     assert all(s.watchdog_tripped for s in bench.chain.servos)
     first.bus.close()  # the process is gone, no stop ramp
+    first.interrupts.__exit__(None, None, None)  # and its signal handlers with it
     second = bench.backend()
     second.connect()
     try:

@@ -80,8 +80,11 @@ def connect_calls() -> int:
     with registered(chain) as url:
         counter = Interrupt(at=-1)
         chain.physics = ChainWatcher(chain, counter)
-        Bench(chain, url).backend().connect()
-    return counter.count
+        backend = Bench(chain, url).backend()
+        backend.connect()
+        count = counter.count
+        backend.close()  # a connected backend holds the stop signals back until it closes
+    return count
 
 
 @pytest.mark.parametrize("policy", ["hold", "limp"])
