@@ -20,12 +20,13 @@ def test_compare_refuses_to_replace_a_comparison_or_a_policy_in_it(
     out.mkdir()
     (out / "compare.json").write_text("{}")
     assert main(argv) == 1
-    assert f"{out}: holds a comparison (compare.json) that would be replaced" in \
-        capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"{out}: holds the comparison files compare.json, which would be replaced" in err
+    assert "--force" in err
     (out / "compare.json").unlink()
     constant_policy(out / "dft", GOAL_ENV_ID, [0, 0, 0, 0, 0], 20)
     assert main(argv) == 1
-    assert f"{out / 'dft'}: holds a trained policy (actor.npz, policy.json)" in \
+    assert f"{out / 'dft'}: holds the trained policy files actor.npz, policy.json, which" in \
         capsys.readouterr().err
     assert main([*argv, "--force"]) == 0
     assert sorted(p.name for p in (out / "dft").iterdir()) == ["actor.npz", "policy.json"]

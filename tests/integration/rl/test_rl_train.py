@@ -53,8 +53,8 @@ def test_a_trained_policy_is_replaced_only_with_force(tmp_path: Path) -> None:
     for extra in ([], ["--dry-run"]):
         again = cli("rl", "train", "--out", str(out), "--steps", "128", *TINY, *FAST, *extra)
         assert again.returncode == 1, again.stderr
-        assert f"{out}: holds a trained policy (actor.npz, learning_curve.csv, " \
-               "learning_curve.png, policy.json, policy.zip) that would be replaced: pass " \
+        assert f"{out}: holds the trained policy files actor.npz, learning_curve.csv, " \
+               "learning_curve.png, policy.json, policy.zip, which would be replaced: pass " \
                "--force" in again.stderr
         assert {name: (out / name).read_bytes() for name in TRAIN_FILES} == before
     forced = cli("rl", "train", "--out", str(out), "--steps", "128", *TINY, *FAST, "--force")

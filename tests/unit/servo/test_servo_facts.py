@@ -119,6 +119,8 @@ NOT_FACTS = {
     ("snakebot/emulation/pty_server.py", 4096),  # a read buffer's size in bytes
     ("snakebot/cli/rl_cmd.py", 2048),  # PPO's rollout length in env steps (SB3's default)
     ("snakebot/rl/train.py", 2048),  # the same
+    ("snakebot/rl/resume.py", 2048),  # the same, for a policy.json that records none
+    ("snakebot/config/input_file.py", 4096),  # the longest string a config file may hold
 }
 
 
