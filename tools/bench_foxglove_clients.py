@@ -180,7 +180,8 @@ def one_run(arm: str, port: str, args: argparse.Namespace, folder: Path, index: 
 
 def bench(args: argparse.Namespace) -> list[RunResult]:
     """The alternating series, beside ``args.hogs`` hogs and one emulator, all stopped after."""
-    hogs = [subprocess.Popen([sys.executable, "-c", _SPIN]) for _ in range(args.hogs)]
+    hogs = [subprocess.Popen([sys.executable, "-c", _SPIN], stderr=subprocess.DEVNULL)
+            for _ in range(args.hogs)]  # an interrupted hog has nothing to say
     results: list[RunResult] = []
     with running(hogs), tempfile.TemporaryDirectory() as tmp:
         emulator = snakebot("emulate", "--pty", "--json", "--robot", args.robot,
