@@ -4,6 +4,7 @@ limit, as ENOSPC on a full disk: CPython ignores SIGXFSZ, ffmpeg is killed by it
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -46,6 +47,8 @@ def test_a_finished_video_reads_back_with_every_frame(tmp_path: Path) -> None:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_FSIZE")
+@pytest.mark.skipif(importlib.util.find_spec("gymnasium") is None,
+                    reason="rl eval's writer needs the rl extra")
 def test_rl_evals_video_on_a_full_disk_is_an_output_error_naming_it(tmp_path: Path) -> None:
     path = tmp_path / "eval.mp4"
     done = subprocess.run([sys.executable, "-c", ENCODE_ON_A_FULL_DISK, str(path)],
