@@ -9,7 +9,7 @@ from typing import Literal
 import numpy as np
 
 from snakebot.config.servo_extras import NO_EXTRAS, ServoExtras
-from snakebot.servo import GainMapping
+from snakebot.servo import GainMapping, TickModel
 from snakebot.types import PDGains, StopPolicy
 
 Axis = Literal["yaw", "pitch"]
@@ -26,15 +26,15 @@ class ServoPhysics:
     """Electromechanical facts of one servo model (datasheet values, see the servo file).
 
     ``stall_torque_nm`` and ``no_load_speed_rad_s`` are at ``nominal_voltage_v``; the twin scales
-    them to ``supply_voltage_v``. Those, ``ticks_per_rev`` and the model number come from the
-    control-table data; ``p_gain_divisor``/``d_gain_divisor`` (the Position P/D Gain registers'
-    meaning, snakebot.servo.gains) and the rest from the servo file. ``stiffness_scale`` (the
-    twin's factor on the SI stiffness), ``damping_nms`` (joint damping with torque on, replacing
-    back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command leaving the controller
-    to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no delay model) come from a
-    robot's ``[twin.servo]`` (sysid), which may also override ``p_gain_divisor`` (then the
-    robot's register gains are converted with the overridden divisor, for the twin and the bus
-    alike). ``extras`` (electrics, overload, encoder and IMU noise) come from the servo file's
+    them to ``supply_voltage_v``. Those, ``ticks`` (how the position registers count) and the model
+    number come from the control-table data; ``p_gain_divisor``/``d_gain_divisor`` (the Position P/D
+    Gain registers' meaning, snakebot.servo.gains) and the rest from the servo file.
+    ``stiffness_scale`` (the twin's factor on the SI stiffness), ``damping_nms`` (joint damping with
+    torque on, replacing back-EMF + viscous) and ``actuator_delay_s`` (seconds from a command
+    leaving the controller to the servo acting on it, 0 to ``MAX_ACTUATOR_DELAY_S``; None: no delay
+    model) come from a robot's ``[twin.servo]`` (sysid), which may also override ``p_gain_divisor``
+    (then the robot's register gains are converted with the overridden divisor, for the twin and the
+    bus alike). ``extras`` (electrics, overload, encoder and IMU noise) come from the servo file's
     ``[twin]``, overridden by the robot's ``[twin.servo]``.
     """
 
@@ -45,7 +45,7 @@ class ServoPhysics:
     armature_kgm2: float
     friction_loss_nm: float
     viscous_damping_nms: float
-    ticks_per_rev: int
+    ticks: TickModel
     pwm_limit: int
     d_gain_loop_period_s: float
     p_gain_divisor: float
@@ -86,7 +86,7 @@ class ServoModel:
         voltage_ratio = physics.supply_voltage_v / physics.nominal_voltage_v
         return GainMapping(
             stall_torque_nm=physics.stall_torque_nm * voltage_ratio,
-            ticks_per_rev=physics.ticks_per_rev,
+            ticks_per_rad=physics.ticks.ticks_per_rad,
             pwm_limit=physics.pwm_limit,
             p_gain_divisor=physics.p_gain_divisor,
             d_gain_divisor=physics.d_gain_divisor,

@@ -107,7 +107,7 @@ _TABLE_FACTS = {
     "physics.stall_torque_nm": "the stall torque",
     "physics.no_load_speed_rad_s": "the no-load speed",
     "physics.nominal_voltage_v": "the voltage of the datasheet's torque and speed",
-    "physics.ticks_per_rev": "the encoder resolution",
+    "physics.ticks_per_rev": "the encoder resolution (the model data's [model.ticks])",
     "default_gains": "the factory Position P/I/D Gain",
 }
 
@@ -166,7 +166,7 @@ def parse_servo_file(path: Path) -> ServoModel:
         armature_kgm2=number("armature_kgm2"),
         friction_loss_nm=number("friction_loss_nm"),
         viscous_damping_nms=number("viscous_damping_nms"),
-        ticks_per_rev=specs.resolution,
+        ticks=specs.ticks,
         pwm_limit=phys.integer("pwm_limit", within=limits["physics.pwm_limit"]),
         d_gain_loop_period_s=number("d_gain_loop_period_s"),
         p_gain_divisor=number("p_gain_divisor"),

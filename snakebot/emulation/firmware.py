@@ -70,7 +70,7 @@ def position_ticks(memory: ControlTableMemory, state: MotorState) -> int:
     """Present Position for a motor state."""
     pulse = memory.by_key["present_position"].scale
     ticks = round(direction(memory) * state.position_rad / pulse)
-    return centre_tick(memory.table.specs.resolution) + ticks + homing_offset(memory)
+    return centre_tick(memory.table.specs.ticks) + ticks + homing_offset(memory)
 
 
 def command(servo: VirtualServo) -> ServoCommand:
@@ -95,7 +95,7 @@ def command(servo: VirtualServo) -> ServoCommand:
         torque_enabled=get("torque_enable") == 1,
         operating_mode=mode,
         goal_position_rad=sign
-        * (get("goal_position") - offset - centre_tick(specs.resolution))
+        * (get("goal_position") - offset - centre_tick(specs.ticks))
         * scale("goal_position"),
         goal_velocity_rad_s=sign * get("goal_velocity") * rpm,
         goal_current_a=sign * current,

@@ -31,7 +31,7 @@ class GainMapping:
     """
 
     stall_torque_nm: float
-    ticks_per_rev: int
+    ticks_per_rad: float
     pwm_limit: int
     p_gain_divisor: float
     d_gain_divisor: float
@@ -42,7 +42,7 @@ class GainMapping:
     @property
     def error_gain(self) -> float:
         """Duty (fraction of full PWM) per radian of error per unit of the P register."""
-        return (self.ticks_per_rev / (2 * math.pi)) / (self.p_gain_divisor * self.pwm_limit)
+        return self.ticks_per_rad / (self.p_gain_divisor * self.pwm_limit)
 
     def kp_nm_per_rad(self, position_p: float) -> float:
         """The stiffness (N·m/rad) a Position P Gain register value gives."""
@@ -81,3 +81,48 @@ def _register(value: float, maximum: int) -> int:
     if not math.isfinite(value):
         return maximum if value > 0 else 0
     return int(min(max(round(value), 0), maximum))
+
+
+COMPLIANCE_SLOPES = (2, 4, 8, 16, 32, 64, 128)
+"""The AX series' Compliance Slope levels: the firmware uses the highest power of two not above
+the register value (e-Manual ax-12a.md: 7 steps, 2..254)."""
+
+
+@dataclass(frozen=True)
+class ComplianceMapping:
+    """An AX-series Compliance Slope register's meaning in SI, for one model at its supply voltage.
+
+    The AX position loop has no PID: the output torque rises from Punch at the Compliance Margin
+    to the Torque Limit over Compliance Slope ticks of error (e-Manual "Compliance"). Read as a
+    spring, that is K = torque_limit / (slope * rad_per_tick) N·m/rad with no damping register
+    (the twin's joint damping and back-EMF give the damping). ``torque_limit_nm`` is the stall
+    torque at the supply voltage times the Torque Limit fraction. SI -> register picks the nearest
+    level of :data:`COMPLIANCE_SLOPES` (in log scale).
+    """
+
+    torque_limit_nm: float
+    rad_per_tick: float
+
+    def slope_level(self, value: int) -> int:
+        """The slope the firmware uses for a register value (highest power of two <= value)."""
+        return max(s for s in COMPLIANCE_SLOPES if s <= max(value, 2))
+
+    def kp_nm_per_rad(self, slope: int) -> float:
+        """The stiffness (N·m/rad) a Compliance Slope register value gives."""
+        return self.torque_limit_nm / (self.slope_level(slope) * self.rad_per_tick)
+
+    def pd_gains(self, slope: int) -> PDGains:
+        """SI gains of a Compliance Slope (no damping register: kd 0)."""
+        return PDGains(self.kp_nm_per_rad(slope), 0.0)
+
+    @property
+    def max_gains(self) -> PDGains:
+        """The stiffest setting (the smallest slope)."""
+        return self.pd_gains(COMPLIANCE_SLOPES[0])
+
+    def slope(self, kp_nm_per_rad: float) -> int:
+        """The Compliance Slope level nearest (in log scale) to a stiffness."""
+        if not math.isfinite(kp_nm_per_rad) or kp_nm_per_rad <= 0:
+            return COMPLIANCE_SLOPES[-1] if not kp_nm_per_rad > 0 else COMPLIANCE_SLOPES[0]
+        wanted = self.torque_limit_nm / (kp_nm_per_rad * self.rad_per_tick)
+        return min(COMPLIANCE_SLOPES, key=lambda s: abs(math.log(s / wanted)))

@@ -10,6 +10,7 @@ from types import MappingProxyType
 from typing import Any
 
 from snakebot.errors import ConfigError, MissingDependencyError
+from snakebot.servo.ticks import TickModel
 from snakebot.servo_tables.table import (
     ACCESS_MODES,
     Register,
@@ -39,6 +40,10 @@ _SPEC_FIELDS = {
     "firmware_version",
     "eeprom_end",
     "resolution",
+    "ticks",
+    "fast_sync_read",
+    "bulk_read",
+    "gains",
     "operating_modes",
     "baud_rates",
     "indirect_banks",
@@ -135,12 +140,38 @@ def _bank(values: list[int]) -> tuple[int, int, int]:
     return address, data, count
 
 
-def _specs(model: dict[str, Any]) -> ServoSpecs:
+def _ticks(source: Path, model: dict[str, Any]) -> TickModel:
+    facts = dict(model.get("ticks", {}))
+    count = int(facts.pop("count", model.get("resolution", 4096)))
+    unknown = set(facts) - {"travel_deg", "centre", "minimum", "maximum", "sign", "sign_bit"}
+    if unknown:
+        raise ConfigError(source, "model.ticks", f"unknown field(s) {sorted(unknown)}")
+    try:
+        return TickModel(
+            count=count,
+            travel_deg=float(facts.get("travel_deg", 360.0)),
+            centre=int(facts.get("centre", count // 2)),
+            minimum=int(facts.get("minimum", 0)),
+            maximum=int(facts.get("maximum", count - 1)),
+            sign=str(facts.get("sign", "unsigned")),
+            sign_bit=int(facts.get("sign_bit", 15)),
+        )
+    except ValueError as exc:
+        raise ConfigError(source, "model.ticks", str(exc)) from exc
+
+
+def _specs(source: Path, model: dict[str, Any]) -> ServoSpecs:
     rates = {int(index): int(rate) for index, rate in model.get("baud_rates", {}).items()}
+    gains = str(model.get("gains", "pid"))
+    if gains not in ("pid", "compliance"):
+        raise ConfigError(source, "model.gains", f"must be 'pid' or 'compliance', not {gains!r}")
     return ServoSpecs(
         firmware_version=int(model.get("firmware_version", 46)),
         eeprom_end=int(model.get("eeprom_end", 64)),
-        resolution=int(model.get("resolution", 4096)),
+        ticks=_ticks(source, model),
+        fast_sync_read=bool(model.get("fast_sync_read", True)),
+        bulk_read=bool(model.get("bulk_read", True)),
+        gains=gains,
         operating_modes=tuple(int(m) for m in model.get("operating_modes", (3,))),
         baud_rates=MappingProxyType(rates),
         indirect_banks=tuple(_bank(bank) for bank in model.get("indirect_banks", ())),
@@ -155,10 +186,12 @@ def _build(stem: str) -> ServoTable:
     source = DATA_DIR / f"{stem}.toml"
     data = _read_toml(stem)
     model = data["model"]
-    unknown = set(model) - _SPEC_FIELDS - {"name", "model_number", "protocol", "model_file"}
+    unknown = set(model) - _SPEC_FIELDS - {
+        "name", "model_number", "protocol", "protocols", "family", "model_file"
+    }
     if unknown:
         raise ConfigError(source, "model", f"unknown field(s) {sorted(unknown)}")
-    specs = _specs(model)
+    specs = _specs(source, model)
     facts_by_key: dict[str, dict[str, Any]] = {
         key: dict(facts)
         for key, facts in data.get("registers", {}).items()
@@ -185,6 +218,8 @@ def _build(stem: str) -> ServoTable:
         protocol=float(model.get("protocol", 2.0)),
         registers=registers,
         specs=specs,
+        family=str(model.get("family", "dynamixel")),
+        protocols=tuple(float(p) for p in model.get("protocols", [model.get("protocol", 2.0)])),
     )
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 from snakebot.errors import SnakebotError
+from snakebot.servo.ticks import X_SERIES_TICKS, TickModel
 
 ACCESS_MODES = ("R", "RW")
 
@@ -104,12 +105,18 @@ class ServoSpecs:
     """Model facts beyond the register list that a driver or an emulator needs.
 
     `baud_rates` maps the Baud Rate register value to bit/s; `indirect_banks` holds
-    (first Indirect Address, first Indirect Data, count) per bank.
+    (first Indirect Address, first Indirect Data, count) per bank; `ticks` is how the position
+    registers count; `fast_sync_read`/`bulk_read` whether the model's firmware has those group
+    reads (the family decides whether its protocol has them at all); `gains` how its position
+    loop is set: "pid" (Position P/D Gain registers) or "compliance" (AX compliance slope).
     """
 
     firmware_version: int = 46
     eeprom_end: int = 64
-    resolution: int = 4096
+    ticks: TickModel = X_SERIES_TICKS
+    fast_sync_read: bool = True
+    bulk_read: bool = True
+    gains: str = "pid"
     operating_modes: tuple[int, ...] = (3,)
     baud_rates: Mapping[int, int] = field(default_factory=lambda: MappingProxyType({}))
     indirect_banks: tuple[tuple[int, int, int], ...] = ()
@@ -117,6 +124,11 @@ class ServoSpecs:
     no_load_speed_rad_s: float = 5.0
     stall_torque_nm: float = 1.0
     stall_current_a: float = 1.0
+
+    @property
+    def resolution(self) -> int:
+        """Position ticks over the model's range of travel (4096, or 1024 on an AX-12A)."""
+        return self.ticks.count
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,6 +144,8 @@ class ServoTable:
     protocol: float
     registers: Mapping[str, Register]
     specs: ServoSpecs = field(default_factory=ServoSpecs)
+    family: str = "dynamixel"
+    protocols: tuple[float, ...] = ()
     _by_address: Mapping[int, Register] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -139,6 +153,8 @@ class ServoTable:
         for register in self.registers.values():
             by_address.setdefault(register.address, register)
         object.__setattr__(self, "registers", MappingProxyType(dict(self.registers)))
+        if not self.protocols:
+            object.__setattr__(self, "protocols", (float(self.protocol),))
         object.__setattr__(self, "_by_address", MappingProxyType(by_address))
 
     def __getitem__(self, key: str) -> Register:

@@ -72,7 +72,7 @@ def parse_key(table: ServoTable, key: str) -> tuple[Register, Unit | None]:
 
 
 def _centre(register: Register, table: ServoTable) -> int:
-    return centre_tick(table.specs.resolution) if register.key in CENTRED_KEYS else 0
+    return centre_tick(table.specs.ticks) if register.key in CENTRED_KEYS else 0
 
 
 def to_raw(register: Register, unit: Unit | None, value: float, table: ServoTable) -> int:

@@ -201,7 +201,7 @@ def outside_new_limits(link: Link, chain: ChainSettings, plan: ApplyPlan, diff: 
         present = bus.read(wanted.servo_id, "present_position")
         if low.raw <= present <= high.raw:
             continue
-        angle = ticks_to_rad(present, ticks_per_rev=bus.table.specs.resolution)
+        angle = ticks_to_rad(present, ticks=bus.table.specs.ticks)
         lo_text, unit = low.show(low.raw)
         hi_text, _ = high.show(high.raw)
         notes.append(

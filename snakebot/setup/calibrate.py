@@ -4,7 +4,7 @@ The one calibration convention (snakebot.servo.ticks, the Dynamixel backend's): 
 offset lives in the robot config; the servo's Homing Offset stays 0 and its Drive Mode reverse bit
 clear (the settings say so and ``config diff`` checks it). With every joint straight (0 rad), a
 servo reading ``ticks`` gets ``zero_offset_rad = direction * (ticks - centre) * 2 pi /
-ticks_per_rev`` (centre 2048 of 4096 on the X series).
+ticks`` (centre 2048 of 4096 on the X series, 512 of 1024 on an AX).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, OutputError
-from snakebot.servo.ticks import ticks_to_rad
+from snakebot.servo.ticks import TickModel, ticks_to_rad
 from snakebot.setup.errors import SetupError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings
@@ -41,10 +41,10 @@ class JointZero:
     new_offset_rad: float
 
 
-def zero_offset_rad(ticks: int, direction: int, ticks_per_rev: int) -> float:
+def zero_offset_rad(ticks: int, direction: int, model: TickModel) -> float:
     """The zero offset that makes a servo reading ``ticks`` report 0 rad: the angle the tick
     means with no offset (snakebot.servo.ticks)."""
-    return ticks_to_rad(ticks, ticks_per_rev=ticks_per_rev, direction=direction)
+    return ticks_to_rad(ticks, ticks=model, direction=direction)
 
 
 def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
@@ -69,7 +69,7 @@ def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
             f"run `snakebot config apply --robot {robot.name} --port {link.port}`"
         )
     ticks = bus.sync_read("present_position", robot.servo_ids)
-    tpr = robot.servo.physics.ticks_per_rev
+    tpr = robot.servo.physics.ticks
     return [
         JointZero(index, joint.servo_id, ticks[joint.servo_id]["present_position"],
                   joint.zero_offset_rad,

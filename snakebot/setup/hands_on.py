@@ -128,7 +128,7 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
     (holding where it got to) when it does not arrive."""
     check_jog(chain, joint, target_rad, speed_rad_s)
     robot, j = chain.robot, chain.robot.joints[joint]
-    tpr = robot.servo.physics.ticks_per_rev
+    tpr = robot.servo.physics.ticks
     bus = link.at(chain.baud)
     (state,) = read_states(link, [j.servo_id], chain.baud)
     values = bus.read_block(j.servo_id, _PREREQUISITES)
@@ -138,7 +138,7 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
         raise SetupError(f"{link.port}: servo {j.servo_id}: jogging needs the configured settings "
                          f"({'; '.join(wrong)}): run `snakebot config apply --robot {robot.name}`")
     problems = torque_on_refusals([state])
-    goal = rad_to_ticks(target_rad, ticks_per_rev=tpr, zero_offset_rad=j.zero_offset_rad,
+    goal = rad_to_ticks(target_rad, ticks=tpr, zero_offset_rad=j.zero_offset_rad,
                         direction=j.direction)
     if not state.limits[0] <= goal <= state.limits[1]:
         problems.append(f"servo {j.servo_id}: tick {goal} is outside its Min/Max Position Limit "
@@ -147,7 +147,7 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
         raise SetupError(f"{link.port}: jog refused, nothing moved: {'; '.join(problems)}")
 
     def angle(ticks: int) -> float:
-        return ticks_to_rad(ticks, ticks_per_rev=tpr, zero_offset_rad=j.zero_offset_rad,
+        return ticks_to_rad(ticks, ticks=tpr, zero_offset_rad=j.zero_offset_rad,
                             direction=j.direction)
 
     table = bus.table
@@ -164,7 +164,7 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
         bus.write(j.servo_id, "profile_velocity", velocity)
         bus.write(j.servo_id, "goal_position", goal)
         travel_s = abs(goal - present) / (velocity * table["profile_velocity"].scale
-                                          * tpr / (2 * math.pi))
+                                          * tpr.ticks_per_rad)
         deadline = start_s + travel_s + 2 * JOG_RAMP_S + 2.0
         changed_s = start_s
         while abs(present - goal) > 1 and link.clock_s() < deadline:

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.config.schema import RobotConfig
-from snakebot.servo.ticks import centre_tick, rad_per_tick, ticks_per_rad
+from snakebot.servo.ticks import TickModel
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,7 @@ class TickConverter:
     into one gain and one bias per joint, so the control loop pays two array operations per way.
     """
 
-    ticks_per_rev: int
+    ticks: TickModel
     zero_offset_rad: np.ndarray
     direction: np.ndarray
     lower_rad: np.ndarray
@@ -43,8 +43,8 @@ class TickConverter:
     )
 
     def __post_init__(self) -> None:
-        k = ticks_per_rad(self.ticks_per_rev)
-        centre = centre_tick(self.ticks_per_rev)
+        k = self.ticks.ticks_per_rad
+        centre = self.ticks.centre
         derived = {
             "_tick_gain": self.direction * k,
             "_tick_bias": centre + self.direction * self.zero_offset_rad * k,
@@ -60,17 +60,18 @@ class TickConverter:
     @classmethod
     def for_robot(cls, robot: RobotConfig) -> TickConverter:
         """The converter for a robot's joints and servo resolution."""
-        tpr = robot.servo.physics.ticks_per_rev
+        model = robot.servo.physics.ticks
         offset = np.array([j.zero_offset_rad for j in robot.joints], dtype=float)
         direction = np.array([j.direction for j in robot.joints], dtype=float)
         lower, upper = robot.lower_rad.astype(float), robot.upper_rad.astype(float)
-        k = ticks_per_rad(tpr)
-        a = centre_tick(tpr) + direction * (lower + offset) * k
-        b = centre_tick(tpr) + direction * (upper + offset) * k
+        k = model.ticks_per_rad
+        a = model.centre + direction * (lower + offset) * k
+        b = model.centre + direction * (upper + offset) * k
         # Limits round inwards so a clipped goal never lands outside the configured range.
         lo = np.ceil(np.minimum(a, b) - 1e-9).astype(np.int64)
         hi = np.floor(np.maximum(a, b) + 1e-9).astype(np.int64)
-        return cls(tpr, offset, direction, lower, upper, lo, hi)
+        lo, hi = np.maximum(lo, model.minimum), np.minimum(hi, model.maximum)
+        return cls(model, offset, direction, lower, upper, lo, hi)
 
     @property
     def joint_count(self) -> int:
@@ -79,8 +80,8 @@ class TickConverter:
 
     @property
     def rad_per_tick(self) -> float:
-        """Resolution: 2 pi / ticks_per_rev."""
-        return rad_per_tick(self.ticks_per_rev)
+        """Resolution (rad per tick)."""
+        return self.ticks.rad_per_tick
 
     def to_ticks(self, angle_rad: np.ndarray) -> np.ndarray:
         """Joint angles (rad, (N,)) to goal ticks (int64, (N,)), unclipped."""

@@ -131,7 +131,7 @@ class TwinBackend(Backend):
         physics = self.robot.servo.physics
         servo = servo_dynamics(physics, self.robot.gains)
         self._sensors = TwinSensors(
-            self.model, self._head_id, physics.extras, physics.ticks_per_rev, self._seed
+            self.model, self._head_id, physics.extras, physics.ticks.rad_per_tick, self._seed
         )
         extras = physics.extras
         if extras.stall_current_a is not None or extras.overload_trip_s is not None:

@@ -8,8 +8,6 @@ Reading them never changes the physics.
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
@@ -20,14 +18,14 @@ class TwinSensors:
     """The head IMU and the encoders of one twin (``head_id`` the head body)."""
 
     def __init__(
-        self, model: mujoco.MjModel, head_id: int, extras: ServoExtras, ticks_per_rev: int,
+        self, model: mujoco.MjModel, head_id: int, extras: ServoExtras, rad_per_tick: float,
         seed: int = 0,
     ) -> None:
         self._model = model
         self._head = head_id
         self._gyro_noise = extras.imu_gyro_noise_rad_s or 0.0
         self._position_noise = extras.encoder_noise_rad or 0.0
-        self._tick_rad = 2 * math.pi / ticks_per_rev if extras.quantise_encoder else 0.0
+        self._tick_rad = rad_per_tick if extras.quantise_encoder else 0.0
         self._rng = np.random.default_rng(seed)
         self._velocity = np.zeros(6)
 

@@ -99,12 +99,12 @@ def test_the_datasheet_facts_come_from_the_control_table(model: str) -> None:
     assert physics.stall_torque_nm == table.specs.stall_torque_nm
     assert physics.no_load_speed_rad_s == table.specs.no_load_speed_rad_s
     assert physics.nominal_voltage_v == table.specs.nominal_voltage_v
-    assert physics.ticks_per_rev == table.specs.resolution
-    assert centre_tick(physics.ticks_per_rev) == 2048
+    assert physics.ticks == table.specs.ticks
+    assert centre_tick(physics.ticks) == 2048
     # The position registers' SI scale (what the emulator and the bus tables use) is the same
     # tick as the tick <-> radian formula's.
     for key in ("goal_position", "present_position", "homing_offset"):
-        assert table[key].scale == pytest.approx(rad_per_tick(physics.ticks_per_rev), rel=1e-15)
+        assert table[key].scale == pytest.approx(rad_per_tick(physics.ticks), rel=1e-15)
     # What a servo answers as from the factory: the ID and Baud Rate registers' defaults.
     assert table["id"].default == FACTORY_ID
     assert table.baud_rates[table["baud_rate"].default] == FACTORY_BAUD

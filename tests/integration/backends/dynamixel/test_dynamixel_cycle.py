@@ -12,7 +12,7 @@ from snakebot.backends.dynamixel.faults import PoseOutsideLimitsError
 from snakebot.config.loader import load_servo_model
 from snakebot.config.schema import GainRegisters, RobotConfig
 from snakebot.emulation import ExternalMotion, make_chain_for_ids, registered
-from snakebot.servo import rad_to_ticks
+from snakebot.servo import X_SERIES_TICKS, rad_to_ticks
 from snakebot.types import JointCommand, PDGains
 from tests.integration.backends.dynamixel.conftest import BAUD, Bench, robot_variant
 
@@ -44,7 +44,7 @@ def test_a_gait_is_tracked_and_goals_follow_the_tick_convention(bench: Bench) ->
         for joint, servo_id in enumerate(robot.servo_ids):
             j = robot.joints[joint]
             expected = rad_to_ticks(goal[joint], zero_offset_rad=j.zero_offset_rad,
-                                    direction=j.direction, ticks_per_rev=4096)
+                                    direction=j.direction, ticks=X_SERIES_TICKS)
             assert bench.servo(servo_id).peek("goal_position") == expected
         for _ in range(50):
             backend.advance(DT)
@@ -161,7 +161,7 @@ def test_goals_outside_the_joint_limits_are_clipped(bench: Bench) -> None:
         assert backend.stats.extra["clipped_commands"] == 1
         with pytest.raises(ValueError, match="non-finite"):
             backend.send_command(JointCommand(np.full(12, np.nan)))
-    limit = rad_to_ticks(1.5, ticks_per_rev=4096)
+    limit = rad_to_ticks(1.5, ticks=X_SERIES_TICKS)
     assert all(s.peek("goal_position") <= limit for s in bench.chain.servos)
 
 

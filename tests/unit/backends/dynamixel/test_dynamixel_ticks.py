@@ -14,8 +14,8 @@ from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.servo import ticks
 
-rad_to_ticks = functools.partial(ticks.rad_to_ticks, ticks_per_rev=4096)
-ticks_to_rad = functools.partial(ticks.ticks_to_rad, ticks_per_rev=4096)
+rad_to_ticks = functools.partial(ticks.rad_to_ticks, ticks=ticks.X_SERIES_TICKS)
+ticks_to_rad = functools.partial(ticks.ticks_to_rad, ticks=ticks.X_SERIES_TICKS)
 
 TICK = 2 * math.pi / 4096
 
@@ -50,14 +50,18 @@ def test_zero_offset_is_added_before_the_direction() -> None:
     angle=st.floats(-math.pi, math.pi),
     offset=st.floats(-0.5, 0.5),
     direction=st.sampled_from([1, -1]),
-    ticks_per_rev=st.sampled_from([4096, 1024, 1003846]),
+    model=st.sampled_from([
+        ticks.X_SERIES_TICKS,
+        ticks.TickModel(count=1024, travel_deg=300.0, centre=512, maximum=1023),
+        ticks.TickModel(count=1003846, centre=501923, maximum=1003845),
+    ]),
 )
 def test_round_trip_within_half_a_tick(
-    angle: float, offset: float, direction: int, ticks_per_rev: int
+    angle: float, offset: float, direction: int, model: ticks.TickModel
 ) -> None:
-    kw = {"zero_offset_rad": offset, "direction": direction, "ticks_per_rev": ticks_per_rev}
-    back = ticks_to_rad(rad_to_ticks(angle, **kw), **kw)  # type: ignore[arg-type]
-    assert abs(back - angle) <= math.pi / ticks_per_rev + 1e-9
+    kw = {"zero_offset_rad": offset, "direction": direction}
+    back = model.to_rad(model.to_ticks(angle, **kw), **kw)
+    assert abs(back - angle) <= model.rad_per_tick / 2 + 1e-9
 
 
 def test_vectorised_converter_matches_the_scalar_functions() -> None:

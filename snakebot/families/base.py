@@ -1,0 +1,107 @@
+"""What a servo family is: one protocol, its instruction set and what it can do, as one class.
+
+A *family* is the wire side of a servo line: the packet format and its SDK packet handler, the
+instructions the protocol has, how a status packet's error byte reads, and which group
+transactions exist. A *model* (AX-12A, XL430-W250) is data: its control table, tick model, baud
+table and datasheet physics (``snakebot.servo_tables``). What a given servo can do is the family's
+capabilities narrowed by its model (:meth:`ServoFamily.capabilities`): an AX-12A on Protocol 1.0
+has no Bulk Read although the protocol does, an XL430 has no current sensing.
+
+Nothing here imports a vendor SDK; ``snakebot.backends.<vendor>.sdk`` builds the packet handler
+for :attr:`ServoFamily.sdk_protocol`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+from snakebot.servo_tables import ServoTable
+
+READ_METHODS = ("fast_sync_read", "sync_read", "bulk_read", "read")
+"""How a cycle's state read goes out, best first: one combined reply, one reply per servo after
+one request, one request naming a block per servo, one request per servo."""
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What one servo model can do on one family's bus (every field a plain yes/no or a list).
+
+    ``read_method`` is the best of :data:`READ_METHODS` the pair has; ``factory_reset_options``
+    the Factory Reset variants it has (``all`` also resets ID and baud rate).
+    """
+
+    sync_read: bool
+    fast_sync_read: bool
+    bulk_read: bool
+    bus_watchdog: bool
+    hardware_error_status: bool
+    current_sensing: bool
+    reboot: bool
+    broadcast_ping: bool
+    indirect_addresses: bool
+    factory_reset_options: tuple[str, ...]
+
+    @property
+    def read_method(self) -> str:
+        """The cheapest group read this pair has ("read": one Read per servo)."""
+        if self.fast_sync_read:
+            return "fast_sync_read"
+        if self.sync_read:
+            return "sync_read"
+        if self.bulk_read:
+            return "bulk_read"
+        return "read"
+
+
+class ServoFamily(ABC):
+    """One servo family's protocol: identity, instruction set, error byte and timing.
+
+    Subclasses are stateless; compare them by :attr:`name`.
+    """
+
+    name: str
+    """Short name used in robot files and reports, e.g. ``"dynamixel-p1"``."""
+    vendor: str
+    """The model data's ``family`` value this protocol serves, e.g. ``"dynamixel"``."""
+    protocol: float
+    """The protocol version a robot file's ``[bus] protocol`` names."""
+    sdk_protocol: float
+    """What the vendor SDK's packet-handler factory takes for this family."""
+    broadcast_id: int
+    max_id: int
+    status_overhead_bytes: int
+    """Bytes of one status packet beyond its data (header, ID, length, error, checksum)."""
+    read_overhead_bytes: int
+    """Bytes of one Read instruction packet."""
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ServoFamily) and other.name == self.name
+
+    def __hash__(self) -> int:
+        return hash(self.name)
+
+    def __repr__(self) -> str:
+        return f"<servo family {self.name}>"
+
+    def speaks(self, table: ServoTable) -> bool:
+        """Whether servos of this model can run this family's protocol at all."""
+        return table.family == self.vendor and self.protocol in table.protocols
+
+    @abstractmethod
+    def capabilities(self, table: ServoTable) -> Capabilities:
+        """What a servo of model ``table`` can do on this family's bus."""
+
+    @abstractmethod
+    def status_errors(self, error: int) -> tuple[str, ...]:
+        """Names of the faults a status packet's error byte reports, e.g. ("overload",)."""
+
+    @abstractmethod
+    def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
+        """(bytes on the wire, reply turnarounds) of reading ``length`` bytes from ``n_servos``
+        by ``method`` (one of :data:`READ_METHODS`): every turnaround costs a Return Delay Time
+        and, through a USB adapter, a latency tail."""
+
+    @abstractmethod
+    def sync_write_bytes(self, n_servos: int, length: int) -> int:
+        """Bytes of one Sync Write of ``length`` data bytes to ``n_servos``."""

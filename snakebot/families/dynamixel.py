@@ -1,0 +1,136 @@
+"""The two Dynamixel families: Protocol 2.0 (X, MX 2.0 firmware) and Protocol 1.0 (AX, MX, X).
+
+References: e-Manual ``docs/en/dxl/protocol1.md`` and ``protocol2.md``; the SDK's
+``protocol1_packet_handler.py`` (no Sync Read, Reboot, broadcast Ping or Bulk Write in 1.0);
+/work/shared/reference/servo-families.md §3-5 and dynamixel.md §1.
+"""
+
+from __future__ import annotations
+
+from snakebot.families.base import Capabilities, ServoFamily
+from snakebot.servo_tables import ServoTable
+
+P1_ERROR_BITS = (
+    (0x01, "input voltage"),
+    (0x02, "angle limit"),
+    (0x04, "overheating"),
+    (0x08, "range"),
+    (0x10, "checksum"),
+    (0x20, "overload"),
+    (0x40, "instruction"),
+)
+"""Protocol 1.0 status error byte, bit by bit (bit 7 is always 0)."""
+
+P2_ERRORS = {
+    0x01: "result fail",
+    0x02: "instruction",
+    0x03: "crc",
+    0x04: "data range",
+    0x05: "data length",
+    0x06: "data limit",
+    0x07: "access",
+}
+"""Protocol 2.0 status error numbers (bits 0-6); bit 7 is the Alert (a latched hardware error)."""
+
+
+class DynamixelProtocol2(ServoFamily):
+    """Dynamixel Protocol 2.0: CRC-16 packets, Sync/Fast Sync/Bulk Read, Reboot, Bus Watchdog."""
+
+    name = "dynamixel-p2"
+    vendor = "dynamixel"
+    protocol = 2.0
+    sdk_protocol = 2.0
+    broadcast_id = 0xFE
+    max_id = 252
+    status_overhead_bytes = 11  # FF FF FD 00, ID, LEN(2), 0x55, ERR, CRC(2)
+    read_overhead_bytes = 14
+
+    def capabilities(self, table: ServoTable) -> Capabilities:
+        """Every group read; watchdog, hardware error and current sensing where the table has
+        the register; Fast Sync Read where the model's firmware has it."""
+        return Capabilities(
+            sync_read=True,
+            fast_sync_read=table.specs.fast_sync_read,
+            bulk_read=True,
+            bus_watchdog="bus_watchdog" in table,
+            hardware_error_status="hardware_error_status" in table,
+            current_sensing="present_current" in table,
+            reboot=True,
+            broadcast_ping=True,
+            indirect_addresses=bool(table.specs.indirect_banks),
+            factory_reset_options=("keep_id_baud", "keep_id", "all"),
+        )
+
+    def status_errors(self, error: int) -> tuple[str, ...]:
+        """The error number (bits 0-6) and the Alert bit, by name."""
+        names = [P2_ERRORS.get(error & 0x7F, f"error {error & 0x7F}")] if error & 0x7F else []
+        if error & 0x80:
+            names.append("alert")
+        return tuple(names)
+
+    def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
+        """Sync Read: request 14 + N, N replies of 11 + L; Fast Sync Read: one combined reply of
+        8 + N * (L + 4) + 2... counted exactly by the e-Manual's layout; Bulk Read: 5 bytes per
+        servo in the request; Read: one request and one reply per servo."""
+        if method == "fast_sync_read":
+            request = 14 + n_servos
+            reply = 10 + n_servos * (length + 4) + 1
+            return request + reply, 1
+        if method == "sync_read":
+            return 14 + n_servos + n_servos * (self.status_overhead_bytes + length), n_servos
+        if method == "bulk_read":
+            return 10 + 5 * n_servos + n_servos * (self.status_overhead_bytes + length), n_servos
+        return n_servos * (self.read_overhead_bytes + self.status_overhead_bytes + length), n_servos
+
+    def sync_write_bytes(self, n_servos: int, length: int) -> int:
+        """14 bytes of header, address and length, then ID + data per servo."""
+        return 14 + n_servos * (1 + length)
+
+
+class DynamixelProtocol1(ServoFamily):
+    """Dynamixel Protocol 1.0: checksum packets, Sync Write and Bulk Read, a bit-per-fault error
+    byte, no Sync Read, Reboot, broadcast Ping or Bus Watchdog instruction."""
+
+    name = "dynamixel-p1"
+    vendor = "dynamixel"
+    protocol = 1.0
+    sdk_protocol = 1.0
+    broadcast_id = 0xFE
+    max_id = 253
+    status_overhead_bytes = 6  # FF FF, ID, LEN, ERR, CHK
+    read_overhead_bytes = 8
+
+    def capabilities(self, table: ServoTable) -> Capabilities:
+        """Bulk Read where the model has it (MX, X in 1.0 mode; not AX); the Bus Watchdog and
+        Hardware Error Status registers where the (X) table has them below address 256."""
+        def reachable(key: str) -> bool:
+            return key in table and table[key].address + table[key].size <= 256
+
+        return Capabilities(
+            sync_read=False,
+            fast_sync_read=False,
+            bulk_read=table.specs.bulk_read,
+            bus_watchdog=reachable("bus_watchdog"),
+            hardware_error_status=reachable("hardware_error_status"),
+            current_sensing=reachable("present_current"),
+            reboot=False,
+            broadcast_ping=False,
+            indirect_addresses=False,
+            factory_reset_options=("all",),
+        )
+
+    def status_errors(self, error: int) -> tuple[str, ...]:
+        """Every set bit of the error byte, by name (e-Manual protocol1.md)."""
+        return tuple(name for bit, name in P1_ERROR_BITS if error & bit)
+
+    def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
+        """Bulk Read: request 3N + 7, then N replies of 6 + L; Read: 8 + 6 + L per servo."""
+        if method == "bulk_read":
+            return 3 * n_servos + 7 + n_servos * (self.status_overhead_bytes + length), n_servos
+        if method != "read":
+            raise ValueError(f"Protocol 1.0 has no {method.replace('_', ' ')}")
+        return n_servos * (self.read_overhead_bytes + self.status_overhead_bytes + length), n_servos
+
+    def sync_write_bytes(self, n_servos: int, length: int) -> int:
+        """8 bytes of header, address and length, then ID + data per servo."""
+        return 8 + n_servos * (1 + length)
