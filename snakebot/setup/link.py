@@ -74,7 +74,7 @@ class Link:
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
         self.bus = DynamixelBus(port, baud, model=model, retries=retries,
                                 port_handler_factory=self._make_handler)
-        self._raw = sdk.SdkLink(self.handler, 2.0)
+        self._raw = sdk.SdkLink(self.handler, self.bus.family)
         self._open = False
 
     def _make_handler(self, port: str) -> sdk.PortHandlerLike:

@@ -17,6 +17,7 @@ import dynamixel_sdk as _sdk
 
 from snakebot.config.ports import url_scheme
 from snakebot.errors import BusError
+from snakebot.families import ServoFamily
 
 try:
     import termios
@@ -234,12 +235,13 @@ def port_handler_for(port: str) -> PortHandlerLike:
 
 
 class SdkLink:
-    """One opened port plus its packet handler; every call returns the SDK's raw result codes."""
+    """One opened port plus the packet handler of its servo family (``family.sdk_protocol``:
+    the SDK's Protocol 2.0 or 1.0 handler); every call returns the SDK's raw result codes."""
 
-    def __init__(self, port: PortHandlerLike, protocol: float) -> None:
+    def __init__(self, port: PortHandlerLike, family: ServoFamily) -> None:
         self.port = port
-        self.packet: PacketHandlerLike = _sdk.PacketHandler(protocol)
-        self.protocol = protocol
+        self.family = family
+        self.packet: PacketHandlerLike = _sdk.PacketHandler(family.sdk_protocol)
 
     @contextmanager
     def guard(self) -> Iterator[None]:
@@ -303,9 +305,9 @@ class SdkLink:
             return self.packet.reboot(self.port, dxl_id)
 
     def factory_reset(self, dxl_id: int, option: int) -> tuple[int, int]:
-        """(result, error byte); Protocol 1.0 takes no option."""
+        """(result, error byte); a family without reset options resets everything."""
         with self.guard():
-            if self.protocol == 1.0:
+            if not self.family.factory_reset_takes_option:
                 result, error = self.packet.factoryReset(self.port, dxl_id)  # type: ignore[call-arg]
                 return int(result), int(error)
             return self.packet.factoryReset(self.port, dxl_id, option)
