@@ -47,6 +47,7 @@ from snakebot.backends.dynamixel.rate import (
     CycleBudget,
     check_rate,
     cycle_budget,
+    fastest_baud,
     usb_tail_s,
     wanted_return_delay_s,
 )
@@ -179,7 +180,7 @@ class DynamixelBackend(Backend):
         return cycle_budget(
             self.bus.family, self._state_plan.method, len(self.ids), self._state_plan.block.size,
             table["goal_position"].size, self.bus.baud, wanted_return_delay_s(self.robot, table),
-            tail, usb_assumed=assumed,
+            tail, usb_assumed=assumed, fastest_baud=fastest_baud(table),
         )
 
     def check_rate(self, rate_hz: float) -> None:
