@@ -7,9 +7,9 @@ joint mode (a Goal Position outside them is refused: the Angle Limit bit, no mov
 in joint mode (0 = as fast as it goes). Torque Limit (34) starts at Max Torque (14) on power-up;
 0 leaves the output free. Lock (47) = 1 refuses EEPROM writes until the next power cycle, and 0
 cannot be written back. EEPROM is writable with torque on (unlike the X series). The position
-loop is the AX's Compliance or the MX's P/I/D registers, handed to a physics model as they are
-(`ServoCommand.gain_registers`). References: e-Manual ax-12a.md, mx-28.md (control tables);
-servo-families.md §3.2.
+loop is the MX's P/I/D registers (`ServoCommand.position_gains`) or the AX's Compliance
+registers, which a physics model reads from the table. References: e-Manual ax-12a.md, mx-28.md
+(control tables); servo-families.md §3.2.
 """
 
 from __future__ import annotations
@@ -24,17 +24,7 @@ if TYPE_CHECKING:
     from snakebot.emulation.servo import VirtualServo
 
 GOALS = ("goal_position", "moving_speed")
-GAIN_KEYS = (
-    "position_p_gain",
-    "position_i_gain",
-    "position_d_gain",
-    "cw_compliance_margin",
-    "ccw_compliance_margin",
-    "cw_compliance_slope",
-    "ccw_compliance_slope",
-    "punch",
-    "torque_limit",
-)
+PID_KEYS = ("position_p_gain", "position_i_gain", "position_d_gain")
 MULTI_TURN_LIMIT = 4095
 """Both angle limits at 4095 select multi-turn mode on an MX (e-Manual mx-28.md)."""
 
@@ -70,8 +60,7 @@ def command(servo: VirtualServo) -> ServoCommand:
     acceleration = 0.0
     if memory.has("goal_acceleration"):
         acceleration = get("goal_acceleration") * memory.by_key["goal_acceleration"].scale
-    gains = tuple((key, get(key)) for key in GAIN_KEYS if memory.has(key))
-    p_i_d = tuple(get(k) if memory.has(k) else 0 for k in GAIN_KEYS[:3])
+    p_i_d = tuple(get(k) if memory.has(k) else 0 for k in PID_KEYS)
     return ServoCommand(
         torque_enabled=get("torque_enable") == 1 and get("torque_limit") > 0,
         operating_mode=OperatingMode.VELOCITY if wheel else OperatingMode.POSITION,
@@ -83,7 +72,6 @@ def command(servo: VirtualServo) -> ServoCommand:
         max_acceleration_rad_s2=acceleration if acceleration > 0 else None,
         no_load_speed_rad_s=no_load,
         position_gains=(p_i_d[0], p_i_d[1], p_i_d[2]),
-        gain_registers=gains,
     )
 
 

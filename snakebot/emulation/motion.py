@@ -53,9 +53,8 @@ class ServoCommand:
 
     Profile limits are None for "unlimited" (register value 0); `max_velocity_rad_s` already folds
     in the Velocity Limit and the no-load speed. `position_gains` is the Position (P, I, D) Gain
-    registers as they are (register units), for a physics model of the position loop;
-    `gain_registers` every register that sets the loop, by key (an AX's compliance slopes,
-    margins, punch and torque limit; empty on the X series, whose loop is `position_gains`).
+    registers as they are (register units), for a physics model of the position loop (zeros
+    on an AX, whose loop is its compliance registers: a physics model reads those itself).
     """
 
     torque_enabled: bool
@@ -68,7 +67,6 @@ class ServoCommand:
     max_acceleration_rad_s2: float | None
     no_load_speed_rad_s: float
     position_gains: tuple[int, int, int]
-    gain_registers: tuple[tuple[str, int], ...] = ()
 
 
 class MotionModel(Protocol):

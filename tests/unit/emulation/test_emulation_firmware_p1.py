@@ -82,14 +82,6 @@ def test_torque_limit_starts_at_max_torque_and_zero_leaves_the_output_free(
     assert not ax.servo(1).command().torque_enabled
 
 
-def test_compliance_registers_reach_the_motion_model(ax: EmulatedChain, bus) -> None:
-    port, ph = bus
-    assert ph.write1ByteTxRx(port, 2, 28, 64) == (dxl.COMM_SUCCESS, 0)  # CW Compliance Slope
-    gains = dict(ax.servo(2).command().gain_registers)
-    assert gains["cw_compliance_slope"] == 64 and gains["ccw_compliance_slope"] == 32
-    assert "position_p_gain" not in gains
-
-
 def test_lock_keeps_the_eeprom_until_a_power_cycle(ax: EmulatedChain, bus) -> None:
     port, ph = bus
     assert ph.write1ByteTxRx(port, 1, LOCK, 1) == (dxl.COMM_SUCCESS, 0)
