@@ -38,6 +38,7 @@ import dynamixel_sdk as sdk
 import numpy as np
 
 from snakebot.backends.dynamixel.backend import DynamixelBackend
+from snakebot.backends.dynamixel.blocks import resolve_block
 from snakebot.backends.dynamixel.checks import cycle_wire_time_s
 from snakebot.backends.dynamixel.rate import METHOD_NAMES, cycle_budget
 from snakebot.config import load_robot
@@ -66,17 +67,20 @@ class Kind:
     model: str
     protocol: float
     method: str
+    robot: str  # the shipped robot whose joints and safety the bench's robot starts from
     ticks: int  # per turn
     travel_rad: float
     speed_unit_rad_s: float
 
 
 KINDS = {
-    "x": Kind("X-series (XL430-W250), Protocol 2.0", MODEL, 2.0, "fast_sync_read", 4096,
+    "x": Kind("X-series (XL430-W250), Protocol 2.0", MODEL, 2.0, "fast_sync_read", "snake8", 4096,
               2 * math.pi, RAD_S_PER_UNIT),
-    "mx": Kind("MX-28, Protocol 1.0", "MX-28", 1.0, "bulk_read", 4096, 2 * math.pi,
+    "mx": Kind("MX-28, Protocol 1.0", "MX-28", 1.0, "bulk_read", "snake12-ax12a", 4096,
+               2 * math.pi,
                0.114 * 2 * math.pi / 60),
-    "ax": Kind("AX-12A, Protocol 1.0", "AX-12A", 1.0, "read", 1024, math.radians(300),
+    "ax": Kind("AX-12A, Protocol 1.0", "AX-12A", 1.0, "read", "snake12-ax12a", 1024,
+               math.radians(300),
                0.111 * 2 * math.pi / 60),
 }
 
@@ -84,7 +88,7 @@ KINDS = {
 def robot_for(n: int, kind: Kind | None = None) -> RobotConfig:
     """n joints of the kind's servos, IDs 1..n, no ramp."""
     kind = kind or KINDS["x"]
-    base = load_robot("snake8" if kind.protocol == 2.0 else "snake12-ax12a")
+    base = load_robot(kind.robot)
     if kind.model != base.servo.name:
         base = dataclasses.replace(base, servo=load_servo_model(kind.model, base.source))
     joints = tuple(dataclasses.replace(base.joints[0], servo_id=i + 1) for i in range(n))
@@ -269,7 +273,7 @@ def make_sides(n: int, cycles: int, kind: Kind | None = None) -> dict[str, Side]
         backend.connect()
     assert backend.bus.capabilities.read_method == kind.method
     url = register_chain(chain_for(n, kind))
-    bare: BareLoop | BareLoopP1 = (BareLoop(url, n) if kind.protocol == 2.0
+    bare: BareLoop | BareLoopP1 = (BareLoop(url, n) if kind.method == "fast_sync_read"
                                    else BareLoopP1(url, n, kind))
     clocks = {"backend": EmulatorClock(), "bare": EmulatorClock()}
     clocks["backend"].instrument(handlers[0])
@@ -353,9 +357,8 @@ def families_table(args: argparse.Namespace) -> None:
         r = results[key]
         table = table_for_model(kind.model)
         family = family_for(table, kind.protocol)
-        read = sum(table[k].size for k in ("present_position", "present_velocity",
-                                            "present_load"))
-        read = READ_LENGTH if kind.protocol == 2.0 else read
+        read = resolve_block(table, ("present_position", "present_velocity",
+                                     "present_load")).size
         write = table["goal_position"].size
         host_s = med(r["backend_client"], 1)
         rates = []
