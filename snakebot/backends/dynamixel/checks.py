@@ -175,8 +175,8 @@ def latency_warning(
 ) -> str | None:
     """A warning with the fix when the latency timer caps the loop rate (above 1 ms).
 
-    ``turnarounds`` is how many replies the cycle waits for one at a time (one per servo with
-    a Read per servo): each may wait a whole latency timer.
+    ``turnarounds`` is how many replies the host waits for one after another in a cycle (one
+    per servo with a Read per servo, else one): each may wait a whole latency timer.
     """
     if latency_ms <= 1:
         return None
