@@ -8,6 +8,7 @@ from snakebot.errors import ConfigError
 from snakebot.families import (
     DynamixelProtocol1,
     DynamixelProtocol2,
+    ServoFamily,
     WireCost,
     family_for,
     family_named,
@@ -76,7 +77,9 @@ def test_the_protocol_2_error_byte_is_a_number_plus_the_alert_bit() -> None:
         (P2, "fast_sync_read", WireCost(14 + 12 + 8 + 12 * 10, 1, 1)),
     ],
 )
-def test_wire_costs_match_the_packet_layouts(family, method: str, expected: WireCost) -> None:
+def test_wire_costs_match_the_packet_layouts(
+    family: ServoFamily, method: str, expected: WireCost
+) -> None:
     assert family.read_cost(method, 12, 6) == expected
 
 
