@@ -97,3 +97,21 @@ def test_families_are_found_by_name() -> None:
     assert family_named("dynamixel-p1") == P1
     with pytest.raises(ConfigError, match="known: dynamixel-p2, dynamixel-p1"):
         family_named("feetech")
+
+
+def test_an_ax_12a_reads_one_servo_at_a_time_and_has_no_watchdog() -> None:
+    table = table_for_model("AX-12A")
+    assert family_for(table) == P1
+    caps = P1.capabilities(table)
+    assert caps.read_method == "read"  # no Sync Read in Protocol 1.0, no Bulk Read on an AX
+    assert not caps.bus_watchdog and not caps.hardware_error_status
+    assert not caps.current_sensing
+    with pytest.raises(ConfigError, match=r"AX-12A servos speak Protocol 1\.0 only"):
+        family_for(table, 2.0)
+
+
+def test_an_mx_28_reads_by_bulk_read_on_protocol_1_and_fast_sync_on_its_2_0_firmware() -> None:
+    assert P1.capabilities(table_for_model("MX-28")).read_method == "bulk_read"
+    two = table_for_model("MX-28-2")
+    assert family_for(two) == P2
+    assert P2.capabilities(two).read_method == "fast_sync_read"
