@@ -195,7 +195,7 @@ def cycle_wire_time_s(
 ) -> tuple[float, int]:
     """(bus seconds, reply turnarounds) of one control cycle at Return Delay Time 0: one Sync
     Write of ``write_bytes`` per servo (goal position) plus one read of ``read_bytes`` per servo
-    by ``method``, at 10 bits per byte (``family.read_cycle_bytes``, ``sync_write_bytes``)."""
-    read, turnarounds = family.read_cycle_bytes(method, servo_count, read_bytes)
-    total = read + family.sync_write_bytes(servo_count, write_bytes)
-    return total * 10.0 / baud, turnarounds
+    by ``method``, at 10 bits per byte (``family.read_cost``, ``sync_write_bytes``)."""
+    read = family.read_cost(method, servo_count, read_bytes)
+    total = read.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)
+    return total * 10.0 / baud, read.return_delays

@@ -28,4 +28,4 @@ def test_protocol_1_overload_heat_and_voltage_are_conditions_the_rest_errors() -
 def test_a_fast_sync_read_reply_is_as_long_as_the_emulator_builds_it() -> None:
     for n in (1, 2, 12):
         reply = len(build_fast_status([(i + 1, 0, bytes(10)) for i in range(n)]))
-        assert P2.read_cycle_bytes("fast_sync_read", n, 10) == (14 + n + reply, 1)
+        assert P2.read_cost("fast_sync_read", n, 10) == (14 + n + reply, 1, 1)
