@@ -271,7 +271,10 @@ class OverPty:
         )
         for ask in questions:
             while True:
-                model, result, error = ask()
+                try:
+                    model, result, error = ask()
+                except IndexError as exc:  # the SDK indexes a status without data: a bad reply
+                    raise AssertionError(f"ID {servo_id}: a status too short to read") from exc
                 if result == dxl.COMM_SUCCESS:
                     expected = model_number(servo_id, self.protocol)
                     assert (model, error) == (expected, 0), f"ID {servo_id}: {model}, {error}"
