@@ -3,10 +3,18 @@
 Transport-free: a transport feeds what the host wrote (`receive`) and delivers each `BusReply` at
 its time; `advance` lets virtual time pass for the servos' motion and watchdogs. Faults are set
 per servo (or per ID, for every servo carrying it) through the methods below.
+
+Servos are stepped lazily: `advance` only counts time; each servo's step for the time passed runs
+once, when something needs its state (a packet arrives, the chain's servos are looked up, or
+`settle` is called), and in whole `STEP_S` steps once `SETTLE_AFTER_S` has piled up. A transport
+that advances the chain once per reply byte group (a Fast Sync Read of N servos: N + 2 advances a
+cycle) thus costs each servo two steps per cycle, not N + 2. How the time between two packets is
+cut does not change the motion: it is stepped as whole `STEP_S` steps and one remainder.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Iterable
 
@@ -14,7 +22,7 @@ from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
 from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.instructions import Slot, execute
-from snakebot.emulation.motion import ChainPhysics, MotionModel
+from snakebot.emulation.motion import STEP_S, ChainPhysics, MotionModel
 from snakebot.emulation.protocol import ParserStats, StreamParser
 from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
@@ -22,6 +30,9 @@ from snakebot.servo import FACTORY_BAUD
 from snakebot.servo_tables import ServoTable, table_for_model
 
 Target = int | VirtualServo
+# A servo held from outside lags the bus clock by less than this (the Bus Watchdog counts in
+# 20 ms units, so it still fires within one unit of its time).
+SETTLE_AFTER_S = 0.01
 
 
 class EmulatedChain:
@@ -50,28 +61,36 @@ class EmulatedChain:
         self.faults = FaultBook(seed)
         self.lock = threading.RLock()
         self._parser = StreamParser(stale_after_s=stale_after_s)
+        self._unstepped_s = 0.0  # bus time the servos have not been stepped through yet
+        self._judge_watchdog = True
 
     # ------------------------------------------------------------------ servos
     @property
     def servos(self) -> tuple[VirtualServo, ...]:
-        """Every servo on the bus, in the order they were added."""
-        return tuple(self._servos)
+        """Every servo on the bus, in the order they were added, stepped up to now."""
+        with self.lock:
+            self.settle()
+            return tuple(self._servos)
 
     def add(self, servo: VirtualServo) -> VirtualServo:
         """Connect a servo to the bus and return it."""
         with self.lock:
+            self.settle()
             self._servos.append(servo)
         return servo
 
     def remove(self, servo: VirtualServo) -> None:
         """Disconnect a servo (and forget its faults)."""
         with self.lock:
+            self.settle()
             self._servos.remove(servo)
             self.faults.clear(servo)
 
     def servos_with_id(self, servo_id: int) -> list[VirtualServo]:
-        """Every servo whose ID register holds `servo_id`."""
-        return [s for s in self._servos if s.servo_id == servo_id]
+        """Every servo whose ID register holds `servo_id`, stepped up to now."""
+        with self.lock:
+            self.settle()
+            return [s for s in self._servos if s.servo_id == servo_id]
 
     def servo(self, servo_id: int) -> VirtualServo:
         """The (first) servo with `servo_id`; EmulationError naming the IDs present if none."""
@@ -88,7 +107,8 @@ class EmulatedChain:
 
     # ------------------------------------------------------------------ time and traffic
     def advance(self, dt_s: float, *, bytes_waiting: bool = False) -> None:
-        """Let `dt_s` seconds of bus time pass: `physics` (if any), then every servo's own step.
+        """Let `dt_s` seconds of bus time pass: `physics` (if any) now, the servos' own steps
+        when their state is next needed (see the module docstring).
 
         `bytes_waiting`: host bytes that arrived at some unknown moment within `dt_s` are still
         unread (a transport that was starved of CPU); feed them next with `receive`. The Bus
@@ -101,9 +121,27 @@ class EmulatedChain:
             self.now_s += dt_s
             if self.physics is not None:
                 self.physics.advance(self._servos, dt_s)
-            judge = not bytes_waiting
-            for servo in self._servos:
-                servo.step(dt_s, judge_watchdog=judge)
+            self._unstepped_s += dt_s
+            self._judge_watchdog = not bytes_waiting
+            if self._unstepped_s >= SETTLE_AFTER_S:
+                self._step_servos(math.floor(self._unstepped_s / STEP_S) * STEP_S)
+
+    def settle(self) -> None:
+        """Step every servo through the bus time that passed since its last step.
+
+        The chain does this itself before it executes a packet and when its servos are looked
+        up; call it before reading a servo held from earlier (its `state`, `peek`, ...).
+        """
+        with self.lock:
+            self._step_servos(self._unstepped_s)
+
+    def _step_servos(self, dt_s: float) -> None:
+        if dt_s <= 0.0:
+            return
+        self._unstepped_s = max(0.0, self._unstepped_s - dt_s)
+        judge = self._judge_watchdog
+        for servo in self._servos:
+            servo.step(dt_s, judge_watchdog=judge)
 
     def byte_time_s(self) -> float:
         """Seconds per byte at the line rate."""
@@ -122,6 +160,7 @@ class EmulatedChain:
             replies: list[BusReply] = []
             offset = 0.0
             for packet in self._parser.feed(data, self.now_s, idle_s=idle_s):
+                self.settle()  # the packet acts at now: the servos must have reached it
                 hearing = [
                     s
                     for s in self._servos
@@ -151,6 +190,7 @@ class EmulatedChain:
     # ------------------------------------------------------------------ fault injection
     def _targets(self, target: Target) -> list[VirtualServo]:
         if isinstance(target, VirtualServo):
+            self.settle()
             return [target]
         found = self.servos_with_id(target)
         if not found:

@@ -58,6 +58,7 @@ class _Layout:
     owner: tuple[int, ...]
     indirect: dict[int, int]
     defaults: bytes
+    spans: dict[str, tuple[int, int, bool, bool]]  # key: (start, end, signed, writable)
 
 
 _layouts: dict[ServoTable, _Layout] = {}
@@ -84,7 +85,11 @@ def _layout(table: ServoTable) -> _Layout:
         for register in items.values()
         if register.key.startswith("indirect_data_")
     }
-    layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image))
+    spans = {
+        key: (r.address, r.address + r.size, r.signed, r.access == "RW")
+        for key, r in by_key.items()
+    }
+    layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image), spans)
     _layouts[table] = layout
     return layout
 
@@ -98,26 +103,23 @@ class ControlTableMemory:
         self._layout = layout
         self.items, self.by_key = layout.items, layout.by_key
         self._owner, self._indirect = layout.owner, layout.indirect
+        self._spans = layout.spans
         self.data = bytearray(layout.defaults)
         self.version = 0
 
     # `version` counts changes of writable items so that the motor command can be cached.
     def get(self, key: str) -> int:
         """Decode the item `key` from memory (signed where the item is)."""
-        register = self.by_key[key]
-        address = register.address
-        return int.from_bytes(
-            self.data[address : address + register.size], "little", signed=register.signed
-        )
+        start, end, signed, _ = self._spans[key]  # read per packet per servo: kept lean
+        return int.from_bytes(self.data[start:end], "little", signed=signed)
 
     def set(self, key: str, value: int) -> None:
         """Store `value` in item `key` without any rule; values are wrapped to the item's size."""
-        register = self.by_key[key]
-        if register.access == "RW":
+        start, end, _, writable = self._spans[key]
+        if writable:
             self.version += 1
-        bits = 8 * register.size
-        encoded = (value & ((1 << bits) - 1)).to_bytes(register.size, "little")
-        self.data[register.address : register.address + register.size] = encoded
+        size = end - start
+        self.data[start:end] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
 
     def has(self, key: str) -> bool:
         """Whether the model has item `key`."""

@@ -47,6 +47,9 @@ class VirtualServo:
         if not 0 <= servo_id <= MAX_ID:
             raise EmulationError(f"servo ID {servo_id} is outside 0..{MAX_ID}")
         self.memory = ControlTableMemory(self.table)
+        # ID and Baud Rate are one byte each, looked up for every packet by every servo.
+        self._id_address = self.memory.by_key["id"].address
+        self._baud_address = self.memory.by_key["baud_rate"].address
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
         if processing_time_s is None:
@@ -73,12 +76,12 @@ class VirtualServo:
     @property
     def servo_id(self) -> int:
         """ID(7)."""
-        return self.memory.get("id")
+        return self.memory.data[self._id_address]
 
     @property
     def baud(self) -> int:
         """The rate the servo listens at, in bit/s, from Baud Rate(8)."""
-        return self.table.baud_rates.get(self.memory.get("baud_rate"), 0)
+        return self.table.baud_rates.get(self.memory.data[self._baud_address], 0)
 
     @property
     def return_delay_s(self) -> float:
