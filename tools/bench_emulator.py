@@ -3,8 +3,9 @@
 One cycle = one Sync Write of N goal positions (4 B) + one Fast Sync Read of Present Current,
 Velocity and Position (126..135), sent by the stock SDK (`GroupSyncWrite`, `GroupSyncRead`) through
 `EmulatedPortHandler` to an in-process chain of XL430-W250 at 4 Mbps, return delay 0, virtual time.
-"emulator" is the time spent inside the emulated serial port (the chain's work: parsing, control
-tables, motion models, replies); "motion steps" counts each servo's motion-model steps per cycle.
+"emulator" is the CPU time (this thread's, so other processes' load does not count) spent inside
+the emulated serial port: the chain's work (parsing, control tables, motion models, replies);
+"motion steps" counts each servo's motion-model steps per cycle.
 The goals follow a travelling sine, so every servo is moving. Medians over rounds.
 
 Usage: python tools/bench_emulator.py [--rounds 7] [--cycles 200] [--sizes 8 16 32]
@@ -76,11 +77,11 @@ class Rig:
 
     def _timed(self, method: Callable[..., Any]) -> Callable[..., Any]:
         def timed(*args: Any) -> Any:
-            start = time.perf_counter()
+            start = time.thread_time()
             try:
                 return method(*args)
             finally:
-                self.inside_s += time.perf_counter() - start
+                self.inside_s += time.thread_time() - start
         return timed
 
     def cycle(self) -> tuple[float, float]:
@@ -128,8 +129,8 @@ def main() -> None:
     print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, load "
           f"{os.getloadavg()[0]:.1f}, {args.rounds} rounds x {args.cycles} cycles, {MODEL} at "
           f"{BAUD // 1_000_000} Mbps, Sync Write + Fast Sync Read of {READ_LENGTH} B.\n")
-    print("| N | emulator per cycle, µs (min–max over rounds) | motion steps per servo per cycle "
-          "| wire time, µs | emulator / wire |")
+    print("| N | emulator CPU per cycle, µs (min–max over rounds) "
+          "| motion steps per servo per cycle | wire time, µs | emulator / wire |")
     print("|---|---|---|---|---|")
     for n in args.sizes:
         got = medians[n]

@@ -104,6 +104,7 @@ class ControlTableMemory:
         self.items, self.by_key = layout.items, layout.by_key
         self._owner, self._indirect = layout.owner, layout.indirect
         self._spans = layout.spans
+        self._indirect_span = (min(self._indirect, default=0), max(self._indirect, default=0))
         self.data = bytearray(layout.defaults)
         self.version = 0
 
@@ -148,7 +149,10 @@ class ControlTableMemory:
             return StatusError.DATA_LENGTH, b""
         if address < 0 or address + length > len(self.data):
             return StatusError.ACCESS, b""
-        return 0, bytes(self.data[self._target(a)] for a in range(address, address + length))
+        end = address + length
+        if not self._indirect or end <= self._indirect_span[0] or address > self._indirect_span[1]:
+            return 0, bytes(self.data[address:end])
+        return 0, bytes(self.data[self._target(a)] for a in range(address, end))
 
     def plan_write(self, address: int, payload: bytes) -> WritePlan:
         """Check a write against layout, access, length and static range; nothing is stored."""

@@ -27,9 +27,9 @@ from snakebot.emulation.servo import VirtualServo
 class TwinMotion:
     """A `MotionModel` shared by every servo of the chain, backed by one `TwinBackend`.
 
-    The first servo's step of each chain step (`EmulatedChain.settle`) applies what changed in the control tables
-    (goals, torque, gains), steps the twin by the elapsed time (whole physics steps; the
-    remainder carries over) and writes every servo's state.
+    The first servo's step of each chain step (`EmulatedChain.settle`) applies what changed in
+    the control tables (goals, torque, gains), steps the twin by the elapsed time (whole physics
+    steps; the remainder carries over) and writes every servo's state.
     """
 
     def __init__(self, robot: RobotConfig, twin: TwinBackend) -> None:

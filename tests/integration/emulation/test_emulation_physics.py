@@ -135,4 +135,5 @@ def test_gains_written_with_torque_off_wait_and_position_i_is_ignored(
     assert (kp[2], kv[2]) == pytest.approx(expected(robot, GainRegisters(1200, 0, 100), timestep))
     assert kp[1] == 0.0  # torque still off there
     bus.write(3, "position_i_gain", 500)  # the twin's loop is PD: no I term
-    assert actuator_gains(bus.chain, motion)[0][2] == kp[2] and actuator_gains(bus.chain, motion)[1][2] == kv[2]
+    kp_after, kv_after = actuator_gains(bus.chain, motion)
+    assert kp_after[2] == kp[2] and kv_after[2] == kv[2]
