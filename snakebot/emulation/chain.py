@@ -18,6 +18,7 @@ import math
 import threading
 from collections.abc import Iterable
 
+from snakebot.emulation.case import cases_of
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
 from snakebot.emulation.firmware import HardwareError
@@ -198,10 +199,13 @@ class EmulatedChain:
         return found
 
     def silence(self, target: Target, silent: bool = True) -> None:
-        """Take servos off the bus (they hear and answer nothing), or put them back."""
+        """Take servos off the bus (they hear and answer nothing), or put them back; an axis of
+        a multi-axis servo takes its whole case (one connector, one module)."""
         with self.lock:
             for servo in self._targets(target):
-                self.faults.update(servo, silent=silent)
+                axes = servo.case.axes if servo.case is not None else (servo,)
+                for axis in axes:
+                    self.faults.update(axis, silent=silent)
 
     def drop_replies(self, target: Target, *, next_n: int = 0, probability: float = 0.0) -> None:
         """Lose the next `next_n` replies, then each with `probability`; instructions still run."""
@@ -250,8 +254,10 @@ def make_chain_for_ids(
     """A chain of identical servos with the given IDs, all configured for and listening at `baud`.
 
     `motion` is shared by every servo when given (an external physics bridge); otherwise each gets
-    its own kinematic `ProfileMotion`.
+    its own kinematic `ProfileMotion`. A multi-axis model (2XL430) pairs the IDs into cases in
+    the order given (`cases_of`): EmulationError unless they fill whole cases.
     """
     table = model if isinstance(model, ServoTable) else table_for_model(model)
     servos = [VirtualServo(table, servo_id, baud=baud, motion=motion) for servo_id in ids]
+    cases_of(servos)
     return EmulatedChain(servos, baud=baud, seed=seed)

@@ -11,9 +11,10 @@ import itertools
 from dataclasses import dataclass, replace
 
 from snakebot.emulation import firmware
+from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
-from snakebot.emulation.memory import ControlTableMemory
+from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotionModel, MotorState, ProfileMotion, ServoCommand
 from snakebot.emulation.protocol import ALERT_BIT, MAX_ID, StatusError
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
@@ -67,6 +68,7 @@ class VirtualServo:
         self._registered_address = 0
         self._command: tuple[int, ServoCommand] | None = None
         self._rules: tuple[int, _StepRules] | None = None
+        self.case: ServoCase | None = None  # the other axes of a multi-axis servo (2XL430)
         self.memory.load_defaults()
         self.memory.set("id", servo_id)
         self.memory.set("baud_rate", self.table.baud_index(baud))
@@ -152,7 +154,7 @@ class VirtualServo:
     def write(self, address: int, data: bytes) -> int:
         """Serve a WRITE; returns the error number (0 on success) and changes nothing on error."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or firmware.check_write(self, plan)
+        error = plan.error or firmware.check_write(self, plan) or self._check_case(plan)
         if error:
             return error
         self.memory.store(plan)
@@ -162,7 +164,7 @@ class VirtualServo:
     def reg_write(self, address: int, data: bytes) -> int:
         """Serve a REG WRITE: check now, apply on ACTION; sets Registered Instruction(69)."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or firmware.check_write(self, plan)
+        error = plan.error or firmware.check_write(self, plan) or self._check_case(plan)
         if not error:
             self._registered, self._registered_address = bytes(data), address
             self.memory.set("registered_instruction", 1)
@@ -188,6 +190,8 @@ class VirtualServo:
         self.memory.load_defaults(keep)
         self._registered = None
         self._boot()
+        if self.case is not None:
+            self.case.follow(self)  # the reset baud and protocol are the module's
         return 0
 
     def clear(self, params: bytes) -> int:
@@ -261,8 +265,13 @@ class VirtualServo:
             self.memory.set("torque_enable", self.memory.get("startup_configuration") & 0x01)
         firmware.refresh_present(self)
 
+    def _check_case(self, plan: WritePlan) -> int:
+        return 0 if self.case is None else self.case.check_write(self, plan)
+
     def _after_write(self, values: dict[str, int]) -> None:
         firmware.apply_side_effects(self, values)
+        if self.case is not None and not SHARED_KEYS.isdisjoint(values):
+            self.case.follow(self)
         if values.get("bus_watchdog") == 0:
             self._watchdog_tripped = False
         if "bus_watchdog" in values:
