@@ -103,8 +103,8 @@ class Rig:
 def wire_time_s(n: int) -> float:
     """Bus time of the same cycle at `BAUD`, return delay 0 (10 bits per byte)."""
     family = family_for(table_for_model(MODEL))
-    read_bytes, _ = family.read_cycle_bytes("fast_sync_read", n, READ_LENGTH)
-    return (family.sync_write_bytes(n, 4) + read_bytes) * 10.0 / BAUD
+    read = family.read_cost("fast_sync_read", n, READ_LENGTH)
+    return (family.sync_write_bytes(n, 4) + read.wire_bytes) * 10.0 / BAUD
 
 
 def main() -> None:

@@ -18,6 +18,7 @@ from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotionModel, MotorState, ProfileMotion, ServoCommand
 from snakebot.emulation.protocol import ALERT_BIT, MAX_ID, StatusError
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
+from snakebot.servo.ticks import centre_tick
 from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
@@ -67,6 +68,7 @@ class VirtualServo:
         self._registered: bytes | None = None
         self._registered_address = 0
         self._command: tuple[int, ServoCommand] | None = None
+        self._goal_frame = (1, 0, 0, 0.0)  # direction, homing offset, centre, rad per tick
         self._rules: tuple[int, _StepRules] | None = None
         self.case: ServoCase | None = None  # the other axes of a multi-axis servo (2XL430)
         self.memory.load_defaults()
@@ -157,8 +159,11 @@ class VirtualServo:
         error = plan.error or firmware.check_write(self, plan) or self._check_case(plan)
         if error:
             return error
+        follow = self._goal_only(plan.values)
         self.memory.store(plan)
         self._after_write(plan.values)
+        if follow is not None and self.memory.version == follow + 1:
+            self._follow_goal(follow)
         return 0
 
     def reg_write(self, address: int, data: bytes) -> int:
@@ -240,8 +245,15 @@ class VirtualServo:
         """The control table's current request in SI, in the motor's frame (see motion.py)."""
         if self._command is not None and self._command[0] == self.memory.version:
             return self._command[1]
+        memory = self.memory
         command = firmware.command(self)
-        self._command = (self.memory.version, command)
+        self._command = (memory.version, command)
+        self._goal_frame = (
+            firmware.direction(memory),
+            firmware.homing_offset(memory),
+            centre_tick(self.table.specs.ticks),
+            memory.by_key["goal_position"].scale,
+        )
         return command
 
     # ----------------------------------------------------------------- internals
@@ -264,6 +276,26 @@ class VirtualServo:
         if self.memory.has("startup_configuration"):
             self.memory.set("torque_enable", self.memory.get("startup_configuration") & 0x01)
         firmware.refresh_present(self)
+
+    def _goal_only(self, values: dict[str, int]) -> int | None:
+        """The memory version before a write of Goal Position alone, when the command and the
+        step rules of that version are cached (a control cycle's write: see `_follow_goal`)."""
+        version = self.memory.version
+        if len(values) != 1 or "goal_position" not in values or self._command is None:
+            return None
+        return version if self._command[0] == version else None
+
+    def _follow_goal(self, version: int) -> None:
+        """Carry the cached command and step rules over a Goal Position write: only the goal
+        changed, so the rest of `firmware.command`'s work (a dozen registers) is not redone."""
+        assert self._command is not None
+        sign, offset, centre, scale = self._goal_frame
+        goal = self.memory.get("goal_position")
+        # The expression of firmware.command, so the value is bit for bit the same.
+        goal_rad = sign * (goal - offset - centre) * scale
+        self._command = (self.memory.version, replace(self._command[1], goal_position_rad=goal_rad))
+        if self._rules is not None and self._rules[0] == version:
+            self._rules = (self.memory.version, self._rules[1])
 
     def _check_case(self, plan: WritePlan) -> int:
         return 0 if self.case is None else self.case.check_write(self, plan)
