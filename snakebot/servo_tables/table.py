@@ -219,8 +219,11 @@ class ServoTable:
         object.__setattr__(self, "_by_address", MappingProxyType(by_address))
 
     def _find(self, key: str) -> Register | None:
+        found = self.registers.get(key)  # a key as such: no normalising (hot in the emulator)
+        if found is not None:
+            return found
         normal = register_key(key)
-        return self.registers.get(key) or self.registers.get(normal) or self._by_name.get(normal)
+        return self.registers.get(normal) or self._by_name.get(normal)
 
     def __getitem__(self, key: str) -> Register:
         """Return the register for a key ("goal_position", "min_position_limit") or its
