@@ -58,7 +58,8 @@ class _Layout:
     owner: tuple[int, ...]
     indirect: dict[int, int]
     defaults: bytes
-    spans: dict[str, tuple[int, int, bool, bool]]  # key: (start, end, signed, writable)
+    # key: (start, end, signed, writable, the register itself where it is sign-magnitude)
+    spans: dict[str, tuple[int, int, bool, bool, Register | None]]
 
 
 _layouts: dict[ServoTable, _Layout] = {}
@@ -77,16 +78,20 @@ def _layout(table: ServoTable) -> _Layout:
     image = bytearray(table.size)
     for address, register in items.items():
         owner[address : address + register.size] = [address] * register.size
-        bits = 8 * register.size
-        value = register.default & ((1 << bits) - 1)
-        image[address : address + register.size] = value.to_bytes(register.size, "little")
+        image[address : address + register.size] = register.encode(register.default)
     indirect = {
         register.address: by_key["indirect_address_" + register.key.rsplit("_", 1)[1]].address
         for register in items.values()
         if register.key.startswith("indirect_data_")
     }
     spans = {
-        key: (r.address, r.address + r.size, r.signed, r.access == "RW")
+        key: (
+            r.address,
+            r.address + r.size,
+            r.signed,
+            r.access == "RW",
+            r if r.sign_bit is not None else None,
+        )
         for key, r in by_key.items()
     }
     layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image), spans)
@@ -111,15 +116,21 @@ class ControlTableMemory:
     # `version` counts changes of writable items so that the motor command can be cached.
     def get(self, key: str) -> int:
         """Decode the item `key` from memory (signed where the item is)."""
-        start, end, signed, _ = self._spans[key]  # read per packet per servo: kept lean
+        start, end, signed, _, magnitude = self._spans[key]  # per packet per servo: kept lean
+        if magnitude is not None:
+            return magnitude.decode(self.data[start:end])
         return int.from_bytes(self.data[start:end], "little", signed=signed)
 
     def set(self, key: str, value: int) -> None:
         """Store `value` in item `key` without any rule; values are wrapped to the item's size."""
-        start, end, _, writable = self._spans[key]
+        start, end, _, writable, magnitude = self._spans[key]
         if writable:
             self.version += 1
         size = end - start
+        if magnitude is not None and magnitude.sign_bit is not None:
+            # Sign-magnitude (P1 Present Speed/Load): clipped to what the magnitude bits hold.
+            limit = (1 << magnitude.sign_bit) - 1
+            value = magnitude.raw_of(max(-limit, min(limit, value)))
         self.data[start:end] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
 
     def has(self, key: str) -> bool:

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, replace
+from typing import Protocol
 
-from snakebot.emulation import firmware
+from snakebot.emulation import firmware, firmware_p1
 from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
@@ -22,8 +23,32 @@ from snakebot.servo.ticks import centre_tick
 from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
+P1_ALARMS = HardwareError.INPUT_VOLTAGE | HardwareError.OVERHEATING | HardwareError.OVERLOAD
 OVERLOAD_AFTER_S = 1.0
 _serial_numbers = itertools.count(1)
+
+
+class Firmware(Protocol):
+    """The register semantics of one control-table layout: `firmware` (X series) and
+    `firmware_p1` (AX, MX with Protocol 1.0 firmware) are the two modules that provide it."""
+
+    def position_ticks(self, memory: ControlTableMemory, state: MotorState) -> int:
+        """Present Position for a motor state."""
+
+    def command(self, servo: VirtualServo) -> ServoCommand:
+        """The control table's request in SI."""
+
+    def check_write(self, servo: VirtualServo, plan: WritePlan) -> int:
+        """Firmware write rules; an error number or 0."""
+
+    def apply_side_effects(self, servo: VirtualServo, values: dict[str, int]) -> None:
+        """What a successful write sets off."""
+
+    def reset_goal_limits(self, memory: ControlTableMemory) -> None:
+        """Goal limits as at boot."""
+
+    def refresh_present(self, servo: VirtualServo) -> None:
+        """Present values from the motor state."""
 
 
 class VirtualServo:
@@ -52,6 +77,9 @@ class VirtualServo:
         # ID and Baud Rate are one byte each, looked up for every packet by every servo.
         self._id_address = self.memory.by_key["id"].address
         self._baud_address = self.memory.by_key["baud_rate"].address
+        # X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX Protocol 1.0 layout.
+        self.firmware: Firmware = firmware if "operating_mode" in self.table else firmware_p1
+        self._alarms = 0  # latched faults, on tables without Hardware Error Status
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
         if processing_time_s is None:
@@ -99,14 +127,24 @@ class VirtualServo:
 
     @property
     def secondary_id(self) -> int | None:
-        """Secondary(Shadow) ID(12), or None when disabled (253 and up)."""
+        """Secondary(Shadow) ID(12), or None when disabled (253 and up) or absent (AX, MX)."""
+        if not self.memory.has("secondary_shadow_id"):
+            return None
         value = self.memory.get("secondary_shadow_id")
         return value if value < 253 else None
 
     @property
+    def protocol(self) -> float:
+        """The protocol the servo answers: Protocol Type(13) where the model has it (1 selects
+        1.0, anything else 2.0), otherwise the model's only protocol (AX, MX 1.0 firmware)."""
+        if self.memory.has("protocol_type"):
+            return 1.0 if self.memory.get("protocol_type") == 1 else 2.0
+        return float(self.table.protocol)
+
+    @property
     def speaks_protocol_2(self) -> bool:
-        """Whether Protocol Type(13) selects Protocol 2.0 (1 switches the servo to 1.0)."""
-        return self.memory.get("protocol_type") != 1
+        """Whether the servo answers Protocol 2.0 packets (see `protocol`)."""
+        return self.protocol == 2.0
 
     @property
     def torque_enabled(self) -> bool:
@@ -116,6 +154,8 @@ class VirtualServo:
     @property
     def hardware_error(self) -> HardwareError:
         """Latched Hardware Error Status(70) bits."""
+        if not self.memory.has("hardware_error_status"):
+            return HardwareError(self._alarms)
         return HardwareError(self.memory.get("hardware_error_status"))
 
     @property
@@ -126,7 +166,7 @@ class VirtualServo:
 
     def peek(self, key: str) -> int:
         """Read item `key` as the bus would see it now (signed where the item is)."""
-        firmware.refresh_present(self)
+        self.firmware.refresh_present(self)
         return self.memory.get(key)
 
     def poke(self, key: str, value: int) -> None:
@@ -135,7 +175,12 @@ class VirtualServo:
 
     def status_error(self, error: int = 0) -> int:
         """A status packet's error byte: `error`, plus the Alert bit while a HW error is latched."""
-        return error | (ALERT_BIT if self.memory.get("hardware_error_status") else 0)
+        return error | (ALERT_BIT if self.hardware_error else 0)
+
+    def alarm_bits(self) -> int:
+        """The faults a Protocol 1.0 status byte reports on every reply: input voltage,
+        overheating and overload, at the same bit positions in both protocols."""
+        return int(self.hardware_error) & P1_ALARMS
 
     def ping_params(self) -> bytes:
         """Ping reply parameters: model number (LE) and firmware version."""
@@ -150,13 +195,13 @@ class VirtualServo:
 
     def read(self, address: int, length: int) -> tuple[int, bytes]:
         """Serve a READ: (error number, data)."""
-        firmware.refresh_present(self)
+        self.firmware.refresh_present(self)
         return self.memory.read(address, length)
 
     def write(self, address: int, data: bytes) -> int:
         """Serve a WRITE; returns the error number (0 on success) and changes nothing on error."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or firmware.check_write(self, plan) or self._check_case(plan)
+        error = plan.error or self.firmware.check_write(self, plan) or self._check_case(plan)
         if error:
             return error
         follow = self._goal_only(plan.values)
@@ -169,7 +214,7 @@ class VirtualServo:
     def reg_write(self, address: int, data: bytes) -> int:
         """Serve a REG WRITE: check now, apply on ACTION; sets Registered Instruction(69)."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or firmware.check_write(self, plan) or self._check_case(plan)
+        error = plan.error or self.firmware.check_write(self, plan) or self._check_case(plan)
         if not error:
             self._registered, self._registered_address = bytes(data), address
             self.memory.set("registered_instruction", 1)
@@ -208,10 +253,20 @@ class VirtualServo:
         self.state = replace(self.state, position_rad=firmware.wrap_turn(self.state.position_rad))
         return 0
 
+    def clear_alarms(self) -> None:
+        """Forget latched faults (a Protocol 1.0 servo does on Torque Enable 1; an X servo only
+        on reboot). A cause still present latches again on the next step."""
+        if self.memory.has("hardware_error_status"):
+            self.memory.set("hardware_error_status", 0)
+        self._alarms = 0
+
     def latch_error(self, bits: int) -> None:
         """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off."""
-        latched = self.memory.get("hardware_error_status") | bits
-        self.memory.set("hardware_error_status", latched)
+        latched = int(self.hardware_error) | bits
+        if self.memory.has("hardware_error_status"):
+            self.memory.set("hardware_error_status", latched)
+        else:
+            self._alarms = latched
         if bits & self.memory.get("shutdown"):
             self.memory.set("torque_enable", 0)
 
@@ -246,14 +301,15 @@ class VirtualServo:
         if self._command is not None and self._command[0] == self.memory.version:
             return self._command[1]
         memory = self.memory
-        command = firmware.command(self)
+        command = self.firmware.command(self)
         self._command = (memory.version, command)
-        self._goal_frame = (
-            firmware.direction(memory),
-            firmware.homing_offset(memory),
-            centre_tick(self.table.specs.ticks),
-            memory.by_key["goal_position"].scale,
-        )
+        if self.firmware is firmware:
+            self._goal_frame = (
+                firmware.direction(memory),
+                firmware.homing_offset(memory),
+                centre_tick(self.table.specs.ticks),
+                memory.by_key["goal_position"].scale,
+            )
         return command
 
     # ----------------------------------------------------------------- internals
@@ -266,8 +322,9 @@ class VirtualServo:
         self.state = replace(
             self.state, position_rad=firmware.wrap_turn(self.state.position_rad), velocity_rad_s=0.0
         )
-        self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
-        firmware.reset_goal_limits(self.memory)
+        self.memory.set("goal_position", self.firmware.position_ticks(self.memory, self.state))
+        self.firmware.reset_goal_limits(self.memory)
+        self._alarms = 0
         self.uptime_s = 0.0
         self._since_packet_s = 0.0
         self._overload_s = 0.0
@@ -275,13 +332,15 @@ class VirtualServo:
         self._registered = None
         if self.memory.has("startup_configuration"):
             self.memory.set("torque_enable", self.memory.get("startup_configuration") & 0x01)
-        firmware.refresh_present(self)
+        self.firmware.refresh_present(self)
 
     def _goal_only(self, values: dict[str, int]) -> int | None:
         """The memory version before a write of Goal Position alone, when the command and the
         step rules of that version are cached (a control cycle's write: see `_follow_goal`)."""
         version = self.memory.version
         if len(values) != 1 or "goal_position" not in values or self._command is None:
+            return None
+        if self.firmware is not firmware:  # the X-series decode only (see `command`)
             return None
         return version if self._command[0] == version else None
 
@@ -301,7 +360,7 @@ class VirtualServo:
         return 0 if self.case is None else self.case.check_write(self, plan)
 
     def _after_write(self, values: dict[str, int]) -> None:
-        firmware.apply_side_effects(self, values)
+        self.firmware.apply_side_effects(self, values)
         if self.case is not None and not SHARED_KEYS.isdisjoint(values):
             self.case.follow(self)
         if values.get("bus_watchdog") == 0:
@@ -314,7 +373,7 @@ class VirtualServo:
         self._watchdog_tripped = True
         self.watchdog_trips += 1
         self.memory.set("bus_watchdog", -1)
-        self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
+        self.memory.set("goal_position", self.firmware.position_ticks(self.memory, self.state))
         self.memory.set("goal_velocity", 0)
         self.state = replace(self.state, velocity_rad_s=0.0)
 
@@ -325,7 +384,7 @@ class VirtualServo:
             get = self.memory.get
             rules = _StepRules(
                 torque_enabled=get("torque_enable") == 1,
-                watchdog_s=get("bus_watchdog") * 0.02,
+                watchdog_s=get("bus_watchdog") * 0.02 if self.memory.has("bus_watchdog") else 0.0,
                 min_volts_x10=get("min_voltage_limit"),
                 max_volts_x10=get("max_voltage_limit"),
                 temperature_limit_c=get("temperature_limit"),
@@ -343,7 +402,7 @@ class VirtualServo:
         self._overload_s = self._overload_s + dt_s if abs(state.effort) >= 1.0 else 0.0
         if self._overload_s > OVERLOAD_AFTER_S:
             found |= HardwareError.OVERLOAD
-        if found and found & ~self.memory.get("hardware_error_status"):
+        if found and found & ~int(self.hardware_error):
             self.latch_error(found)
 
 

@@ -45,7 +45,7 @@ from snakebot.backends.dynamixel.stopping import StopSequence
 from snakebot.backends.dynamixel.supervision import CatchUp, TrackingLimits, TrackingMonitor
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.backends.pacing import Pacer
-from snakebot.config.schema import GainRegisters, RobotConfig
+from snakebot.config.schema import PID_GAIN_KEYS, GainRegisters, RobotConfig
 from snakebot.errors import BackendError, BusError
 from snakebot.servo_tables import supported_models, table_for_model
 from snakebot.types import JointState, PDGains
@@ -365,19 +365,23 @@ class DynamixelBackend(Backend):
         return [row[-1] for row in rows]
 
     def _set_gains(self, gains: PDGains) -> None:
-        registers = self.robot.servo.registers_of(gains, self.position_i_gain)
-        pid = (registers.position_d, registers.position_i, registers.position_p)
-        keys = ("position_d_gain", "position_i_gain", "position_p_gain")
-        self.bus.sync_write(keys, dict.fromkeys(self.ids, pid))
-        self.gain_registers = registers
-        log.debug("%s: Position P/I/D Gain %d/%d/%d for kp %.4g N·m/rad, kd %.4g N·m·s/rad",
-                  self.port, registers.position_p, registers.position_i, registers.position_d,
+        servo = self.robot.servo
+        writes = servo.gain_writes(gains, position_i=self.position_i_gain)
+        keys = sorted(writes, key=lambda key: self.bus.table[key].address)  # one block
+        self.bus.sync_write(keys, dict.fromkeys(self.ids, tuple(writes[key] for key in keys)))
+        if servo.gain_kind == "pid":
+            self.gain_registers = GainRegisters(*(writes[key] for key in PID_GAIN_KEYS))
+        log.debug("%s: %s for kp %.4g N·m/rad, kd %.4g N·m·s/rad", self.port,
+                  ", ".join(f"{self.bus.table[k].name} {writes[k]}" for k in keys),
                   gains.kp_nm_per_rad, gains.kd_nms_per_rad)
 
     def set_position_i_gain(self, position_i: int) -> None:
         """Write the Position I Gain register of every servo (a Dynamixel-only setting: the
         Backend contract's gains are PD); ValueError beyond the control table's range."""
         self._require_connected()
+        if self.robot.servo.gain_kind != "pid":
+            raise ValueError(f"{self.robot.servo.name} has no Position I Gain (its loop is "
+                             "Compliance Slope)")
         maximum = self.robot.servo.gain_max.position_i
         if not 0 <= position_i <= maximum:
             raise ValueError(f"Position I Gain must be 0..{maximum}, got {position_i}")
