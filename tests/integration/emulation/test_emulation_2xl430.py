@@ -9,6 +9,7 @@ from collections.abc import Iterator
 import dynamixel_sdk as sdk
 import pytest
 
+from snakebot.config import load_robot
 from snakebot.emulation import EmulatedChain, EmulationError, make_chain_for_ids, registered
 from snakebot.emulation.bench import robot_servos
 from snakebot.emulation.port import EmulatedPortHandler
@@ -114,3 +115,10 @@ def test_ids_that_leave_a_case_incomplete_are_refused_naming_the_model() -> None
 def test_single_axis_models_form_no_cases() -> None:
     chain = make_chain_for_ids("XL430-W250", [1, 1], BAUD)
     assert all(servo.case is None for servo in chain.servos)
+
+
+def test_the_shipped_2xl430_robot_is_served_as_four_cases() -> None:
+    robot = load_robot("snake8-2xl430")
+    servos = robot_servos(robot.servo.name, robot.servo_ids, BAUD)
+    cases = [[axis.servo_id for axis in s.case.axes] for s in servos[::2] if s.case is not None]
+    assert cases == [[1, 2], [3, 4], [5, 6], [7, 8]]
