@@ -9,17 +9,22 @@ the emulated serial port: the chain's work (parsing, control tables, motion mode
 The goals follow a travelling sine, so every servo is moving. Medians over rounds.
 
 Usage: python tools/bench_emulator.py [--rounds 7] [--cycles 200] [--sizes 8 16 32]
+       [--baseline CHECKOUT]   # e.g. git worktree add /tmp/before <commit>: both, side by side
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import platform
 import statistics
+import subprocess
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import dynamixel_sdk as sdk
@@ -107,37 +112,90 @@ def wire_time_s(n: int) -> float:
     return (family.sync_write_bytes(n, 4) + read.wire_bytes) * 10.0 / BAUD
 
 
+def measure(sizes: list[int], rounds: int, cycles: int) -> dict[int, tuple[list[float], float]]:
+    """Per size: the median emulator seconds per cycle of each round, and the motion steps per
+    servo per cycle."""
+    rigs = {n: Rig(n) for n in sizes}
+    for rig in rigs.values():  # warm-up
+        for _ in range(20):
+            rig.cycle()
+    medians: dict[int, list[float]] = {n: [] for n in sizes}
+    steps: dict[int, float] = {}
+    for _ in range(rounds):
+        for n, rig in rigs.items():
+            got = [rig.cycle() for _ in range(cycles)]
+            medians[n].append(statistics.median(s for s, _ in got))
+            steps[n] = statistics.median(c for _, c in got)
+    return {n: (medians[n], steps[n]) for n in sizes}
+
+
+def baseline_round(checkout: Path, sizes: list[int], cycles: int) -> dict[int, tuple[float, float]]:
+    """One round of the same measurement on another checkout's emulator (a subprocess with that
+    checkout first on the path): per size (median seconds per cycle, steps per servo)."""
+    command = [sys.executable, __file__, "--json", "--rounds", "1", "--cycles", str(cycles),
+               "--sizes", *map(str, sizes)]
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
+    out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout
+    return {int(n): (v[0][0], v[1]) for n, v in json.loads(out).items()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=7)
     parser.add_argument("--cycles", type=int, default=200)
     parser.add_argument("--sizes", type=int, nargs="+", default=[8, 16, 32])
+    parser.add_argument("--baseline", type=Path, metavar="CHECKOUT",
+                        help="also measure the emulator of another checkout (e.g. a worktree of "
+                        "the commit before), round by round in alternation, side by side")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
 
-    rigs = {n: Rig(n) for n in args.sizes}
-    for rig in rigs.values():  # warm-up
-        for _ in range(20):
-            rig.cycle()
-    medians: dict[int, list[float]] = {n: [] for n in args.sizes}
-    steps: dict[int, float] = {}
-    for _ in range(args.rounds):
-        for n, rig in rigs.items():
-            got = [rig.cycle() for _ in range(args.cycles)]
-            medians[n].append(statistics.median(s for s, _ in got))
-            steps[n] = statistics.median(c for _, c in got)
+    if args.json:
+        print(json.dumps(measure(args.sizes, args.rounds, args.cycles)))
+        return
+    here: dict[int, list[float]] = {n: [] for n in args.sizes}
+    there: dict[int, list[float]] = {n: [] for n in args.sizes}
+    steps: dict[int, tuple[float, float]] = {}
+    for k in range(args.rounds):
+        # Which side goes first alternates, so both see the same machine load.
+        for side in (("here", "there") if k % 2 else ("there", "here")):
+            if side == "here":
+                for n, (got, count) in measure(args.sizes, 1, args.cycles).items():
+                    here[n] += got
+                    steps[n] = (count, steps.get(n, (0.0, 0.0))[1])
+            elif args.baseline is not None:
+                for n, (seconds, count) in baseline_round(
+                    args.baseline, args.sizes, args.cycles
+                ).items():
+                    there[n].append(seconds)
+                    steps[n] = (steps.get(n, (0.0, 0.0))[0], count)
 
     print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, load "
           f"{os.getloadavg()[0]:.1f}, {args.rounds} rounds x {args.cycles} cycles, {MODEL} at "
           f"{BAUD // 1_000_000} Mbps, Sync Write + Fast Sync Read of {READ_LENGTH} B.\n")
-    print("| N | emulator CPU per cycle, µs (min–max over rounds) "
-          "| motion steps per servo per cycle | wire time, µs | emulator / wire |")
-    print("|---|---|---|---|---|")
+
+    def cell(values: list[float]) -> str:
+        mid = statistics.median(values) * 1e6
+        return f"{mid:.0f} ({min(values) * 1e6:.0f}–{max(values) * 1e6:.0f})"
+
+    if args.baseline is None:
+        print("| N | emulator CPU per cycle, µs (min–max over rounds) "
+              "| motion steps per servo per cycle | wire time, µs | emulator / wire |")
+        print("|---|---|---|---|---|")
+    else:
+        print(f"baseline: {args.baseline}\n")
+        print("| N | baseline: emulator CPU per cycle, µs | steps per servo per cycle "
+              "| this checkout: emulator CPU per cycle, µs | steps per servo per cycle "
+              "| wire time, µs | this checkout / wire |")
+        print("|---|---|---|---|---|---|---|")
     for n in args.sizes:
-        got = medians[n]
         wire = wire_time_s(n) * 1e6
-        cost = statistics.median(got) * 1e6
-        print(f"| {n} | {cost:.0f} ({min(got) * 1e6:.0f}–{max(got) * 1e6:.0f}) "
-              f"| {steps[n]:.0f} | {wire:.0f} | {cost / wire:.2f} |")
+        ratio = statistics.median(here[n]) * 1e6 / wire
+        if args.baseline is None:
+            print(f"| {n} | {cell(here[n])} | {steps[n][0]:.0f} | {wire:.0f} | {ratio:.2f} |")
+        else:
+            print(f"| {n} | {cell(there[n])} | {steps[n][1]:.0f} | {cell(here[n])} "
+                  f"| {steps[n][0]:.0f} | {wire:.0f} | {ratio:.2f} |")
 
 
 if __name__ == "__main__":
