@@ -304,6 +304,7 @@ def run(args: argparse.Namespace) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         if motion is not None:
+            bench.chain.settle()  # the twin's last steps count in its summary
             motion.twin.close()
     if motion is not None:
         _summary(args, robot, motion, bench)

@@ -30,6 +30,7 @@ from snakebot.config.servo_file import (
 from snakebot.config.servo_settings import parse_settings
 from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
+from snakebot.families import family_for
 from snakebot.servo_tables import ServoTable
 
 __all__ = ["BAUD_RATES", "load_robot", "load_servo_model", "robot_names", "servo_file_name"]
@@ -132,11 +133,17 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         port=check_port(
             bus_t.text("port", "/dev/ttyUSB0"), source=path, key="bus.port", allow_emulator=False
         ),
-        baud=bus_t.integer("baud", 1_000_000, choices=BAUD_RATES),
-        protocol=bus_t.number("protocol", 2.0),
+        baud=bus_t.integer(
+            "baud", 1_000_000, choices=sorted(set(control_table.baud_rates.values()))
+        ),
+        protocol=bus_t.number("protocol", control_table.protocol),
     )
     if bus.protocol not in (1.0, 2.0):
         raise bus_t.error("protocol", f"expected 1.0 or 2.0, got {bus.protocol}")
+    try:
+        family_for(control_table, bus.protocol)
+    except ConfigError as exc:
+        raise bus_t.error("protocol", exc.reason) from exc
     bus_t.done()
 
     link_t = root.table("link")

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from snakebot.emulation.case import cases_of
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.servo import VirtualServo
@@ -46,12 +47,14 @@ def new_servo(
 def robot_servos(
     model: str | int | ServoTable, ids: Sequence[int], baud: int
 ) -> list[VirtualServo]:
-    """Factory-default servos already given the chain's IDs and baud, serials 1..N head to tail."""
+    """Factory-default servos already given the chain's IDs and baud, serials 1..N head to tail;
+    the axes of a multi-axis model paired into cases in that order (`cases_of`)."""
     out = []
     for serial, servo_id in enumerate(ids, start=1):
         servo = VirtualServo(model, servo_id, baud=baud)
         servo.serial_number = serial
         out.append(servo)
+    cases_of(out)
     return out
 
 

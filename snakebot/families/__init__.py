@@ -7,7 +7,7 @@ servo can do; ``FAMILIES`` lists every family snakebot speaks.
 from __future__ import annotations
 
 from snakebot.errors import ConfigError
-from snakebot.families.base import READ_METHODS, Capabilities, ServoFamily
+from snakebot.families.base import READ_METHODS, Capabilities, ServoFamily, WireCost
 from snakebot.families.dynamixel import DynamixelProtocol1, DynamixelProtocol2
 from snakebot.servo_tables import ServoTable
 
@@ -53,6 +53,7 @@ __all__ = [
     "DynamixelProtocol1",
     "DynamixelProtocol2",
     "ServoFamily",
+    "WireCost",
     "families_of",
     "family_for",
     "family_named",

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from snakebot.servo_tables import ServoTable
 
@@ -52,6 +53,17 @@ class Capabilities:
         if self.bulk_read:
             return "bulk_read"
         return "read"
+
+
+class WireCost(NamedTuple):
+    """What one transaction costs on the wire: ``wire_bytes`` (10 bit times each at 8N1),
+    ``return_delays`` (how many servos wait their Return Delay Time before answering) and
+    ``round_trips`` (how many times the host waits for a reply: each costs a USB adapter's latency
+    tail)."""
+
+    wire_bytes: int
+    return_delays: int
+    round_trips: int
 
 
 class ServoFamily(ABC):
@@ -97,10 +109,9 @@ class ServoFamily(ABC):
         """Names of the faults a status packet's error byte reports, e.g. ("overload",)."""
 
     @abstractmethod
-    def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
-        """(bytes on the wire, reply turnarounds) of reading ``length`` bytes from ``n_servos``
-        by ``method`` (one of :data:`READ_METHODS`): every turnaround costs a Return Delay Time
-        and, through a USB adapter, a latency tail."""
+    def read_cost(self, method: str, n_servos: int, length: int) -> WireCost:
+        """What reading ``length`` bytes from each of ``n_servos`` by ``method`` (one of
+        :data:`READ_METHODS`) costs on the wire; ValueError for a method the family lacks."""
 
     @abstractmethod
     def sync_write_bytes(self, n_servos: int, length: int) -> int:

@@ -7,7 +7,7 @@ References: e-Manual ``docs/en/dxl/protocol1.md`` and ``protocol2.md``; the SDK'
 
 from __future__ import annotations
 
-from snakebot.families.base import Capabilities, ServoFamily
+from snakebot.families.base import Capabilities, ServoFamily, WireCost
 from snakebot.servo_tables import ServoTable
 
 P1_ERROR_BITS = (
@@ -68,19 +68,22 @@ class DynamixelProtocol2(ServoFamily):
             names.append("alert")
         return tuple(names)
 
-    def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
-        """Sync Read: request 14 + N, N replies of 11 + L; Fast Sync Read: one combined reply of
-        8 + N * (L + 4) + 2... counted exactly by the e-Manual's layout; Bulk Read: 5 bytes per
-        servo in the request; Read: one request and one reply per servo."""
+    def read_cost(self, method: str, n_servos: int, length: int) -> WireCost:
+        """Sync Read: request 14 + N, then N replies of 11 + L, each after its Return Delay; Fast
+        Sync Read: the same request and one combined reply of 8 + N (L + 4), one Return Delay;
+        Bulk Read: request 10 + 5 N; Read: a 14-byte request and a reply per servo, a round trip
+        each (e-Manual protocol2.md packet layouts, unstuffed)."""
+        n, reply = n_servos, self.status_overhead_bytes + length
         if method == "fast_sync_read":
-            request = 14 + n_servos
-            reply = 10 + n_servos * (length + 4) + 1
-            return request + reply, 1
+            return WireCost(14 + n + 8 + n * (length + 4), 1, 1)
         if method == "sync_read":
-            return 14 + n_servos + n_servos * (self.status_overhead_bytes + length), n_servos
+            return WireCost(14 + n + n * reply, n, 1)
         if method == "bulk_read":
-            return 10 + 5 * n_servos + n_servos * (self.status_overhead_bytes + length), n_servos
-        return n_servos * (self.read_overhead_bytes + self.status_overhead_bytes + length), n_servos
+            return WireCost(10 + 5 * n + n * reply, n, 1)
+        if method == "read":
+            return WireCost(n * (self.read_overhead_bytes + reply), n, n)
+        raise ValueError(f"unknown read method {method!r}; known: fast_sync_read, sync_read, "
+                         "bulk_read, read")
 
     def sync_write_bytes(self, n_servos: int, length: int) -> int:
         """14 bytes of header, address and length, then ID + data per servo."""
@@ -123,13 +126,15 @@ class DynamixelProtocol1(ServoFamily):
         """Every set bit of the error byte, by name (e-Manual protocol1.md)."""
         return tuple(name for bit, name in P1_ERROR_BITS if error & bit)
 
-    def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
-        """Bulk Read: request 3N + 7, then N replies of 6 + L; Read: 8 + 6 + L per servo."""
+    def read_cost(self, method: str, n_servos: int, length: int) -> WireCost:
+        """Bulk Read: request 3 N + 7, then N replies of 6 + L, each after its Return Delay, one
+        round trip; Read: an 8-byte request and a 6 + L reply per servo, a round trip each."""
+        n, reply = n_servos, self.status_overhead_bytes + length
         if method == "bulk_read":
-            return 3 * n_servos + 7 + n_servos * (self.status_overhead_bytes + length), n_servos
-        if method != "read":
-            raise ValueError(f"Protocol 1.0 has no {method.replace('_', ' ')}")
-        return n_servos * (self.read_overhead_bytes + self.status_overhead_bytes + length), n_servos
+            return WireCost(3 * n + 7 + n * reply, n, 1)
+        if method == "read":
+            return WireCost(n * (self.read_overhead_bytes + reply), n, n)
+        raise ValueError(f"Protocol 1.0 has no {method.replace('_', ' ')}")
 
     def sync_write_bytes(self, n_servos: int, length: int) -> int:
         """8 bytes of header, address and length, then ID + data per servo."""

@@ -52,6 +52,7 @@ _SPEC_FIELDS = {
     "no_load_speed_rad_s",
     "stall_torque_nm",
     "stall_current_a",
+    "axes",
 }
 
 
@@ -261,7 +262,15 @@ def _specs(source: Path, model: dict[str, Any]) -> ServoSpecs:
         no_load_speed_rad_s=float(model.get("no_load_speed_rad_s", 5.0)),
         stall_torque_nm=float(model.get("stall_torque_nm", 1.0)),
         stall_current_a=float(model.get("stall_current_a", 1.0)),
+        axes=_axes(source, model),
     )
+
+
+def _axes(source: Path, model: dict[str, Any]) -> int:
+    axes = model.get("axes", 1)
+    if not isinstance(axes, int) or isinstance(axes, bool) or axes < 1:
+        raise ConfigError(source, "model.axes", f"must be a whole number >= 1, not {axes!r}")
+    return axes
 
 
 def _model_file_rows(
@@ -328,10 +337,13 @@ def build_table(source: Path) -> ServoTable:
     }
     _check_overlaps(source, registers)
     protocols = _protocols(source, model)
+    protocol = model.get("protocol", protocols[0])
+    if protocol not in protocols:
+        raise ConfigError(source, "model.protocol", f"{protocol!r} is not in protocols {protocols}")
     return ServoTable(
         model=str(model["name"]),
         model_number=int(model["model_number"]),
-        protocol=float(model.get("protocol", protocols[0])),
+        protocol=float(protocol),
         registers=registers,
         specs=specs,
         family=str(model.get("family", "dynamixel")),

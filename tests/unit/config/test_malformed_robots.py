@@ -115,6 +115,12 @@ CASES = [
     robot("odd baud", "baud = 1000000", "baud = 1000001", "bus.baud", "expected one of"),
     robot("baud as text", "baud = 1000000", 'baud = "fast"', "bus.baud", "expected an integer"),
     robot("protocol 3", "protocol = 2.0", "protocol = 3.0", "bus.protocol", "expected 1.0 or 2.0"),
+    Case("protocol 1 on servos without it", ROBOT_FILE,
+         lambda text: text.replace('servo = "XL430-W250"', 'servo = "XL330-M288"')
+         .replace("protocol = 2.0", "protocol = 1.0"),
+         "bus.protocol", "XL330-M288 servos speak Protocol 2.0 only"),
+    robot("a baud the model lacks", "baud = 1000000", "baud = 500000", "bus.baud",
+          "expected one of"),
     robot("unknown bus key", "protocol = 2.0", 'protocol = 2.0\nparity = "N"', "bus.parity",
           "unknown key"),
     robot("no bus", "[bus]", "[bus_]", "bus", "missing"),
