@@ -80,6 +80,7 @@ class VirtualServo:
         # X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX Protocol 1.0 layout.
         self.firmware: Firmware = firmware if "operating_mode" in self.table else firmware_p1
         self._alarms = 0  # latched faults, on tables without Hardware Error Status
+        self._protocol: tuple[int, float] = (-1, 2.0)  # (memory version, protocol)
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
         if processing_time_s is None:
@@ -137,9 +138,16 @@ class VirtualServo:
     def protocol(self) -> float:
         """The protocol the servo answers: Protocol Type(13) where the model has it (1 selects
         1.0, anything else 2.0), otherwise the model's only protocol (AX, MX 1.0 firmware)."""
-        if self.memory.has("protocol_type"):
-            return 1.0 if self.memory.get("protocol_type") == 1 else 2.0
-        return float(self.table.protocol)
+        memory = self.memory
+        cached = self._protocol
+        if cached[0] == memory.version:  # asked on every packet: decode once per table change
+            return cached[1]
+        if memory.has("protocol_type"):
+            version = 1.0 if memory.get("protocol_type") == 1 else 2.0
+        else:
+            version = float(self.table.protocol)
+        self._protocol = (memory.version, version)
+        return version
 
     @property
     def speaks_protocol_2(self) -> bool:
