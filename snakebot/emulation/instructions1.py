@@ -45,7 +45,7 @@ def error_byte(servo: VirtualServo, error: int = 0, *, goal_position: bool = Fal
     if error == StatusError.DATA_LIMIT and goal_position:
         bits = ErrorBit.ANGLE_LIMIT
     else:
-        bits = _P1_BITS.get(StatusError(error), ErrorBit.RANGE) if error else ErrorBit.NONE
+        bits = _P1_BITS.get(error, ErrorBit.RANGE) if error else ErrorBit.NONE
     return int(bits) | servo.alarm_bits()
 
 
