@@ -32,7 +32,7 @@ from snakebot.emulation.servo import VirtualServo
 
 _READS = (Instruction.PING, Instruction.READ, Instruction.BULK_READ)
 # Protocol 2.0 error numbers the firmware returns, as Protocol 1.0 bits.
-_P1_BITS = {
+_P1_BITS: dict[int, ErrorBit] = {
     StatusError.NONE: ErrorBit.NONE,
     StatusError.INSTRUCTION: ErrorBit.INSTRUCTION,
     StatusError.CRC: ErrorBit.CHECKSUM,
