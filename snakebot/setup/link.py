@@ -17,7 +17,9 @@ from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.errors import BusError
+from snakebot.families import ServoFamily, family_for
 from snakebot.servo import FACTORY_BAUD
+from snakebot.servo_tables import table_for_model
 
 SEARCH_BAUDS = (FACTORY_BAUD, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 """Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
@@ -64,18 +66,34 @@ class Probe:
 class Link:
     """A port opened for setup: ``bus`` (registers by name, typed errors) at a switchable rate.
 
-    ``model`` picks the control table register names resolve in (X-series servos share it).
+    ``model`` picks the control table register names resolve in (X-series servos share it);
+    ``protocol`` the family spoken (None: the model's default; ConfigError if the model cannot
+    speak it). :meth:`speak` switches the family on the same open port (``scan`` tries both).
     """
 
     def __init__(self, port: str, baud: int, *, model: str | int = "XL430-W250",
-                 retries: int = 2) -> None:
+                 protocol: float | None = None, retries: int = 2) -> None:
         self.port = port
         self.handler: sdk.PortHandlerLike
+        self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
-        self.bus = DynamixelBus(port, baud, model=model, retries=retries,
-                                port_handler_factory=self._make_handler)
-        self._raw = sdk.SdkLink(self.handler, 2.0)
+        self.bus = DynamixelBus(port, baud, protocol=self.family.sdk_protocol, model=model,
+                                retries=retries, port_handler_factory=self._make_handler)
+        self._raw = sdk.SdkLink(self.handler, self.family.sdk_protocol)
         self._open = False
+
+    def speak(self, family: ServoFamily) -> None:
+        """Talk ``family``'s protocol from now on, on the same port at the same rate (the
+        bus keeps its control table and retries)."""
+        if family == self.family:
+            return
+        old = self.bus
+        self.bus = DynamixelBus(self.port, old.baud, protocol=family.sdk_protocol,
+                                model=old.table.model, retries=old.retries,
+                                port_handler_factory=lambda _port: self.handler)
+        self.bus.table = old.table
+        self._raw = sdk.SdkLink(self.handler, family.sdk_protocol)
+        self.family = family
 
     def _make_handler(self, port: str) -> sdk.PortHandlerLike:
         self.handler = sdk.port_handler_for(port)
