@@ -28,6 +28,8 @@ REFUSED = {
     "torque_enable": "is switched by the tools (off for EEPROM writes), not a setting",
     "protocol_type": "must stay 2: snakebot speaks Protocol 2.0 only",
     "led": "is a status light, not a setting",
+    "lock": "is never written: a locked EEPROM (Lock = 1, AX and MX) takes no more writes "
+    "until the servo is power-cycled",
 }
 
 

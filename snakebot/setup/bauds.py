@@ -35,6 +35,14 @@ def factory_baud(table: ServoTable) -> int:
     return port_rate(rate) or rate
 
 
+def baud_value(table: ServoTable, baud: int) -> int:
+    """The Baud Rate register value that puts a servo of ``table`` at ``baud`` as the port opens
+    it (1 Mbps -> 1 on an AX, 3 on an X); RegisterValueError listing the model's rates if none."""
+    rates = sorted(table.baud_rates.items())
+    matches = [v for v, r in rates if r == baud] + [v for v, r in rates if port_rate(r) == baud]
+    return matches[0] if matches else table.baud_index(baud)  # raises, naming the model's rates
+
+
 def preferred(rates: Iterable[int], first: int | None = None) -> tuple[int, ...]:
     """``rates`` in search order: ``first``, then 1 Mbps, then upwards, the slow ones last."""
     pool = set(rates)
