@@ -5,6 +5,10 @@ and limits) at the robot's IDs and baud rate, or, with ``--fresh N``, not at all
 ``plug`` on stdin (or SIGUSR1) then connects the next factory-fresh servo (ID 1 at 57600), the
 way a user adds servos one at a time. ``power`` on stdin power-cycles every servo. With
 ``--state-file`` every servo's EEPROM is kept on disk across runs (emulated power cycles).
+
+The servos speak the robot's ``[bus] protocol`` (``--protocol`` overrides it: an X-series servo
+then has Protocol Type 1 and answers Protocol 1.0 only); ``--also MODEL:IDS[:PROTOCOL]`` adds
+servos of another model to the same wire, so one chain holds both protocols.
 """
 
 from __future__ import annotations
@@ -16,20 +20,24 @@ import queue
 import signal
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-from snakebot.cli.common import add_robot_option, baud_arg, print_json
+from snakebot.cli.common import add_robot_option, baud_arg, print_json, robot_name
 from snakebot.config import RobotConfig, load_robot
 from snakebot.errors import ConfigError
 from snakebot.servo import FACTORY_BAUD
 
 if TYPE_CHECKING:
     from snakebot.emulation.bench import ServoBench
+    from snakebot.emulation.chain import EmulatedChain
     from snakebot.emulation.physics import TwinMotion
     from snakebot.emulation.pty_server import PtyServer
+    from snakebot.emulation.servo import VirtualServo
+    from snakebot.servo_tables import ServoTable
 
 
 def add_parser(subparsers: Any) -> None:
@@ -37,14 +45,22 @@ def add_parser(subparsers: Any) -> None:
     parser = subparsers.add_parser(
         "emulate",
         help="serve an emulated Dynamixel chain on a pseudo-terminal",
-        description="Create a pseudo-terminal that answers like the robot's servo chain (Protocol "
-        "2.0, byte for byte). Prints the device path first; serves until Ctrl-C, SIGTERM or "
-        "SIGHUP, or until its stdin (a pipe) ends once the process that started it has exited. "
+        description="Create a pseudo-terminal that answers like the robot's servo chain (its "
+        "model, IDs, baud and protocol, byte for byte). Prints the device path first; serves "
+        "until Ctrl-C, SIGTERM or SIGHUP, or until its stdin (a pipe) ends once the process "
+        "that started it has exited. "
         "Stdin commands: 'plug' (also SIGUSR1) connects the next --fresh servo, 'power' "
         "power-cycles every servo.",
     )
     add_robot_option(parser)
     parser.add_argument("--baud", type=baud_arg, help="line rate (default: the robot's bus.baud)")
+    parser.add_argument("--protocol", type=protocol_arg, metavar="{1,2}",
+                        help="the protocol the robot's servos speak (default: its bus.protocol); "
+                        "1 on an X-series robot sets Protocol Type 1")
+    parser.add_argument("--also", type=also_arg, action="append", default=[],
+                        metavar="MODEL:IDS[:PROTOCOL]",
+                        help="add servos of MODEL with IDS (e.g. 7-9,12) on the same wire, in "
+                        "PROTOCOL (default: the model's own); repeatable")
     parser.add_argument(
         "--physics",
         action="store_true",
@@ -65,6 +81,97 @@ def add_parser(subparsers: Any) -> None:
                         "state file exists)")
     # writes=False: the state file is the emulated servos' own EEPROM, not an output
     parser.set_defaults(handler=run, writes=False)
+
+
+@dataclass(frozen=True)
+class AlsoServos:
+    """One ``--also`` group: a model, its servo IDs and the protocol they speak (None: the
+    model's default)."""
+
+    model: str
+    ids: tuple[int, ...]
+    protocol: float | None
+
+
+def protocol_arg(text: str) -> float:
+    """argparse type: a protocol version, 1 or 2 (1.0 and 2.0 also read)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if value not in (1.0, 2.0):
+        raise argparse.ArgumentTypeError(f"expected 1 or 2, got {text!r}")
+    return value
+
+
+def _ids(text: str) -> tuple[int, ...]:
+    ids: list[int] = []
+    for part in text.split(","):
+        low, _, high = part.partition("-")
+        first, last = int(low), int(high or low)
+        if not 0 <= first <= last <= 252:
+            raise ValueError(part)
+        ids += range(first, last + 1)
+    return tuple(ids)
+
+
+def also_arg(text: str) -> AlsoServos:
+    """argparse type: ``MODEL:IDS[:PROTOCOL]``, IDS a comma list of IDs and ranges (``1-4,7``)."""
+    grammar = "expected MODEL:IDS[:PROTOCOL], e.g. AX-12A:7-12 or XL430-W250:1,2:1"
+    parts = text.split(":")
+    if len(parts) not in (2, 3) or not parts[0]:
+        raise argparse.ArgumentTypeError(f"{grammar}, got {text!r}")
+    try:
+        ids = _ids(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{grammar}: IDS are 0..252 as a comma list of IDs and ranges, got {parts[1]!r}"
+        ) from None
+    protocol = protocol_arg(parts[2]) if len(parts) == 3 else None
+    return AlsoServos(parts[0], ids, protocol)
+
+
+def _speak(servos: Sequence[VirtualServo], table: ServoTable, protocol: float | None,
+           source: str, *, key: str | None = None) -> None:
+    """Set the servos' protocol (ConfigError naming `source` and `key` if the model cannot
+    speak it)."""
+    from snakebot.families import family_for
+
+    try:
+        family = family_for(table, protocol)
+    except ConfigError as exc:
+        has = " and ".join(f"{p:.1f}" for p in table.protocols)
+        raise ConfigError(source, exc.key if key is None else key,
+                          f"{table.model} servos speak Protocol {has} only, not {exc.key}; "
+                          "expected one of those") from exc
+    if "protocol_type" in table:
+        for servo in servos:
+            servo.poke("protocol_type", int(family.protocol))
+
+
+def _also(chain: EmulatedChain, groups: Sequence[AlsoServos], baud: int) -> None:
+    """Add every ``--also`` group to the chain (ConfigError on an unknown model, a baud the
+    model lacks or an ID already on the chain)."""
+    from snakebot.emulation.bench import robot_servos
+    from snakebot.servo_tables import UnknownModelError, table_for_model
+
+    for group in groups:
+        try:
+            table = table_for_model(group.model)
+        except UnknownModelError as exc:
+            raise ConfigError("--also", group.model, str(exc)) from exc
+        taken = sorted(set(group.ids) & {s.servo_id for s in chain.servos})
+        if taken:
+            raise ConfigError("--also", group.model, f"IDs {taken} are on the chain already")
+        try:
+            servos = robot_servos(table, group.ids, baud)
+        except ValueError as exc:
+            raise ConfigError("--also", group.model, str(exc)) from exc
+        _speak(servos, table, group.protocol, "--also")
+        first = max((s.serial_number for s in chain.servos), default=0) + 1
+        for serial, servo in enumerate(servos, start=first):
+            servo.serial_number = serial
+            chain.add(servo)
 
 
 def _bench(
@@ -96,6 +203,14 @@ def _bench(
     restoring = args.state_file is not None and args.state_file.exists()
     if args.scramble is not None and not restoring:
         scramble(chain, args.scramble)
+    if not args.fresh:
+        table = chain.servos[0].table if chain.servos else None
+        if table is not None:
+            protocol = robot.bus.protocol if args.protocol is None else args.protocol
+            # The robot's servos are the bad input (exit 1), whether the protocol came from
+            # its file or from --protocol.
+            _speak(chain.servos, table, protocol, str(robot.source), key="servo")
+    _also(chain, args.also, baud)
     bench = ServoBench(chain, robot.servo.name, fresh=args.fresh, state_path=args.state_file)
     for _ in range(args.attached):
         bench.plug()
@@ -143,7 +258,7 @@ def run(args: argparse.Namespace) -> int:
     from snakebot.emulation.errors import EmulationError
     from snakebot.emulation.pty_server import PtyServer
 
-    robot = load_robot(args.robot)
+    robot = load_robot(robot_name(args, hardware=False, what="emulate"))
     baud = args.baud or robot.bus.baud
     try:
         bench, motion = _bench(robot, args, baud)
@@ -214,13 +329,20 @@ def _announce(args: argparse.Namespace, robot: RobotConfig, port: str, baud: int
     servos = bench.chain.servos
     ids = sorted({s.servo_id for s in servos})
     if args.json:
-        print_json({"port": port, "baud": baud, "servo_ids": ids, "waiting": bench.waiting})
+        listed = [{"id": s.servo_id, "model": s.table.model, "protocol": s.protocol}
+                  for s in servos]
+        print_json({"port": port, "baud": baud, "servo_ids": ids, "waiting": bench.waiting,
+                    "servos": listed})
         return
     print(port, flush=True)
+    groups: dict[tuple[str, float], list[int]] = {}
+    for servo in servos:
+        groups.setdefault((servo.table.model, servo.protocol), []).append(servo.servo_id)
+    chain = ", ".join(f"{len(g)} x {model} (IDs {min(g)}..{max(g)}, Protocol {protocol:.1f})"
+                      for (model, protocol), g in groups.items())
     what = (f"{len(servos)} x {robot.servo.name} connected, {bench.waiting} fresh waiting "
             "('plug' on stdin or SIGUSR1 connects one)") if args.fresh else (
-        f"{robot.name}: {len(servos)} x {robot.servo.name} (IDs {ids[0]}..{ids[-1]}) at {baud} "
-        "baud" + (", twin physics" if motion else ""))
+        f"{robot.name}: {chain} at {baud} baud" + (", twin physics" if motion else ""))
     print(f"{what}; Ctrl-C to stop", file=sys.stderr, flush=True)
 
 

@@ -25,6 +25,7 @@ from snakebot.config.servo_file import (
     parse_servo_file,
     servo_file_name,
     servo_table,
+    torque_limit_fraction,
 )
 from snakebot.config.servo_settings import parse_settings
 from snakebot.config.servo_twin import read_servo_extras
@@ -169,10 +170,20 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     servo = _with_servo_fit(servo, twin_t.table("servo", required=False))
     twin_t.done()
 
+    # Servo settings for the whole chain; merged per servo and checked against the backend's
+    # connect checks by snakebot.setup (config diff/apply, calibrate). Before [gains]: a
+    # compliance servo's Torque Limit sets what its Compliance Slope means.
+    settings = parse_settings(path, "settings", root.data.get("settings", {}), control_table)
+    root.mark_read("settings")
+    if servo.gain_kind == "compliance" and {"torque_limit", "max_torque"} & set(settings):
+        base = parse_settings(servo.source, "settings",
+                              read_toml(servo.source).get("settings", {}), control_table)
+        servo = replace(servo, torque_limit=torque_limit_fraction({**base, **settings},
+                                                                  control_table))
     if root.has("gains"):
         gains, position_i = parse_gains(root.table("gains"), servo)
     else:
-        gains, position_i = servo.gains_of(servo.default_gains), servo.default_gains.position_i
+        gains, position_i = servo.factory_gains, servo.default_gains.position_i
     root.mark_read("gains")
 
     safety_t = root.table("safety", required=False)
@@ -182,10 +193,6 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         stop_policy=safety_t.text("stop_policy", "hold", choices=("hold", "limp")),  # type: ignore[arg-type]
     )
     safety_t.done()
-    # Servo settings for the whole chain; merged per servo and checked against the backend's
-    # connect checks by snakebot.setup (config diff/apply, calibrate).
-    parse_settings(path, "settings", root.data.get("settings", {}), control_table)
-    root.mark_read("settings")
     root.done()
     return RobotConfig(name, path, servo, bus, joints, link, gains, safety, twin, position_i)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -9,12 +10,18 @@ from typing import Literal
 import numpy as np
 
 from snakebot.config.servo_extras import NO_EXTRAS, ServoExtras
-from snakebot.servo import GainMapping, TickModel
+from snakebot.servo import ComplianceMapping, GainMapping, TickModel
 from snakebot.types import PDGains, StopPolicy
 
 Axis = Literal["yaw", "pitch"]
 GroundModel = Literal["anisotropic", "isotropic"]
 FrictionModelName = Literal["auto", "pairs", "scale"]
+GainKind = Literal["pid", "compliance"]
+
+PID_GAIN_KEYS = ("position_p_gain", "position_i_gain", "position_d_gain")
+"""The registers of a "pid" model's position loop (X series, MX in either firmware)."""
+COMPLIANCE_GAIN_KEYS = ("cw_compliance_slope", "ccw_compliance_slope")
+"""The registers that set a "compliance" model's stiffness (AX series), one per direction."""
 
 # Longest actuator delay a robot file may set: far above a Dynamixel chain's few milliseconds
 # of bus transfer and servo loop, and it sizes the twin's command history (docs/twin.md).
@@ -69,8 +76,15 @@ class GainRegisters:
 
 @dataclass(frozen=True)
 class ServoModel:
-    """A servo model: its name, model number, physics and its gain registers' factory values
-    and maxima (both from the control table)."""
+    """A servo model: its name, model number, physics and how its position loop is set.
+
+    ``gain_kind`` (the control-table data's ``gains``) says which registers set the loop:
+    "pid" models have Position P/I/D Gain (``default_gains``/``gain_max`` are their factory values
+    and maxima); "compliance" models (AX) have CW/CCW Compliance Slope instead, whose factory
+    value is ``default_slope``, and output at most ``torque_limit`` (Torque Limit as a fraction of
+    full torque) at the end of the slope; their ``default_gains``/``gain_max`` are all 0.
+    Everything outside the Dynamixel layer uses SI gains (:meth:`gains_from`, :meth:`gain_writes`).
+    """
 
     name: str
     model_number: int
@@ -78,14 +92,27 @@ class ServoModel:
     default_gains: GainRegisters
     gain_max: GainRegisters
     source: Path
+    gain_kind: GainKind = "pid"
+    default_slope: int = 32
+    torque_limit: float = 1.0
+
+    @property
+    def gain_keys(self) -> tuple[str, ...]:
+        """The control-table keys of the registers that set the position loop, in write order."""
+        return PID_GAIN_KEYS if self.gain_kind == "pid" else COMPLIANCE_GAIN_KEYS
 
     @property
     def gain_mapping(self) -> GainMapping:
-        """Position P/D Gain registers <-> SI stiffness and damping at the supply voltage."""
+        """Position P/D Gain registers <-> SI stiffness and damping at the supply voltage.
+
+        ValueError for a compliance model (it has no P/D registers; see
+        :attr:`compliance_mapping`).
+        """
+        if self.gain_kind != "pid":
+            raise ValueError(f"{self.name} has no Position P/D Gain (its loop is compliance)")
         physics = self.physics
-        voltage_ratio = physics.supply_voltage_v / physics.nominal_voltage_v
         return GainMapping(
-            stall_torque_nm=physics.stall_torque_nm * voltage_ratio,
+            stall_torque_nm=physics.stall_torque_nm * self._voltage_ratio,
             ticks_per_rad=physics.ticks.ticks_per_rad,
             pwm_limit=physics.pwm_limit,
             p_gain_divisor=physics.p_gain_divisor,
@@ -95,12 +122,74 @@ class ServoModel:
             d_max=self.gain_max.position_d,
         )
 
+    @property
+    def compliance_mapping(self) -> ComplianceMapping:
+        """Compliance Slope register <-> SI stiffness at the supply voltage and Torque Limit."""
+        physics = self.physics
+        return ComplianceMapping(
+            torque_limit_nm=physics.stall_torque_nm * self._voltage_ratio * self.torque_limit,
+            rad_per_tick=1.0 / physics.ticks.ticks_per_rad,
+        )
+
+    @property
+    def _voltage_ratio(self) -> float:
+        return self.physics.supply_voltage_v / self.physics.nominal_voltage_v
+
+    @property
+    def max_gains(self) -> PDGains:
+        """The stiffest and most damped SI gains the model's registers reach."""
+        if self.gain_kind == "pid":
+            return self.gain_mapping.max_gains
+        return self.compliance_mapping.max_gains
+
+    @property
+    def factory_gains(self) -> PDGains:
+        """The SI gains of the model's factory register values."""
+        if self.gain_kind == "pid":
+            return self.gains_of(self.default_gains)
+        return self.compliance_mapping.pd_gains(self.default_slope)
+
+    def gain_writes(self, gains: PDGains, *, position_i: int = 0) -> dict[str, int]:
+        """The register values (key -> value, in :attr:`gain_keys` order) for SI gains.
+
+        "pid": Position P/I/D Gain from the stiffness and damping (rounded, clipped to the
+        maxima) plus ``position_i``; "compliance": the Compliance Slope level nearest the
+        stiffness, both directions alike (the damping has no register and is left out).
+        """
+        if self.gain_kind == "pid":
+            p, d = self.gain_mapping.registers(gains)
+            return dict(zip(PID_GAIN_KEYS, (p, position_i, d), strict=True))
+        slope = self.compliance_mapping.slope(gains.kp_nm_per_rad)
+        return dict.fromkeys(COMPLIANCE_GAIN_KEYS, slope)
+
+    def gains_from(self, values: Mapping[str, int]) -> PDGains:
+        """The SI gains of register values keyed as :attr:`gain_keys` (missing keys: factory).
+
+        "pid": from Position P and D Gain (the I gain has no SI counterpart); "compliance": the
+        mean of the two directions' stiffnesses, no damping. KeyError for a key the model's loop
+        does not have.
+        """
+        unknown = set(values) - set(self.gain_keys)
+        if unknown:
+            raise KeyError(f"{self.name}'s position loop has no register {sorted(unknown)[0]!r}")
+        if self.gain_kind == "pid":
+            factory = self.default_gains
+            return self.gain_mapping.pd_gains(
+                values.get("position_p_gain", factory.position_p),
+                values.get("position_d_gain", factory.position_d),
+            )
+        mapping = self.compliance_mapping
+        stiffness = [mapping.kp_nm_per_rad(values.get(k, self.default_slope))
+                     for k in COMPLIANCE_GAIN_KEYS]
+        return PDGains(sum(stiffness) / len(stiffness), 0.0)
+
     def gains_of(self, registers: GainRegisters) -> PDGains:
         """SI gains of Position P/D Gain register values (the I gain has no SI counterpart)."""
         return self.gain_mapping.pd_gains(registers.position_p, registers.position_d)
 
     def registers_of(self, gains: PDGains, position_i: int = 0) -> GainRegisters:
-        """Register values for SI gains (rounded, clipped to the maxima) plus an I register."""
+        """Position P/I/D Gain values for SI gains (rounded, clipped to the maxima); a "pid"
+        model's :meth:`gain_writes` as :class:`GainRegisters` (ValueError on a compliance one)."""
         p, d = self.gain_mapping.registers(gains)
         return GainRegisters(p, position_i, d)
 
@@ -181,8 +270,16 @@ class RobotConfig:
 
     @property
     def gain_registers(self) -> GainRegisters:
-        """The Position P/I/D Gain registers for :attr:`gains` and :attr:`position_i_gain`."""
+        """The Position P/I/D Gain registers for :attr:`gains` and :attr:`position_i_gain`
+        (a "pid" servo's; all 0 on a compliance servo, which has none)."""
+        if self.servo.gain_kind != "pid":
+            return GainRegisters(0, 0, 0)
         return self.servo.registers_of(self.gains, self.position_i_gain)
+
+    @property
+    def gain_writes(self) -> dict[str, int]:
+        """The position-loop registers (key -> value) every servo gets for :attr:`gains`."""
+        return self.servo.gain_writes(self.gains, position_i=self.position_i_gain)
 
     @property
     def joint_count(self) -> int:

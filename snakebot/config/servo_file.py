@@ -10,13 +10,20 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 
 from snakebot.config import bounds
 from snakebot.config.fields import Table, read_toml
-from snakebot.config.schema import GainRegisters, ServoModel, ServoPhysics
-from snakebot.config.servo_settings import parse_settings
+from snakebot.config.schema import (
+    COMPLIANCE_GAIN_KEYS,
+    PID_GAIN_KEYS,
+    GainRegisters,
+    ServoModel,
+    ServoPhysics,
+)
+from snakebot.config.servo_settings import Setting, parse_settings
 from snakebot.config.servo_twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import ServoTable, UnknownModelError, supported_models, table_for_model
@@ -60,14 +67,63 @@ def _register_bounds(servo: ServoModel, gain: str, maximum: int) -> bounds.Bound
     return bounds.Bounds(0, maximum, "", f"{servo.name}'s Position {gain} Gain register range")
 
 
+_PID_KEYS: tuple[str, ...] = ("position_p", "position_i", "position_d", "kd_nms_per_rad")
+_COMPLIANCE_KEYS: tuple[str, ...] = ("compliance_slope",)
+
+
+def _refuse_other_loop(table: Table, servo: ServoModel) -> None:
+    """ConfigError naming a [gains] key of the other kind of position loop."""
+    if servo.gain_kind == "pid":
+        wrong, have = _COMPLIANCE_KEYS, "Position P/I/D Gain (position_p, position_i, position_d)"
+        why = "is an AX-series Compliance Slope setting"
+    else:
+        wrong, have = _PID_KEYS, "a Compliance Slope (compliance_slope, or kp_nm_per_rad)"
+        why = "is a Position P/I/D Gain setting"
+    for key in wrong:
+        if table.has(key):
+            detail = " (the damping has no register; it comes from the twin's joint damping)" \
+                if key == "kd_nms_per_rad" else ""
+            raise table.error(
+                key, f"{key} {why}; {servo.name} has {have} instead{detail}"
+            )
+
+
+def _parse_compliance(table: Table, servo: ServoModel, control: ServoTable) -> PDGains:
+    if table.has("compliance_slope") and table.has("kp_nm_per_rad"):
+        raise table.error(
+            "kp_nm_per_rad", "give the stiffness either as compliance_slope or in SI "
+            "(kp_nm_per_rad), not both"
+        )
+    if table.has("kp_nm_per_rad"):
+        reach = servo.max_gains.kp_nm_per_rad
+        return PDGains(table.number("kp_nm_per_rad", within=bounds.Bounds(
+            0, reach, "N·m/rad", f"what {servo.name}'s smallest Compliance Slope reaches at the "
+            "supply voltage and Torque Limit"
+        )), 0.0)
+    register = control["cw_compliance_slope"]
+    slope = table.integer("compliance_slope", servo.default_slope, within=bounds.Bounds(
+        max(register.minimum, 1), register.maximum, "",
+        f"{servo.name}'s Compliance Slope register range (levels 2, 4, ..., 128)"
+    ))
+    return servo.gains_from(dict.fromkeys(COMPLIANCE_GAIN_KEYS, slope))
+
+
 def parse_gains(table: Table, servo: ServoModel) -> tuple[PDGains, int]:
     """A robot file's ``[gains]``: (SI gains, Position I Gain register).
 
-    The gains are the Position P/D Gain registers (``position_p``, ``position_d``), converted
-    with the servo's mapping, or SI values (``kp_nm_per_rad``, ``kd_nms_per_rad``) up to what
-    the registers reach; ``position_i`` (Dynamixel only) goes with either. ConfigError naming
-    the key if both forms are given, a value is out of range, or a key is unknown.
+    For a "pid" servo the gains are the Position P/D Gain registers (``position_p``,
+    ``position_d``), converted with the servo's mapping, or SI values (``kp_nm_per_rad``,
+    ``kd_nms_per_rad``) up to what the registers reach; ``position_i`` (Dynamixel only) goes
+    with either. For a "compliance" servo (AX) the stiffness is ``compliance_slope`` (the CW/CCW
+    Compliance Slope register, both directions) or ``kp_nm_per_rad``; its I register is 0.
+    ConfigError naming the key if both forms are given, a key belongs to the other kind of
+    loop, a value is out of range, or a key is unknown.
     """
+    _refuse_other_loop(table, servo)
+    if servo.gain_kind == "compliance":
+        gains = _parse_compliance(table, servo, servo_table(servo.name, servo.source))
+        table.done()
+        return gains, 0
     maxima = servo.gain_max
     si = [k for k in ("kp_nm_per_rad", "kd_nms_per_rad") if table.has(k)]
     registers = [k for k in ("position_p", "position_d") if table.has(k)]
@@ -111,6 +167,9 @@ _TABLE_FACTS = {
     "default_gains": "the factory Position P/I/D Gain",
 }
 
+# A compliance model has no P/D registers, so the gain mapping's keys mean nothing for it.
+_PID_PHYSICS = ("pwm_limit", "d_gain_loop_period_s", "p_gain_divisor", "d_gain_divisor")
+
 
 def _refuse_table_facts(root: Table, table: ServoTable) -> None:
     for key, what in _TABLE_FACTS.items():
@@ -126,13 +185,37 @@ def _refuse_table_facts(root: Table, table: ServoTable) -> None:
 
 
 def default_gains(table: ServoTable) -> GainRegisters:
-    """The factory Position P/I/D Gain register values of a model (its control table)."""
-    return GainRegisters(*(table[f"position_{g}_gain"].default for g in "pid"))
+    """The factory Position P/I/D Gain register values of a model (its control table; all 0
+    on a compliance model, which has none)."""
+    if table.specs.gains != "pid":
+        return GainRegisters(0, 0, 0)
+    return GainRegisters(*(table[key].default for key in PID_GAIN_KEYS))
 
 
 def gain_maxima(table: ServoTable) -> GainRegisters:
-    """The largest Position P/I/D Gain register values a model takes (its control table)."""
-    return GainRegisters(*(table[f"position_{g}_gain"].maximum for g in "pid"))
+    """The largest Position P/I/D Gain register values a model takes (its control table; all
+    0 on a compliance model)."""
+    if table.specs.gains != "pid":
+        return GainRegisters(0, 0, 0)
+    return GainRegisters(*(table[key].maximum for key in PID_GAIN_KEYS))
+
+
+def output_full_scale(table: ServoTable) -> tuple[str, int]:
+    """(register key, maximum) of the register that sets the output's full scale: PWM Limit on
+    Protocol 2.0 tables, Max Torque (1023 = 100 %) on the Protocol 1.0 AX/MX tables."""
+    key = "pwm_limit" if "pwm_limit" in table else "max_torque"
+    return key, table[key].maximum
+
+
+def torque_limit_fraction(settings: Mapping[str, Setting], table: ServoTable) -> float:
+    """The Torque Limit a compliance model runs at, as a fraction of full torque: the
+    ``torque_limit`` setting, else ``max_torque`` (Torque Limit takes Max Torque's value at
+    power-on, e-Manual ax-12a.md), else Max Torque's factory value."""
+    register = table["max_torque"]
+    for key in ("torque_limit", "max_torque"):
+        if key in settings:
+            return settings[key].raw / register.maximum
+    return register.default / register.maximum
 
 
 def parse_servo_file(path: Path) -> ServoModel:
@@ -158,6 +241,13 @@ def parse_servo_file(path: Path) -> ServoModel:
         return phys.number(key, within=limits[f"physics.{key}"])
 
     specs = table.specs
+    compliance = specs.gains == "compliance"
+    if compliance:
+        for key in _PID_PHYSICS:
+            if phys.has(key):
+                raise phys.error(key, f"{table.model} has no Position P/D Gain (its loop is "
+                                 "Compliance Slope, snakebot.servo.ComplianceMapping); remove it")
+    full_key, full_max = output_full_scale(table)
     physics = ServoPhysics(
         stall_torque_nm=specs.stall_torque_nm,
         no_load_speed_rad_s=specs.no_load_speed_rad_s,
@@ -167,14 +257,16 @@ def parse_servo_file(path: Path) -> ServoModel:
         friction_loss_nm=number("friction_loss_nm"),
         viscous_damping_nms=number("viscous_damping_nms"),
         ticks=specs.ticks,
-        pwm_limit=phys.integer("pwm_limit", within=limits["physics.pwm_limit"]),
-        d_gain_loop_period_s=number("d_gain_loop_period_s"),
-        p_gain_divisor=number("p_gain_divisor"),
-        d_gain_divisor=number("d_gain_divisor"),
+        # On a compliance model the P/D mapping is unused: the full scale and unit divisors.
+        pwm_limit=full_max if compliance else phys.integer(
+            "pwm_limit", within=limits["physics.pwm_limit"]),
+        d_gain_loop_period_s=1e-3 if compliance else number("d_gain_loop_period_s"),
+        p_gain_divisor=1.0 if compliance else number("p_gain_divisor"),
+        d_gain_divisor=1.0 if compliance else number("d_gain_divisor"),
     )
-    pwm_max = table["pwm_limit"].maximum
-    if physics.pwm_limit > pwm_max:
-        raise phys.error("pwm_limit", f"{table.model}'s PWM Limit is at most {pwm_max}")
+    if physics.pwm_limit > full_max:
+        name = table[full_key].name
+        raise phys.error("pwm_limit", f"{table.model}'s {name} is at most {full_max}")
     phys.done()
     twin = root.table("twin", required=False)
     if twin.has("p_gain_divisor"):
@@ -184,9 +276,15 @@ def parse_servo_file(path: Path) -> ServoModel:
         )
     physics = replace(physics, extras=read_servo_extras(twin, physics.extras))
     twin.done()
-    parse_settings(path, "settings", root.data.get("settings", {}), table)
+    settings = parse_settings(path, "settings", root.data.get("settings", {}), table)
     root.mark_read("settings")
     root.done()
-    return ServoModel(
+    model = ServoModel(
         name, table.model_number, physics, default_gains(table), gain_maxima(table), path
+    )
+    if not compliance:
+        return model
+    return replace(
+        model, gain_kind="compliance", default_slope=table["cw_compliance_slope"].default,
+        torque_limit=torque_limit_fraction(settings, table),
     )

@@ -18,7 +18,9 @@ from snakebot.servo_tables import Register, ServoTable
 from snakebot.servo_tables.units import Unit, UnitError, display, parse_key, to_raw
 
 GAIN_KEYS = {"position_p_gain": "position_p", "position_i_gain": "position_i",
-             "position_d_gain": "position_d"}
+             "position_d_gain": "position_d", "cw_compliance_slope": "compliance_slope",
+             "ccw_compliance_slope": "compliance_slope"}
+"""The position-loop registers (P/I/D Gain, or an AX's Compliance Slope) -> their [gains] key."""
 DERIVED = {
     "id": "comes from the robot file ([[joints]] servo_id)",
     "baud_rate": "comes from the robot file ([bus] baud)",

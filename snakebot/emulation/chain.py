@@ -10,12 +10,13 @@ from __future__ import annotations
 import threading
 from collections.abc import Iterable
 
+from snakebot.emulation import instructions, instructions1, protocol, protocol1
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
 from snakebot.emulation.firmware import HardwareError
-from snakebot.emulation.instructions import Slot, execute
+from snakebot.emulation.instructions import Slot
 from snakebot.emulation.motion import ChainPhysics, MotionModel
-from snakebot.emulation.protocol import ParserStats, StreamParser
+from snakebot.emulation.protocol import ParserStats
 from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
 from snakebot.servo import FACTORY_BAUD
@@ -27,8 +28,10 @@ Target = int | VirtualServo
 class EmulatedChain:
     """Several `VirtualServo`s sharing one bus at line rate `baud` (bit/s).
 
-    A servo whose Baud Rate register gives another rate, or whose Protocol Type is 1.0, hears
-    nothing. Servos may share an ID: all of them execute what is sent to it and their replies
+    A servo whose Baud Rate register gives another rate hears nothing. Both protocols share the
+    wire: each servo answers only the packets of the protocol it speaks (`VirtualServo.protocol`:
+    an X servo's Protocol Type, an AX always 1.0), so one chain may hold both kinds. Servos may
+    share an ID: all of them execute what is sent to it and their replies
     collide on the wire. `physics`, when given, moves all servos at once (give them
     `ExternalMotion`). Thread-safe: every public method holds `lock`; hold it yourself to touch
     servos while a transport thread (PtyServer) serves the chain.
@@ -49,7 +52,8 @@ class EmulatedChain:
         self.now_s = 0.0
         self.faults = FaultBook(seed)
         self.lock = threading.RLock()
-        self._parser = StreamParser(stale_after_s=stale_after_s)
+        self._parser = protocol.StreamParser(stale_after_s=stale_after_s)
+        self._parser1 = protocol1.StreamParser(stale_after_s=stale_after_s)
 
     # ------------------------------------------------------------------ servos
     @property
@@ -83,8 +87,14 @@ class EmulatedChain:
 
     @property
     def parser_stats(self) -> ParserStats:
-        """What the bus receiver dropped so far (garbage, bad CRCs, stale partial packets)."""
+        """What the Protocol 2.0 receiver dropped so far (garbage, bad CRCs, stale partial
+        packets)."""
         return self._parser.stats
+
+    @property
+    def parser1_stats(self) -> protocol1.ParserStats:
+        """The same for the Protocol 1.0 receiver (`crc_errors` counts bad checksums)."""
+        return self._parser1.stats
 
     # ------------------------------------------------------------------ time and traffic
     def advance(self, dt_s: float, *, bytes_waiting: bool = False) -> None:
@@ -121,16 +131,36 @@ class EmulatedChain:
         with self.lock:
             replies: list[BusReply] = []
             offset = 0.0
-            for packet in self._parser.feed(data, self.now_s, idle_s=idle_s):
-                hearing = [
-                    s
-                    for s in self._servos
-                    if s.baud == self.baud and s.speaks_protocol_2 and self.faults.hears(s)
-                ]
-                timed = self._timed(execute(packet, hearing), offset)
-                replies += timed
-                offset = max([offset, *(r.end_s(self.baud) for r in timed)])
+            speaks = {s.protocol for s in self._servos}
+            # Each receiver sees every byte; one that no servo on the bus speaks is skipped (its
+            # servos could only appear by an `add` or a Protocol Type write, which resets it).
+            # Within one call, Protocol 2.0 packets are served before Protocol 1.0 ones: a host
+            # waits for each reply, so one call rarely holds both.
+            if 2.0 in speaks:
+                for packet in self._parser.feed(data, self.now_s, idle_s=idle_s):
+                    hearing = self._hearing(2.0)
+                    timed = self._timed(instructions.execute(packet, hearing), offset)
+                    replies += timed
+                    offset = max([offset, *(r.end_s(self.baud) for r in timed)])
+            else:
+                self._parser.reset()
+            if 1.0 in speaks:
+                for packet1 in self._parser1.feed(data, self.now_s, idle_s=idle_s):
+                    hearing = self._hearing(1.0)
+                    timed = self._timed(instructions1.execute(packet1, hearing), offset)
+                    replies += timed
+                    offset = max([offset, *(r.end_s(self.baud) for r in timed)])
+            else:
+                self._parser1.reset()
             return merge_collisions(replies, self.baud)
+
+    def _hearing(self, version: float) -> list[VirtualServo]:
+        """The servos that receive a packet of protocol `version` now."""
+        return [
+            s
+            for s in self._servos
+            if s.baud == self.baud and s.protocol == version and self.faults.hears(s)
+        ]
 
     def _timed(self, slots: list[Slot], offset: float) -> list[BusReply]:
         """Place each slot after the previous one; apply drop, corruption and delay faults."""

@@ -42,7 +42,7 @@ class TwinMotion:
         self._goal = np.zeros(robot.joint_count)
         self._torque = np.zeros(robot.joint_count, dtype=bool)
         self._commands: dict[int, ServoCommand] = {}  # per joint, the command last applied
-        self._gains: dict[int, tuple[int, int, int]] = {}
+        self._gains: dict[int, tuple[int, ...]] = {}
         self._pending_s = 0.0
         self._leader: VirtualServo | None = None
         self._servos: dict[int, VirtualServo] = {}
@@ -104,7 +104,8 @@ class TwinMotion:
     def _read_tables(self) -> None:
         """Apply the goals, torque flags and gains of every servo whose table changed."""
         goals_changed = torque_changed = False
-        new_gains: dict[tuple[int, int, int], list[int]] = {}
+        new_gains: dict[tuple[int, ...], list[int]] = {}
+        gain_keys = self.robot.servo.gain_keys  # P/I/D or Compliance Slope, as the model has
         for index, servo in self._servos.items():
             command = servo.command()  # cached until the servo's memory changes
             if command is self._commands.get(index):
@@ -118,12 +119,13 @@ class TwinMotion:
             if command.torque_enabled != self._torque[index]:
                 self._torque[index] = command.torque_enabled
                 torque_changed = True
-            if command.position_gains != self._gains.get(index):
-                self._gains[index] = command.position_gains
-                new_gains.setdefault(command.position_gains, []).append(index)
-        mapping = self.robot.servo.gain_mapping
-        for (p, _i, d), joints in new_gains.items():
-            self.twin.set_joint_gains(joints, mapping.pd_gains(p, d))
+            gains = tuple(servo.memory.get(key) for key in gain_keys)
+            if gains != self._gains.get(index):
+                self._gains[index] = gains
+                new_gains.setdefault(gains, []).append(index)
+        for values, joints in new_gains.items():
+            gains_si = self.robot.servo.gains_from(dict(zip(gain_keys, values, strict=True)))
+            self.twin.set_joint_gains(joints, gains_si)
         if torque_changed:
             self.twin.set_joint_torque(self._torque)
         if goals_changed:

@@ -20,6 +20,7 @@ from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
+P1_ALARMS = HardwareError.INPUT_VOLTAGE | HardwareError.OVERHEATING | HardwareError.OVERLOAD
 OVERLOAD_AFTER_S = 1.0
 _serial_numbers = itertools.count(1)
 
@@ -92,14 +93,24 @@ class VirtualServo:
 
     @property
     def secondary_id(self) -> int | None:
-        """Secondary(Shadow) ID(12), or None when disabled (253 and up)."""
+        """Secondary(Shadow) ID(12), or None when disabled (253 and up) or absent (AX, MX)."""
+        if not self.memory.has("secondary_shadow_id"):
+            return None
         value = self.memory.get("secondary_shadow_id")
         return value if value < 253 else None
 
     @property
+    def protocol(self) -> float:
+        """The protocol the servo answers: Protocol Type(13) where the model has it (1 selects
+        1.0, anything else 2.0), otherwise the model's only protocol (AX, MX 1.0 firmware)."""
+        if self.memory.has("protocol_type"):
+            return 1.0 if self.memory.get("protocol_type") == 1 else 2.0
+        return float(self.table.protocol)
+
+    @property
     def speaks_protocol_2(self) -> bool:
-        """Whether Protocol Type(13) selects Protocol 2.0 (1 switches the servo to 1.0)."""
-        return self.memory.get("protocol_type") != 1
+        """Whether the servo answers Protocol 2.0 packets (see `protocol`)."""
+        return self.protocol == 2.0
 
     @property
     def torque_enabled(self) -> bool:
@@ -129,6 +140,11 @@ class VirtualServo:
     def status_error(self, error: int = 0) -> int:
         """A status packet's error byte: `error`, plus the Alert bit while a HW error is latched."""
         return error | (ALERT_BIT if self.memory.get("hardware_error_status") else 0)
+
+    def alarm_bits(self) -> int:
+        """The faults a Protocol 1.0 status byte reports on every reply: input voltage,
+        overheating and overload, at the same bit positions in both protocols."""
+        return int(self.hardware_error) & P1_ALARMS
 
     def ping_params(self) -> bytes:
         """Ping reply parameters: model number (LE) and firmware version."""

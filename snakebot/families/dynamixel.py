@@ -46,6 +46,10 @@ class DynamixelProtocol2(ServoFamily):
     firmware_address = 6  # Model Number 0-1, Model Information 2-5, Firmware Version 6
     status_overhead_bytes = 11  # FF FF FD 00, ID, LEN(2), 0x55, ERR, CRC(2)
     read_overhead_bytes = 14
+    condition_bits = 0x80  # Alert: read Hardware Error Status (70)
+    resend_error = 0x03  # CRC error
+    access_error = 0x07
+    factory_reset_takes_option = True
 
     def capabilities(self, table: ServoTable) -> Capabilities:
         """Every group read; watchdog, hardware error and current sensing where the table has
@@ -72,11 +76,12 @@ class DynamixelProtocol2(ServoFamily):
 
     def read_cycle_bytes(self, method: str, n_servos: int, length: int) -> tuple[int, int]:
         """Sync Read: request 14 + N, N replies of 11 + L; Fast Sync Read: one combined reply of
-        8 + N * (L + 4) + 2... counted exactly by the e-Manual's layout; Bulk Read: 5 bytes per
-        servo in the request; Read: one request and one reply per servo."""
+        8 + N * (L + 4) (header, ID, length, instruction, then error, ID, data and a CRC per
+        servo, the last CRC the packet's); Bulk Read: 5 bytes per servo in the request; Read:
+        one request and one reply per servo."""
         if method == "fast_sync_read":
             request = 14 + n_servos
-            reply = 10 + n_servos * (length + 4) + 1
+            reply = 8 + n_servos * (length + 4)
             return request + reply, 1
         if method == "sync_read":
             return 14 + n_servos + n_servos * (self.status_overhead_bytes + length), n_servos
@@ -103,6 +108,13 @@ class DynamixelProtocol1(ServoFamily):
     firmware_address = 2  # AX/MX/RX: Model Number 0-1, Firmware Version 2 (e-Manual)
     status_overhead_bytes = 6  # FF FF, ID, LEN, ERR, CHK
     read_overhead_bytes = 8
+    # Input voltage, overheating, overload: the servo's state, reported in every status packet
+    # while it lasts (e-Manual protocol1.md "Status Packet"); the Alarm Shutdown register decides
+    # which of them also turn its torque off.
+    condition_bits = 0x25
+    resend_error = 0x10  # checksum error
+    access_error = None
+    factory_reset_takes_option = False
 
     def capabilities(self, table: ServoTable) -> Capabilities:
         """Bulk Read where the model has it (MX, X in 1.0 mode; not AX); the Bus Watchdog and

@@ -1,9 +1,9 @@
-"""Build `ServoTable`s: addresses and sizes from the SDK's `.model` files, the rest from TOML."""
+"""Build a `ServoTable` from one model data file: TOML facts; addresses from a `.model` or TOML."""
 
 from __future__ import annotations
 
-import functools
 import importlib.util
+import itertools
 import tomllib
 from pathlib import Path
 from types import MappingProxyType
@@ -16,7 +16,6 @@ from snakebot.servo_tables.table import (
     Register,
     ServoSpecs,
     ServoTable,
-    UnknownModelError,
     register_key,
 )
 
@@ -34,6 +33,8 @@ _REGISTER_FIELDS = {
     "unit",
     "scale",
     "signed",
+    "sign",
+    "sign_bit",
     "fix_model_file",
 }
 _SPEC_FIELDS = {
@@ -85,14 +86,33 @@ def read_model_file(path: Path) -> list[tuple[int, int, str]]:
     return rows
 
 
-def _read_toml(name: str) -> dict[str, Any]:
-    path = DATA_DIR / f"{name}.toml"
-    with path.open("rb") as handle:
-        data = tomllib.load(handle)
+def _base_path(source: Path, base: str) -> Path:
+    """A `base = "..."` file: beside the data file first, then among the shipped data."""
+    for folder in (source.parent, DATA_DIR):
+        path = folder / f"{base}.toml"
+        if path.is_file():
+            return path
+    raise ConfigError(source, "model.base", f"no data file {base}.toml beside it or in {DATA_DIR}")
+
+
+def read_data_file(source: Path, _seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The TOML of a model data file, merged over its `base` chain (the file's facts win).
+
+    Raises ConfigError naming the file for unreadable TOML, a missing base or a base cycle.
+    """
+    if source in _seen:
+        raise ConfigError(source, "model.base", "the base files include each other")
+    try:
+        with source.open("rb") as handle:
+            data = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(source, "", f"not valid TOML: {exc}") from exc
+    except OSError as exc:
+        raise ConfigError(source, "", f"cannot read: {exc.strerror or exc}") from exc
     base = data.get("model", {}).pop("base", None)
     if base is None:
         return data
-    merged = _read_toml(str(base))
+    merged = read_data_file(_base_path(source, str(base)), (*_seen, source))
     merged.setdefault("model", {}).update(data.get("model", {}))
     registers = merged.setdefault("registers", {})
     for key, facts in data.get("registers", {}).items():
@@ -100,39 +120,101 @@ def _read_toml(name: str) -> dict[str, Any]:
     return merged
 
 
-def _full_range(size: int, signed: bool) -> tuple[int, int]:
+def _full_range(size: int, sign: str, sign_bit: int | None) -> tuple[int, int]:
+    if sign_bit is not None:
+        return -((1 << sign_bit) - 1), (1 << sign_bit) - 1
     bits = 8 * size
-    return (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if signed else (0, (1 << bits) - 1)
+    return (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if sign == "twos" else (0, (1 << bits) - 1)
+
+
+def _int(source: Path, key: str, facts: dict[str, Any], name: str, default: int) -> int:
+    value = facts.get(name, default)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ConfigError(
+            source, f"registers.{key}.{name}", f"must be a whole number, not {value!r}"
+        )
+    return value
+
+
+def _sign(source: Path, key: str, facts: dict[str, Any], size: int) -> tuple[str, int | None]:
+    """("unsigned" | "twos" | "magnitude", sign bit or None) from `sign`/`sign_bit`/`signed`."""
+    where = f"registers.{key}"
+    sign = str(facts.get("sign", "twos" if facts.get("signed") else "unsigned"))
+    if sign not in ("unsigned", "twos", "magnitude"):
+        raise ConfigError(
+            source, f"{where}.sign", f"must be unsigned, twos or magnitude, not {sign!r}"
+        )
+    if "signed" in facts and bool(facts["signed"]) != (sign == "twos"):
+        raise ConfigError(source, f"{where}.signed", f"contradicts sign = {sign!r}")
+    if sign != "magnitude":
+        if "sign_bit" in facts:
+            raise ConfigError(source, f"{where}.sign_bit", 'only with sign = "magnitude"')
+        return sign, None
+    if "sign_bit" not in facts:
+        raise ConfigError(source, f"{where}.sign_bit", 'missing; sign = "magnitude" needs it')
+    sign_bit = _int(source, key, facts, "sign_bit", 0)
+    if not 0 < sign_bit < 8 * size:
+        raise ConfigError(source, f"{where}.sign_bit", f"must lie in 1..{8 * size - 1}")
+    return sign, sign_bit
 
 
 def _register(source: Path, key: str, facts: dict[str, Any], eeprom_end: int) -> Register:
+    where = f"registers.{key}"
     unknown = set(facts) - _REGISTER_FIELDS
     if unknown:
-        raise ConfigError(source, f"registers.{key}", f"unknown field(s) {sorted(unknown)}")
+        raise ConfigError(source, where, f"unknown field(s) {sorted(unknown)}")
     for needed in ("name", "address", "size"):
         if needed not in facts:
-            raise ConfigError(source, f"registers.{key}", f"missing {needed!r}; not in the .model")
-    size, signed = int(facts["size"]), bool(facts.get("signed", False))
-    low, high = _full_range(size, signed)
+            raise ConfigError(
+                source, f"{where}.{needed}", "missing (the model has no .model row for it)"
+            )
+    address, size = _int(source, key, facts, "address", 0), _int(source, key, facts, "size", 0)
+    if size not in (1, 2, 4) or not 0 <= address < 65536:
+        raise ConfigError(source, where, f"bad address/size {address}/{size} (size 1, 2 or 4)")
+    sign, sign_bit = _sign(source, key, facts, size)
+    low, high = _full_range(size, sign, sign_bit)
     register = Register(
         name=str(facts["name"]),
         key=key,
-        address=int(facts["address"]),
+        address=address,
         size=size,
         access=str(facts.get("access", "RW")),
-        eeprom=bool(facts.get("eeprom", int(facts["address"]) < eeprom_end)),
-        minimum=int(facts.get("minimum", low)),
-        maximum=int(facts.get("maximum", high)),
-        default=int(facts.get("default", 0)),
+        eeprom=bool(facts.get("eeprom", address < eeprom_end)),
+        minimum=_int(source, key, facts, "minimum", low),
+        maximum=_int(source, key, facts, "maximum", high),
+        default=_int(source, key, facts, "default", 0),
         unit=str(facts.get("unit", "")),
         scale=float(facts.get("scale", 1.0)),
-        signed=signed,
+        signed=sign == "twos",
+        sign_bit=sign_bit,
     )
-    if register.access not in ACCESS_MODES or size not in (1, 2, 4):
-        raise ConfigError(source, f"registers.{key}", f"bad access/size {register.access!r}/{size}")
-    if register.access == "RW" and not register.minimum <= register.default <= register.maximum:
-        raise ConfigError(source, f"registers.{key}", "default lies outside minimum..maximum")
+    if register.access not in ACCESS_MODES:
+        raise ConfigError(source, f"{where}.access", f"must be R or RW, not {register.access!r}")
+    if not low <= register.minimum <= register.maximum <= high:
+        raise ConfigError(
+            source, where, f"range {register.minimum}..{register.maximum} does not fit "
+            f"{size} byte(s) {sign} ({low}..{high})"
+        )
+    checked = register.access == "RW" or "default" in facts
+    if checked and not register.minimum <= register.default <= register.maximum:
+        raise ConfigError(
+            source, f"{where}.default",
+            f"{register.default} lies outside {register.minimum}..{register.maximum}",
+        )
     return register
+
+
+def _check_overlaps(source: Path, registers: dict[str, Register]) -> None:
+    """Raise ConfigError when two items share bytes without being aliases (same address, size)."""
+    ordered = sorted(registers.values(), key=lambda r: (r.address, r.size))
+    for first, second in itertools.pairwise(ordered):
+        alias = (first.address, first.size) == (second.address, second.size)
+        if second.address < first.address + first.size and not alias:
+            raise ConfigError(
+                source, f"registers.{second.key}",
+                f"address {second.address} overlaps {first.key} "
+                f"({first.address}..{first.address + first.size - 1})",
+            )
 
 
 def _bank(values: list[int]) -> tuple[int, int, int]:
@@ -182,25 +264,14 @@ def _specs(source: Path, model: dict[str, Any]) -> ServoSpecs:
     )
 
 
-def _build(stem: str) -> ServoTable:
-    source = DATA_DIR / f"{stem}.toml"
-    data = _read_toml(stem)
-    model = data["model"]
-    unknown = set(model) - _SPEC_FIELDS - {
-        "name", "model_number", "protocol", "protocols", "family", "model_file"
-    }
-    if unknown:
-        raise ConfigError(source, "model", f"unknown field(s) {sorted(unknown)}")
-    specs = _specs(source, model)
-    facts_by_key: dict[str, dict[str, Any]] = {
-        key: dict(facts)
-        for key, facts in data.get("registers", {}).items()
-        if not facts.get("absent")
-    }
-    registers: dict[str, Register] = {}
-    for address, size, name in read_model_file(model_file_dir() / str(model["model_file"])):
+def _model_file_rows(
+    source: Path, model_file: str, facts_by_key: dict[str, dict[str, Any]]
+) -> dict[str, dict[str, Any]]:
+    """Merge the `.model` file's (address, size, name) rows into the register facts."""
+    rows: dict[str, dict[str, Any]] = {}
+    for address, size, name in read_model_file(model_file_dir() / model_file):
         key = register_key(name)
-        if key in registers:
+        if key in rows:
             continue
         facts = facts_by_key.pop(key, None)
         if facts is None:
@@ -209,60 +280,60 @@ def _build(stem: str) -> ServoTable:
             raise ConfigError(source, f"registers.{key}", "address differs from the .model file")
         facts.setdefault("address", address)
         facts.update(name=name, size=size)
-        registers[key] = _register(source, key, facts, specs.eeprom_end)
-    for key, facts in facts_by_key.items():
-        registers[key] = _register(source, key, facts, specs.eeprom_end)
+        rows[key] = facts
+    return rows
+
+
+def _protocols(source: Path, model: dict[str, Any]) -> tuple[float, ...]:
+    protocols = model.get("protocols", [model.get("protocol", 2.0)])
+    if not isinstance(protocols, list) or not protocols or any(
+        p not in (1.0, 2.0) for p in protocols
+    ):
+        raise ConfigError(source, "model.protocols", f"must list 1.0 and/or 2.0, not {protocols!r}")
+    return tuple(float(p) for p in protocols)
+
+
+def build_table(source: Path) -> ServoTable:
+    """Build the `ServoTable` of one model data file (`[model]` + `[registers]`).
+
+    With `model_file` the addresses and sizes come from the SDK's `.model` file; without it
+    (Protocol 1.0 models, which have none) every register gives `name`, `address` and `size`.
+    Raises ConfigError naming the file and key for a missing or bad field, a register outside
+    its size, a default outside its range or two overlapping registers.
+    """
+    data = read_data_file(source)
+    model = data.get("model", {})
+    unknown = set(model) - _SPEC_FIELDS - {
+        "name", "model_number", "protocol", "protocols", "family", "model_file"
+    }
+    if unknown:
+        raise ConfigError(source, "model", f"unknown field(s) {sorted(unknown)}")
+    for needed in ("name", "model_number"):
+        if needed not in model:
+            raise ConfigError(source, f"model.{needed}", "missing")
+    specs = _specs(source, model)
+    facts_by_key: dict[str, dict[str, Any]] = {
+        key: dict(facts)
+        for key, facts in data.get("registers", {}).items()
+        if not facts.get("absent")
+    }
+    rows = (
+        _model_file_rows(source, str(model["model_file"]), facts_by_key)
+        if "model_file" in model
+        else {}
+    )
+    registers = {
+        key: _register(source, key, facts, specs.eeprom_end)
+        for key, facts in {**rows, **facts_by_key}.items()
+    }
+    _check_overlaps(source, registers)
+    protocols = _protocols(source, model)
     return ServoTable(
         model=str(model["name"]),
         model_number=int(model["model_number"]),
-        protocol=float(model.get("protocol", 2.0)),
+        protocol=float(model.get("protocol", protocols[0])),
         registers=registers,
         specs=specs,
         family=str(model.get("family", "dynamixel")),
-        protocols=tuple(float(p) for p in model.get("protocols", [model.get("protocol", 2.0)])),
+        protocols=protocols,
     )
-
-
-@functools.cache
-def _index() -> dict[str, tuple[str, int]]:
-    """Model name -> (data file stem, model number) for every TOML data file (not `_base` files)."""
-    index: dict[str, tuple[str, int]] = {}
-    for path in sorted(DATA_DIR.glob("*.toml")):
-        if path.stem.startswith("_"):
-            continue
-        with path.open("rb") as handle:
-            model = tomllib.load(handle)["model"]
-        index[str(model["name"])] = (path.stem, int(model["model_number"]))
-    return index
-
-
-def supported_models() -> list[str]:
-    """Return the model names that have control-table data, e.g. ["XL330-M288", ...]."""
-    return sorted(_index())
-
-
-def _normalise(name: str) -> str:
-    return register_key(name)
-
-
-@functools.cache
-def _table_for_stem(stem: str) -> ServoTable:
-    return _build(stem)
-
-
-def table_for_model(model: str | int) -> ServoTable:
-    """Return the table for a model name ("XL430-W250", "xl430_w250", "XL430-W250-T") or number.
-
-    Raises UnknownModelError listing the supported models.
-    """
-    for name, (stem, number) in _index().items():
-        if isinstance(model, int):
-            if model == number:
-                return _table_for_stem(stem)
-            continue
-        names = (_normalise(name), stem)
-        wanted = _normalise(model)
-        if wanted in names or wanted.rsplit("_", 1)[0] in names:
-            return _table_for_stem(stem)
-    known = ", ".join(supported_models())
-    raise UnknownModelError(f"no control-table data for servo model {model!r}; supported: {known}")

@@ -49,6 +49,28 @@ def decode_signed(raw: int, size: int) -> int:
     return raw - (1 << bits) if raw >> (bits - 1) else raw
 
 
+def decode_magnitude(raw: int, sign_bit: int) -> int:
+    """Read `raw` as sign-magnitude: bit `sign_bit` the sign (set = negative), below it the size.
+
+    Dynamixel Protocol 1.0 Present Speed/Load use bit 10 (e-Manual AX-12A "Present Load"); Feetech
+    registers use bit 15 or 11. Bits above `sign_bit` are ignored.
+    """
+    magnitude = raw & ((1 << sign_bit) - 1)
+    return -magnitude if (raw >> sign_bit) & 1 else magnitude
+
+
+def encode_magnitude(value: int, sign_bit: int) -> int:
+    """The sign-magnitude raw value of `value` (bit `sign_bit` set when negative).
+
+    Raises RegisterValueError when |value| needs more than `sign_bit` bits.
+    """
+    if abs(value) >= 1 << sign_bit:
+        raise RegisterValueError(
+            f"{value} does not fit in {sign_bit} magnitude bits (sign in bit {sign_bit})"
+        )
+    return -value | (1 << sign_bit) if value < 0 else value
+
+
 def encode_value(value: int, size: int) -> bytes:
     """Encode `value` little-endian in `size` bytes, negatives as two's complement.
 
@@ -62,7 +84,13 @@ def encode_value(value: int, size: int) -> bytes:
 
 @dataclass(frozen=True)
 class Register:
-    """One control-table item: where it lives, who may write it, its range and its SI unit."""
+    """One control-table item: where it lives, who may write it, its range and its SI unit.
+
+    `signed` means two's complement; `sign_bit` (when not None) means sign-magnitude with that
+    bit as the sign (P1 Present Speed/Load: bit 10), and then `signed` is False, so a raw reader
+    sees the unsigned bits and :meth:`value_of` turns them into the value. `minimum`/`maximum`/
+    `default` are values (negative where the register can be), not raw bit patterns.
+    """
 
     name: str
     key: str
@@ -76,14 +104,40 @@ class Register:
     unit: str
     scale: float
     signed: bool
+    sign_bit: int | None = None
 
-    def decode(self, data: bytes | bytearray) -> int:
-        """Decode the item's little-endian bytes into its integer value (signed where it is)."""
-        raw = int.from_bytes(bytes(data[: self.size]), "little")
+    @property
+    def sign(self) -> str:
+        """How a negative value is encoded: "unsigned" (never), "twos" or "magnitude"."""
+        if self.sign_bit is not None:
+            return "magnitude"
+        return "twos" if self.signed else "unsigned"
+
+    def value_of(self, raw: int) -> int:
+        """The value of the unsigned little-endian integer `raw` read from this item."""
+        raw &= (1 << (8 * self.size)) - 1
+        if self.sign_bit is not None:
+            return decode_magnitude(raw, self.sign_bit)
         return decode_signed(raw, self.size) if self.signed else raw
 
+    def raw_of(self, value: int) -> int:
+        """The unsigned integer (the item's bits) that encodes `value`.
+
+        Raises RegisterValueError when the value does not fit the item.
+        """
+        if self.sign_bit is not None:
+            return encode_magnitude(value, self.sign_bit)
+        return int.from_bytes(encode_value(value, self.size), "little")
+
+    def decode(self, data: bytes | bytearray) -> int:
+        """Decode the item's little-endian bytes into its value (two's complement or
+        sign-magnitude where the item is)."""
+        return self.value_of(int.from_bytes(bytes(data[: self.size]), "little"))
+
     def encode(self, value: int) -> bytes:
-        """Encode an integer value into the item's little-endian bytes."""
+        """Encode a value into the item's little-endian bytes (RegisterValueError if too big)."""
+        if self.sign_bit is not None:
+            return encode_magnitude(value, self.sign_bit).to_bytes(self.size, "little")
         return encode_value(value, self.size)
 
     def to_si(self, value: int) -> float:
@@ -147,27 +201,34 @@ class ServoTable:
     family: str = "dynamixel"
     protocols: tuple[float, ...] = ()
     _by_address: Mapping[int, Register] = field(init=False, repr=False, compare=False)
+    _by_name: Mapping[str, Register] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         by_address: dict[int, Register] = {}
+        by_name: dict[str, Register] = {}
         for register in self.registers.values():
             by_address.setdefault(register.address, register)
+            by_name.setdefault(register_key(register.name), register)
+        object.__setattr__(self, "_by_name", MappingProxyType(by_name))
         object.__setattr__(self, "registers", MappingProxyType(dict(self.registers)))
         if not self.protocols:
             object.__setattr__(self, "protocols", (float(self.protocol),))
         object.__setattr__(self, "_by_address", MappingProxyType(by_address))
 
+    def _find(self, key: str) -> Register | None:
+        normal = register_key(key)
+        return self.registers.get(key) or self.registers.get(normal) or self._by_name.get(normal)
+
     def __getitem__(self, key: str) -> Register:
-        """Return the register for a key ("goal_position") or SDK name ("Goal Position")."""
-        register = self.registers.get(key) or self.registers.get(register_key(key))
+        """Return the register for a key ("goal_position", "min_position_limit") or its
+        datasheet name ("Goal Position", "CW Angle Limit")."""
+        register = self._find(key)
         if register is None:
             raise UnknownRegisterError(self.model, key, list(self.registers))
         return register
 
     def __contains__(self, key: object) -> bool:
-        if not isinstance(key, str):
-            return False
-        return key in self.registers or register_key(key) in self.registers
+        return isinstance(key, str) and self._find(key) is not None
 
     def by_address(self, address: int) -> Register | None:
         """Return the register starting at `address` (the first listed, for aliases), or None."""

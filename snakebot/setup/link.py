@@ -77,9 +77,9 @@ class Link:
         self.handler: sdk.PortHandlerLike
         self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
-        self.bus = DynamixelBus(port, baud, protocol=self.family.sdk_protocol, model=model,
-                                retries=retries, port_handler_factory=self._make_handler)
-        self._raw = sdk.SdkLink(self.handler, self.family.sdk_protocol)
+        self.bus = DynamixelBus(port, baud, model=model, family=self.family, retries=retries,
+                                port_handler_factory=self._make_handler)
+        self._raw = sdk.SdkLink(self.handler, self.family)
         self._open = False
 
     def speak(self, family: ServoFamily) -> None:
@@ -88,11 +88,10 @@ class Link:
         if family == self.family:
             return
         old = self.bus
-        self.bus = DynamixelBus(self.port, old.baud, protocol=family.sdk_protocol,
-                                model=old.table.model, retries=old.retries,
+        self.bus = DynamixelBus(self.port, old.baud, family=family, model=old.table.model,
+                                retries=old.retries,
                                 port_handler_factory=lambda _port: self.handler)
-        self.bus.table = old.table
-        self._raw = sdk.SdkLink(self.handler, family.sdk_protocol)
+        self._raw = sdk.SdkLink(self.handler, family)
         self.family = family
 
     def _make_handler(self, port: str) -> sdk.PortHandlerLike:

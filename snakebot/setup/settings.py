@@ -66,11 +66,8 @@ def _derived(robot: RobotConfig, table: ServoTable, source: Path) -> dict[str, S
     except ValueError as exc:
         raise ConfigError(source, "bus.baud", str(exc)) from None
     out = {"baud_rate": Setting(table["baud_rate"], baud_index, None, "[bus] baud", table)}
-    for key, name in GAIN_KEYS.items():
-        if key not in table:  # a compliance model (AX): no P/I/D registers
-            continue
-        value = getattr(robot.gain_registers, name)
-        out[key] = Setting(table[key], value, None, f"[gains] {name}", table)
+    for key, value in robot.gain_writes.items():
+        out[key] = Setting(table[key], value, None, f"[gains] {GAIN_KEYS[key]}", table)
     return out
 
 

@@ -79,6 +79,9 @@ def robot_facts(robot: Any) -> dict[str, Any]:
             facts[key] = _jsonable(dataclasses.asdict(value))
     if "gains" in facts:
         facts["gains_units"] = "kp_nm_per_rad: N m/rad, kd_nms_per_rad: N m s/rad"
+    writes = getattr(robot, "gain_writes", None)
+    if isinstance(writes, dict):  # the position-loop registers, P/I/D or Compliance Slope
+        facts["gain_writes"] = _jsonable(writes)
     registers = getattr(robot, "gain_registers", None)
     if dataclasses.is_dataclass(registers) and not isinstance(registers, type):
         facts["gain_registers"] = _jsonable(dataclasses.asdict(registers))

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from snakebot.config.fields import read_toml
 from snakebot.config.schema import GainRegisters, RobotConfig
+from snakebot.errors import ConfigError
 from snakebot.tuning.config_edit import set_table_values
 from snakebot.tuning.gains import (
     BackendSession,
@@ -78,7 +79,15 @@ def search_gains(
     listener: Listener | None = None,
 ) -> GainSearch:
     """A coarse grid around the current gains, then a finer pattern around the best; at most
-    ``budget`` candidates (the current gains count as the first)."""
+    ``budget`` candidates (the current gains count as the first). ConfigError naming the robot
+    file's ``[gains]`` for a servo without Position P/I/D Gain (an AX's Compliance Slope has
+    seven levels: set ``compliance_slope`` there)."""
+    if robot.servo.gain_kind != "pid":
+        raise ConfigError(
+            robot.source, "gains", f"the gain search tunes Position P/I/D Gain registers, which "
+            f"{robot.servo.name} does not have; its stiffness is the Compliance Slope "
+            "(compliance_slope = 2, 4, 8, 16, 32, 64 or 128 in [gains])"
+        )
     current = robot.gain_registers
     maxima = robot.servo.gain_max
     grid = candidate_grid(

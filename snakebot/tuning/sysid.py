@@ -103,7 +103,7 @@ class ServoFit:
         servo = dataclasses.replace(robot.servo, physics=physics)
         gains = robot.gains
         if physics.p_gain_divisor != robot.servo.physics.p_gain_divisor:
-            gains = servo.gains_of(robot.gain_registers)
+            gains = servo.gains_from(robot.gain_writes)
         return dataclasses.replace(robot, servo=servo, gains=gains)
 
     def scaled(self, names: Sequence[str], factors: Sequence[float]) -> ServoFit:

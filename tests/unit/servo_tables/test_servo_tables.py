@@ -193,7 +193,7 @@ def test_unknown_register_lists_close_names() -> None:
 
 def test_unknown_model_names_the_supported_ones() -> None:
     with pytest.raises(UnknownModelError, match="XL430-W250"):
-        table_for_model("AX-12A")
+        table_for_model("RX-28")
     with pytest.raises(UnknownModelError):
         table_for_model(9999)
 
