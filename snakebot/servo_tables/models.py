@@ -117,9 +117,8 @@ def _table(entry: ModelEntry) -> ServoTable:
     return build_table(entry.path)
 
 
-def _matches(entry: ModelEntry, wanted: str) -> bool:
-    names = (register_key(entry.name), register_key(entry.path.stem))
-    return wanted in names or wanted.rsplit("_", 1)[0] in names
+def _names(entry: ModelEntry) -> tuple[str, str]:
+    return register_key(entry.name), register_key(entry.path.stem)
 
 
 def table_for_model(model: str | int) -> ServoTable:
@@ -134,8 +133,10 @@ def table_for_model(model: str | int) -> ServoTable:
             return _table(entry)
     if not isinstance(model, int):
         wanted = register_key(model)
-        for entry in entries:
-            if _matches(entry, wanted):
-                return _table(entry)
+        # An exact name first ("MX-28-2" is not "MX-28"), then without a variant suffix ("-T").
+        for name in (wanted, wanted.rsplit("_", 1)[0]):
+            for entry in entries:
+                if name in _names(entry):
+                    return _table(entry)
     known = ", ".join(entry.name for entry in entries)
     raise UnknownModelError(f"no control-table data for servo model {model!r}; supported: {known}")
