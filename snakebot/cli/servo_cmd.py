@@ -1,4 +1,4 @@
-"""``snakebot servo reboot|reset|info|torque|jog``: recover, inspect and move single servos."""
+"""``snakebot servo reboot|reset|info|models|torque|jog``: recover, inspect and move servos."""
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ from snakebot.cli.servo_hands_on import add_actions
 from snakebot.config import load_robot
 from snakebot.errors import BusError, UsageError
 from snakebot.servo import FACTORY_ID
+from snakebot.servo_tables import model_dirs, model_entries, table_for_model
 from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
 from snakebot.setup.bauds import factory_baud
@@ -65,6 +66,10 @@ def add_parser(subparsers: Any) -> None:
     info.add_argument("--id", type=servo_id_arg, required=True, help="the servo to read")
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(handler=run_info, writes=False)
+    listing = actions.add_parser(
+        "models", help="servo models with control-table data (shipped and SNAKEBOT_SERVO_DATA)")
+    listing.add_argument("--json", action="store_true", help="print one JSON object")
+    listing.set_defaults(handler=run_models, writes=False)
     add_actions(actions, _port, servo_id_arg)
 
 
@@ -167,6 +172,28 @@ def run_reset(args: argparse.Namespace) -> int:
             print(f"snakebot: it is found with `snakebot scan --port {args.port} --baud "
                   f"{new_baud} --ids {new_id}`; `snakebot config assign-id` gives it its ID and "
                   "rate back", file=sys.stderr)
+    return 0
+
+
+def run_models(args: argparse.Namespace) -> int:
+    """List every servo model with data; loading each one names any broken file and key."""
+    rows: list[dict[str, Any]] = []
+    for entry in model_entries():
+        table = table_for_model(entry.name)
+        rows.append({
+            "model": table.model, "model_number": table.model_number, "family": table.family,
+            "protocols": list(table.protocols), "ticks": table.specs.ticks.count,
+            "registers": len(table.registers),
+            "file": "shipped" if entry.shipped else str(entry.path),
+        })
+    if args.json:
+        print_json({"models": rows, "folders": [str(f) for f in model_dirs()]})
+        return 0
+    print(f"{'model':<14} {'number':>6}  {'protocols':<10} {'ticks':>5}  file")
+    for row in rows:
+        protocols = "/".join(f"{p:.1f}" for p in row["protocols"])
+        print(f"{row['model']:<14} {row['model_number']:>6}  {protocols:<10} {row['ticks']:>5}  "
+              f"{row['file']}")
     return 0
 
 
