@@ -163,14 +163,16 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _missing(report: ScanReport, expected: tuple[int, ...] | None) -> list[int]:
-    """The robot's IDs that did not answer; without a robot, the gaps between the IDs found
-    (a chain numbered 1..N with holes in it looks incomplete)."""
+    """The robot's IDs that did not answer; without a robot, the gaps between the IDs found in
+    each protocol (a chain numbered 1..N with holes in it looks incomplete)."""
     found = {e.servo_id for e in report.entries}
     if expected is not None:
         return [i for i in expected if i not in found]
-    if not found:
-        return []
-    return [i for i in range(min(found), max(found) + 1) if i not in found]
+    gaps: set[int] = set()
+    for protocol in {e.family.protocol for e in report.entries}:
+        ids = {e.servo_id for e in report.entries if e.family.protocol == protocol}
+        gaps |= {i for i in range(min(ids), max(ids) + 1) if i not in ids}
+    return sorted(gaps - found)
 
 
 def _warn_missing(

@@ -20,6 +20,7 @@ from snakebot.cli.console import confirm
 from snakebot.cli.servo_hands_on import add_actions
 from snakebot.config import load_robot
 from snakebot.errors import BusError, UsageError
+from snakebot.families import family_for
 from snakebot.servo import FACTORY_ID
 from snakebot.servo_tables import model_dirs, model_entries, table_for_model
 from snakebot.servo_tables.units import display
@@ -146,8 +147,11 @@ def run_reset(args: argparse.Namespace) -> int:
         if link.ping_clean(args.id, args.baud) is None:
             raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
                            f"scan --port {args.port} --all-bauds` shows where the servos are")
+        was = link.family
         if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, factory):
+            link.speak(family_for(link.bus.table))  # a full reset restores the protocol too
             other = link.probe(FACTORY_ID, factory, tries=1)
+            link.speak(was)
             if other.models or other.corrupt:
                 keep = ("reset with --keep-id, or unplug it"
                         if "keep_id" in link.family.capabilities(link.bus.table)
@@ -162,16 +166,24 @@ def run_reset(args: argparse.Namespace) -> int:
                 "then_id": args.id if args.keep_id else FACTORY_ID,
                 "then_baud": args.baud if args.keep_baud else factory,
             })
-        new_id, new_baud = factory_reset(link, args.id, args.baud, keep_id=args.keep_id,
-                                         keep_baud=args.keep_baud)
+        new_id, new_baud, family = factory_reset(link, args.id, args.baud,
+                                                 keep_id=args.keep_id, keep_baud=args.keep_baud)
     if args.json:
-        print_json({"port": args.port, "id": args.id, "new_id": new_id, "new_baud": new_baud})
-    else:
-        print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} baud")
-        if (new_id, new_baud) != (args.id, args.baud):
-            print(f"snakebot: it is found with `snakebot scan --port {args.port} --baud "
-                  f"{new_baud} --ids {new_id}`; `snakebot config assign-id` gives it its ID and "
-                  "rate back", file=sys.stderr)
+        print_json({"port": args.port, "id": args.id, "new_id": new_id, "new_baud": new_baud,
+                    "new_protocol": family.protocol})
+        return 0
+    now = f" in Protocol {family.protocol:.1f}" if family != was else ""
+    print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} "
+          f"baud{now}")
+    if family != was:
+        print(f"snakebot: the reset put its Protocol Type back to the factory {family.protocol:.1f}"
+              f": switch it to {was.protocol:.1f} again (Protocol Type, address 13, e.g. with "
+              "Dynamixel Wizard 2.0) before `snakebot config assign-id` gives it its ID and rate "
+              "back", file=sys.stderr)
+    elif (new_id, new_baud) != (args.id, args.baud):
+        print(f"snakebot: `snakebot scan --port {args.port} --baud {new_baud} --protocol "
+              f"{family.protocol:g} --ids {new_id}` finds it; `snakebot config assign-id` gives "
+              "it its ID and rate back", file=sys.stderr)
     return 0
 
 

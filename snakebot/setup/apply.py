@@ -100,6 +100,8 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
     refused = _refusals(chain, diff)
     if refused:
         raise SetupError("cannot apply the settings: " + "; ".join(refused))
+    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(
+        chain.table).reboot
     steps: list[Step] = []
     bauds: list[Step] = []
     limp: list[int] = []
@@ -121,7 +123,8 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
             steps.append(Step(servo_id, "torque_off", reason=f"EEPROM writes need it; {why}"))
             steps += [_write(d) for d in eeprom]
             resets |= any(d.key == "operating_mode" for d in eeprom)
-        booted = [d.key for d in eeprom if d.key in REBOOT_KEYS]
+        # Without a Reboot instruction (Protocol 1.0) they act at the next power-up.
+        booted = [d.key for d in eeprom if d.key in REBOOT_KEYS] if can_reboot else []
         if booted:
             steps.append(Step(servo_id, "reboot", reason=f"{', '.join(booted)} acts at boot"))
         if resets or booted:

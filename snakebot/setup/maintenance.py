@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from snakebot.backends.dynamixel.faults import decode_hardware_error
 from snakebot.errors import BusError
+from snakebot.families import ServoFamily, family_for
 from snakebot.servo_tables import Register, ServoTable, table_for_model
 from snakebot.setup.bauds import factory_baud
 from snakebot.setup.errors import SetupError
@@ -88,12 +89,14 @@ def reset_option(link: Link, *, keep_id: bool, keep_baud: bool) -> str:
 
 
 def factory_reset(link: Link, servo_id: int, baud: int, *, keep_id: bool,
-                  keep_baud: bool) -> tuple[int, int]:
-    """Factory-reset one servo; (ID, baud) it answers at afterwards.
+                  keep_baud: bool) -> tuple[int, int, ServoFamily]:
+    """Factory-reset one servo; the (ID, baud, family) it answers at afterwards.
 
     The firmware keeps the baud only together with the ID (option 0x02); without the ID the servo
     comes back as ID 1 at its model's factory rate (57600 on the X series and the MX, 1 Mbps on
-    the AX). Protocol 1.0 servos always come back that way (SetupError if asked to keep either).
+    the AX) and in its factory protocol (an X-series servo in Protocol 1.0 mode comes back in
+    2.0: Protocol Type is reset too). Protocol 1.0 servos always come back that way (SetupError
+    if asked to keep either). The link is left speaking the family the servo answers in.
     """
     option = reset_option(link, keep_id=keep_id, keep_baud=keep_baud)
     bus = link.at(baud)
@@ -103,12 +106,13 @@ def factory_reset(link: Link, servo_id: int, baud: int, *, keep_id: bool,
     if option == "all":
         with unanswered_ok():  # the status may already come as ID 1, at the factory rate
             bus.factory_reset(servo_id, keep=option)
+        link.speak(family_for(table))
     else:
         bus.factory_reset(servo_id, keep=option)
     new_id = servo_id if keep_id else table["id"].default
     new_baud = baud if keep_baud else factory_baud(table)
     wait_for_boot(link, new_id, new_baud)
-    return new_id, new_baud
+    return new_id, new_baud, link.family
 
 
 @dataclass(frozen=True)

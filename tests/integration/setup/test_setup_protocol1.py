@@ -1,0 +1,203 @@
+"""Setup and scan on Protocol 1.0, through the SDK's Protocol 1.0 packet handler and the emulator.
+
+The servos are X-series in Protocol 1.0 mode (Protocol Type 1), beside Protocol 2.0 servos on the
+same wire where a test says so: what differs is what the family can do (no broadcast ping, no
+Reboot, one Factory Reset that resets everything), asked of ``snakebot.families``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from snakebot.config import load_robot
+from snakebot.emulation.bench import robot_servos
+from snakebot.emulation.chain import EmulatedChain
+from snakebot.emulation.registry import registered
+from snakebot.emulation.servo import VirtualServo
+from snakebot.servo_tables import table_for_model
+from tests.conftest import edit_robot
+from tests.integration.setup.conftest import ROBOT_BAUD, Bus, Cli
+
+MODEL = "XL430-W250"
+
+
+def in_protocol_1(servos: list[VirtualServo]) -> list[VirtualServo]:
+    """The servos switched to Protocol 1.0 (Protocol Type 1, as Dynamixel Wizard sets it)."""
+    for servo in servos:
+        servo.poke("protocol_type", 1)
+    return servos
+
+
+@pytest.fixture
+def p1_snake() -> Iterator[Bus]:
+    chain = EmulatedChain(in_protocol_1(robot_servos(MODEL, range(1, 13), ROBOT_BAUD)),
+                          baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        yield Bus(chain, url)
+
+
+@pytest.fixture
+def p1_robot(config_dir: Path) -> Path:
+    """snake12 on a Protocol 1.0 bus."""
+    return edit_robot(config_dir, "snake12", "protocol = 2.0", "protocol = 1.0")
+
+
+def test_scan_finds_a_mixed_chain_and_says_each_servos_protocol(cli: Cli) -> None:
+    servos = in_protocol_1(robot_servos(MODEL, range(1, 5), ROBOT_BAUD))
+    servos += robot_servos(MODEL, (20, 21), ROBOT_BAUD)
+    chain = EmulatedChain(servos, baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        code, out, err = cli("scan", "--port", url, "--json")
+        text_code, text, _ = cli("scan", "--port", url)
+    assert code == 0 and text_code == 0, err
+    report = json.loads(out)
+    found = [(s["id"], s["protocol"], s["model"], s["firmware"]) for s in report["servos"]]
+    assert found == [(20, 2.0, MODEL, 46), (21, 2.0, MODEL, 46),
+                     *((i, 1.0, MODEL, 46) for i in range(1, 5))]
+    assert report["mixed"] is True and report["protocols"] == [2.0, 1.0]
+    assert "servos of two protocols share this port (Protocol 2.0: ID(s) 20, 21; Protocol " \
+        "1.0: ID(s) 1, 2, 3, 4)" in err
+    assert "Protocol Type (address 13" in err
+    assert "did not answer" not in err  # 5..19 lie between two chains, not inside one
+    assert "ID   1  XL430-W250   firmware 46  Protocol 1.0 at 1000000 baud" in text
+
+
+def test_a_protocol_1_sweep_says_what_it_costs_and_ids_bounds_it(
+    p1_snake: Bus, cli: Cli
+) -> None:
+    p1_snake.chain.add(in_protocol_1([VirtualServo(MODEL, 40, baud=ROBOT_BAUD)])[0])
+    code, out, err = cli("scan", "--port", p1_snake.url, "--protocol", "1", "--json")
+    assert code == 0, err
+    assert [s["id"] for s in json.loads(out)["servos"]] == [*range(1, 13), 40]
+    assert ("Protocol 1.0 has no broadcast ping: pinging IDs 0..253 one by one at 1000000 baud "
+            "(about 8.7 s on a real port") in err
+    code, out, err = cli("scan", "--port", p1_snake.url, "--protocol", "1", "--ids", "1-12",
+                         "--json")
+    assert code == 0, err
+    assert [s["id"] for s in json.loads(out)["servos"]] == list(range(1, 13))
+    assert "pinging IDs 1..12 one by one at 1000000 baud (about 0.4 s" in err
+
+
+def test_scan_protocol_1_only_does_not_list_protocol_2_servos(cli: Cli) -> None:
+    chain = EmulatedChain(robot_servos(MODEL, range(1, 4), ROBOT_BAUD), baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        code, _, err = cli("scan", "--port", url, "--protocol", "1", "--ids", "0-20")
+    assert code == 1
+    assert "no servo answered in Protocol 1.0 at 1000000 baud" in err
+
+
+@pytest.mark.parametrize("protocol", [1.0, 2.0])
+def test_a_model_number_snakebot_does_not_know_is_shown_as_such(
+    protocol: float, cli: Cli
+) -> None:
+    table = table_for_model(MODEL)  # a servo of a model snakebot has no data for, number 4242
+    unknown = replace(table, model_number=4242, registers={
+        **table.registers, "model_number": replace(table["model_number"], default=4242)})
+    servo = VirtualServo(unknown, 7, baud=ROBOT_BAUD)
+    servo.poke("protocol_type", 1 if protocol == 1.0 else 2)
+    chain = EmulatedChain([servo], baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        code, out, err = cli("scan", "--port", url, "--ids", "0-10", "--json")
+    assert code == 0, err
+    (found,) = json.loads(out)["servos"]
+    assert (found["id"], found["protocol"], found["model_number"]) == (7, protocol, 4242)
+    assert found["model"] == "model 4242 (unknown to snakebot)"
+    assert found["duplicate"] is None
+
+
+def test_reboot_on_protocol_1_is_refused_with_a_power_cycle_hint(
+    p1_snake: Bus, p1_robot: Path, cli: Cli
+) -> None:
+    for which in (("--id", "3"), ("--all",)):
+        code, _, err = cli("servo", "reboot", "--robot", str(p1_robot), "--port", p1_snake.url,
+                           *which, "--yes")
+        assert code == 1
+        assert "XL430-W250 on Protocol 1.0) have no Reboot instruction: power-cycle" in err
+
+
+def test_factory_reset_on_protocol_1_resets_everything_and_says_where_the_servo_is(
+    p1_snake: Bus, p1_robot: Path, cli: Cli
+) -> None:
+    three = p1_snake.servo(3)
+    three.poke("return_delay_time", 0)
+    args = ("servo", "reset", "--robot", str(p1_robot), "--port", p1_snake.url, "--id", "3")
+    code, _, err = cli(*args, "--keep-id", "--yes")
+    assert code == 1
+    assert "its Factory Reset resets everything, the ID to 1 and the baud rate to 57600" in err
+    assert three.servo_id == 3  # refused before anything was sent
+    code, out, err = cli(*args, "--yes")
+    assert code == 0, err
+    assert out.strip() == ("servo 3: factory reset; it now answers as ID 1 at 57600 baud in "
+                           "Protocol 2.0")
+    assert "Protocol Type back to the factory 2.0: switch it to 1.0 again" in err
+    assert (three.servo_id, three.baud, three.protocol) == (1, 57600, 2.0)
+    assert three.peek("return_delay_time") == 250
+
+
+def test_config_diff_and_apply_bring_a_protocol_1_chain_to_its_settings(
+    p1_snake: Bus, p1_robot: Path, cli: Cli
+) -> None:
+    p1_snake.servo(5).poke("temperature_limit", 60)
+    p1_snake.servo(9).poke("torque_enable", 1)  # EEPROM needs it off
+    code, out, err = cli("config", "diff", "--robot", str(p1_robot), "--port", p1_snake.url,
+                         "--json")
+    assert code == 1, err
+    diff = json.loads(out)
+    assert {d["id"] for d in diff["differences"]} == set(range(1, 13))
+    code, out, err = cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url,
+                         "--yes")
+    assert code == 0, err
+    assert "torque goes off on servo(s) 9" in err
+    code, out, err = cli("config", "diff", "--robot", str(p1_robot), "--port", p1_snake.url)
+    assert code == 0, err
+    assert "all 12 servos hold the configured settings" in out
+    assert all(s.protocol == 1.0 for s in p1_snake.chain.servos)
+
+
+def test_a_latched_error_on_protocol_1_asks_for_a_power_cycle(
+    p1_snake: Bus, p1_robot: Path, cli: Cli
+) -> None:
+    p1_snake.servo(4).latch_error(0x04)  # overheating
+    code, _, err = cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url,
+                       "--yes")
+    assert code == 1
+    assert ("servo 4 has a latched hardware error and Protocol 1.0 has no Reboot: power-cycle "
+            "it") in err
+
+
+def test_assign_id_on_protocol_1_finds_a_new_servo_id_by_id(
+    p1_robot: Path, cli: Cli
+) -> None:
+    new = in_protocol_1([VirtualServo(MODEL, 1, baud=57600)])[0]
+    chain = EmulatedChain([new], baud=57600)
+    with registered(chain) as url:
+        code, out, err = cli("config", "assign-id", "--robot", str(p1_robot), "--port", url,
+                             "--to", "5")
+        assert code == 0, err
+        assert out.strip() == "servo ID 1 at 57600 baud is now ID 5 at 1000000 baud"
+        assert "Protocol 1.0 has no broadcast ping: every ID is pinged on its own" in err
+        assert (new.servo_id, new.baud, new.protocol) == (5, ROBOT_BAUD, 1.0)
+        chain.add(in_protocol_1([VirtualServo(MODEL, 1, baud=57600)])[0])
+        code, _, err = cli("config", "assign-id", "--robot", str(p1_robot), "--port", url,
+                           "--to", "6")
+        assert code == 1
+        assert "2 servos answer (ID 1 at 57600 baud, ID 5 at 1000000 baud)" in err
+
+
+def test_calibrate_on_protocol_1_reads_each_servo_without_sync_read(
+    p1_snake: Bus, p1_robot: Path, cli: Cli
+) -> None:
+    assert cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url,
+               "--yes")[0] == 0
+    for servo, shaft in zip(p1_snake.chain.servos, [0.05 * (i % 3) for i in range(12)],
+                            strict=True):
+        servo.state = replace(servo.state, position_rad=shaft)
+    code, _, err = cli("calibrate", "--robot", str(p1_robot), "--port", p1_snake.url, "--yes")
+    assert code == 0, err
+    offsets = [j.zero_offset_rad for j in load_robot(p1_robot).joints]
+    assert offsets == pytest.approx([0.05 * (i % 3) for i in range(12)], abs=2e-3)
