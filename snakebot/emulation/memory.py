@@ -76,9 +76,7 @@ def _layout(table: ServoTable) -> _Layout:
     image = bytearray(table.size)
     for address, register in items.items():
         owner[address : address + register.size] = [address] * register.size
-        bits = 8 * register.size
-        value = register.default & ((1 << bits) - 1)
-        image[address : address + register.size] = value.to_bytes(register.size, "little")
+        image[address : address + register.size] = register.encode(register.default)
     indirect = {
         register.address: by_key["indirect_address_" + register.key.rsplit("_", 1)[1]].address
         for register in items.values()
@@ -106,9 +104,10 @@ class ControlTableMemory:
         """Decode the item `key` from memory (signed where the item is)."""
         register = self.by_key[key]
         address = register.address
-        return int.from_bytes(
-            self.data[address : address + register.size], "little", signed=register.signed
-        )
+        raw = self.data[address : address + register.size]
+        if register.sign_bit is not None:
+            return register.decode(raw)
+        return int.from_bytes(raw, "little", signed=register.signed)
 
     def set(self, key: str, value: int) -> None:
         """Store `value` in item `key` without any rule; values are wrapped to the item's size."""
@@ -116,6 +115,10 @@ class ControlTableMemory:
         if register.access == "RW":
             self.version += 1
         bits = 8 * register.size
+        if register.sign_bit is not None:
+            # Sign-magnitude (P1 Present Speed/Load): clipped to what the magnitude bits hold.
+            limit = (1 << register.sign_bit) - 1
+            value = register.raw_of(max(-limit, min(limit, value)))
         encoded = (value & ((1 << bits) - 1)).to_bytes(register.size, "little")
         self.data[register.address : register.address + register.size] = encoded
 

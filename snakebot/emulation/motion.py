@@ -53,7 +53,8 @@ class ServoCommand:
 
     Profile limits are None for "unlimited" (register value 0); `max_velocity_rad_s` already folds
     in the Velocity Limit and the no-load speed. `position_gains` is the Position (P, I, D) Gain
-    registers as they are (register units), for a physics model of the position loop.
+    registers as they are (register units), for a physics model of the position loop (zeros
+    on an AX, whose loop is its compliance registers: a physics model reads those itself).
     """
 
     torque_enabled: bool

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, replace
+from typing import Protocol
 
-from snakebot.emulation import firmware
+from snakebot.emulation import firmware, firmware_p1
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
-from snakebot.emulation.memory import ControlTableMemory
+from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotionModel, MotorState, ProfileMotion, ServoCommand
 from snakebot.emulation.protocol import ALERT_BIT, MAX_ID, StatusError
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
@@ -23,6 +24,29 @@ CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
 P1_ALARMS = HardwareError.INPUT_VOLTAGE | HardwareError.OVERHEATING | HardwareError.OVERLOAD
 OVERLOAD_AFTER_S = 1.0
 _serial_numbers = itertools.count(1)
+
+
+class Firmware(Protocol):
+    """The register semantics of one control-table layout: `firmware` (X series) and
+    `firmware_p1` (AX, MX with Protocol 1.0 firmware) are the two modules that provide it."""
+
+    def position_ticks(self, memory: ControlTableMemory, state: MotorState) -> int:
+        """Present Position for a motor state."""
+
+    def command(self, servo: VirtualServo) -> ServoCommand:
+        """The control table's request in SI."""
+
+    def check_write(self, servo: VirtualServo, plan: WritePlan) -> int:
+        """Firmware write rules; an error number or 0."""
+
+    def apply_side_effects(self, servo: VirtualServo, values: dict[str, int]) -> None:
+        """What a successful write sets off."""
+
+    def reset_goal_limits(self, memory: ControlTableMemory) -> None:
+        """Goal limits as at boot."""
+
+    def refresh_present(self, servo: VirtualServo) -> None:
+        """Present values from the motor state."""
 
 
 class VirtualServo:
@@ -48,6 +72,9 @@ class VirtualServo:
         if not 0 <= servo_id <= MAX_ID:
             raise EmulationError(f"servo ID {servo_id} is outside 0..{MAX_ID}")
         self.memory = ControlTableMemory(self.table)
+        # X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX Protocol 1.0 layout.
+        self.firmware: Firmware = firmware if "operating_mode" in self.table else firmware_p1
+        self._alarms = 0  # latched faults, on tables without Hardware Error Status
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
         if processing_time_s is None:
@@ -120,6 +147,8 @@ class VirtualServo:
     @property
     def hardware_error(self) -> HardwareError:
         """Latched Hardware Error Status(70) bits."""
+        if not self.memory.has("hardware_error_status"):
+            return HardwareError(self._alarms)
         return HardwareError(self.memory.get("hardware_error_status"))
 
     @property
@@ -130,7 +159,7 @@ class VirtualServo:
 
     def peek(self, key: str) -> int:
         """Read item `key` as the bus would see it now (signed where the item is)."""
-        firmware.refresh_present(self)
+        self.firmware.refresh_present(self)
         return self.memory.get(key)
 
     def poke(self, key: str, value: int) -> None:
@@ -139,7 +168,7 @@ class VirtualServo:
 
     def status_error(self, error: int = 0) -> int:
         """A status packet's error byte: `error`, plus the Alert bit while a HW error is latched."""
-        return error | (ALERT_BIT if self.memory.get("hardware_error_status") else 0)
+        return error | (ALERT_BIT if self.hardware_error else 0)
 
     def alarm_bits(self) -> int:
         """The faults a Protocol 1.0 status byte reports on every reply: input voltage,
@@ -159,13 +188,13 @@ class VirtualServo:
 
     def read(self, address: int, length: int) -> tuple[int, bytes]:
         """Serve a READ: (error number, data)."""
-        firmware.refresh_present(self)
+        self.firmware.refresh_present(self)
         return self.memory.read(address, length)
 
     def write(self, address: int, data: bytes) -> int:
         """Serve a WRITE; returns the error number (0 on success) and changes nothing on error."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or firmware.check_write(self, plan)
+        error = plan.error or self.firmware.check_write(self, plan)
         if error:
             return error
         self.memory.store(plan)
@@ -175,7 +204,7 @@ class VirtualServo:
     def reg_write(self, address: int, data: bytes) -> int:
         """Serve a REG WRITE: check now, apply on ACTION; sets Registered Instruction(69)."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or firmware.check_write(self, plan)
+        error = plan.error or self.firmware.check_write(self, plan)
         if not error:
             self._registered, self._registered_address = bytes(data), address
             self.memory.set("registered_instruction", 1)
@@ -212,10 +241,20 @@ class VirtualServo:
         self.state = replace(self.state, position_rad=firmware.wrap_turn(self.state.position_rad))
         return 0
 
+    def clear_alarms(self) -> None:
+        """Forget latched faults (a Protocol 1.0 servo does on Torque Enable 1; an X servo only
+        on reboot). A cause still present latches again on the next step."""
+        if self.memory.has("hardware_error_status"):
+            self.memory.set("hardware_error_status", 0)
+        self._alarms = 0
+
     def latch_error(self, bits: int) -> None:
         """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off."""
-        latched = self.memory.get("hardware_error_status") | bits
-        self.memory.set("hardware_error_status", latched)
+        latched = int(self.hardware_error) | bits
+        if self.memory.has("hardware_error_status"):
+            self.memory.set("hardware_error_status", latched)
+        else:
+            self._alarms = latched
         if bits & self.memory.get("shutdown"):
             self.memory.set("torque_enable", 0)
 
@@ -249,7 +288,7 @@ class VirtualServo:
         """The control table's current request in SI, in the motor's frame (see motion.py)."""
         if self._command is not None and self._command[0] == self.memory.version:
             return self._command[1]
-        command = firmware.command(self)
+        command = self.firmware.command(self)
         self._command = (self.memory.version, command)
         return command
 
@@ -263,8 +302,9 @@ class VirtualServo:
         self.state = replace(
             self.state, position_rad=firmware.wrap_turn(self.state.position_rad), velocity_rad_s=0.0
         )
-        self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
-        firmware.reset_goal_limits(self.memory)
+        self.memory.set("goal_position", self.firmware.position_ticks(self.memory, self.state))
+        self.firmware.reset_goal_limits(self.memory)
+        self._alarms = 0
         self.uptime_s = 0.0
         self._since_packet_s = 0.0
         self._overload_s = 0.0
@@ -272,10 +312,10 @@ class VirtualServo:
         self._registered = None
         if self.memory.has("startup_configuration"):
             self.memory.set("torque_enable", self.memory.get("startup_configuration") & 0x01)
-        firmware.refresh_present(self)
+        self.firmware.refresh_present(self)
 
     def _after_write(self, values: dict[str, int]) -> None:
-        firmware.apply_side_effects(self, values)
+        self.firmware.apply_side_effects(self, values)
         if values.get("bus_watchdog") == 0:
             self._watchdog_tripped = False
         if "bus_watchdog" in values:
@@ -286,7 +326,7 @@ class VirtualServo:
         self._watchdog_tripped = True
         self.watchdog_trips += 1
         self.memory.set("bus_watchdog", -1)
-        self.memory.set("goal_position", firmware.position_ticks(self.memory, self.state))
+        self.memory.set("goal_position", self.firmware.position_ticks(self.memory, self.state))
         self.memory.set("goal_velocity", 0)
         self.state = replace(self.state, velocity_rad_s=0.0)
 
@@ -297,7 +337,7 @@ class VirtualServo:
             get = self.memory.get
             rules = _StepRules(
                 torque_enabled=get("torque_enable") == 1,
-                watchdog_s=get("bus_watchdog") * 0.02,
+                watchdog_s=get("bus_watchdog") * 0.02 if self.memory.has("bus_watchdog") else 0.0,
                 min_volts_x10=get("min_voltage_limit"),
                 max_volts_x10=get("max_voltage_limit"),
                 temperature_limit_c=get("temperature_limit"),
@@ -315,7 +355,7 @@ class VirtualServo:
         self._overload_s = self._overload_s + dt_s if abs(state.effort) >= 1.0 else 0.0
         if self._overload_s > OVERLOAD_AFTER_S:
             found |= HardwareError.OVERLOAD
-        if found and found & ~self.memory.get("hardware_error_status"):
+        if found and found & ~int(self.hardware_error):
             self.latch_error(found)
 
 
