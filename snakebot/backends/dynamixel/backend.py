@@ -212,7 +212,7 @@ class DynamixelBackend(Backend):
                 self._set_torque(True)
             self._read_state()
             assert self.last_rows is not None
-            self._open_bounds([row[-1] for row in self.last_rows])
+            self._open_bounds(self._positions(self.last_rows))
             self.interrupts.deliver()  # a Ctrl-C during the connect fails it, policy applied
         except BaseException:
             self.stopper.abort_connect()
@@ -382,7 +382,7 @@ class DynamixelBackend(Backend):
         assert self._monitor is not None
         if self.last_goal_ticks is None:
             return
-        stalls = self._monitor.check(self.clock(), [r[-1] for r in rows], self.last_goal_ticks)
+        stalls = self._monitor.check(self.clock(), self._positions(rows), self.last_goal_ticks)
         if stalls:
             self.stopper.diagnose(stalls)
             self._monitor.reset()
@@ -453,7 +453,12 @@ class DynamixelBackend(Backend):
         silent)."""
         rows = self._state_plan.read_rows(fast=self.fast_read)
         self.last_rows = rows
-        return [row[-1] for row in rows]
+        return self._positions(rows)
+
+    def _positions(self, rows: list[Row]) -> list[int]:
+        """Present Position (ticks) of each row of the cycle read."""
+        k = self._decoder.position_index
+        return [row[k] for row in rows]
 
     def _set_gains(self, gains: PDGains) -> None:
         servo = self.robot.servo

@@ -223,7 +223,15 @@ class DynamixelBus:
         self.transport.alerts.discard(servo_id)
 
     def factory_reset(self, servo_id: int, *, keep: str = "keep_id_baud") -> None:
-        """Reset one servo's control table; ``keep`` is "keep_id_baud", "keep_id" or "all"."""
+        """Reset one servo's control table; ``keep`` is "keep_id_baud", "keep_id" or "all".
+
+        ValueError for a ``keep`` the model's family does not have (Protocol 1.0 always resets
+        everything, ID and baud rate included: it is never sent as a milder reset).
+        """
+        if keep not in self.capabilities.factory_reset_options:
+            have = ", ".join(self.capabilities.factory_reset_options)
+            raise ValueError(f"{self.table.model} on {self.family.name} has no factory reset "
+                             f"{keep!r} (only {have}: it resets ID and baud rate too)")
         option = FACTORY_RESET_OPTIONS[keep]
 
         def op() -> tuple[int, int, list[int]]:

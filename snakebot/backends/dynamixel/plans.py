@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from snakebot.backends.dynamixel import sdk
-from snakebot.backends.dynamixel.blocks import Block
+from snakebot.backends.dynamixel.blocks import Block, magnitude_value
 from snakebot.families import READ_METHODS
 from snakebot.servo_tables import Register, RegisterValueError
 
@@ -118,6 +118,8 @@ class ReadPlan:
             raise ValueError(f"servo IDs appear twice in one read: {list(self.ids)}")
         self._single_read = single
         self._unpacker = block_struct(block)
+        self._magnitude = [(k, f.sign_bit) for k, f in enumerate(block.fields)
+                           if f.sign_bit is not None]
         self._total = block.size * len(self.ids)
         name = "sync read" if method == "fast_sync_read" else method.replace("_", " ")
         self._what = f"{name} {','.join(block.keys)}"
@@ -148,7 +150,19 @@ class ReadPlan:
         # No servo's data can be longer than the block, so the total catches any short one.
         if len(buffer) != self._total:
             return None
-        return list(self._unpacker.iter_unpack(buffer))
+        return self._values(list(self._unpacker.iter_unpack(buffer)))
+
+    def _values(self, rows: list[Row]) -> list[Row]:
+        """Rows with sign-magnitude fields turned from raw bits into values."""
+        if not self._magnitude:
+            return rows
+        out = []
+        for row in rows:
+            values = list(row)
+            for k, bit in self._magnitude:
+                values[k] = magnitude_value(values[k], bit)
+            out.append(tuple(values))
+        return out
 
     def _single(self, servo_id: int) -> dict[str, int]:
         return self._single_read(servo_id, self.block)
@@ -189,7 +203,7 @@ class ReadPlan:
             transport.note_condition(servo_id, error)
             rows.append(unpack(bytes(data)))
         else:
-            return rows
+            return self._values(rows)
         return self._assemble(transport.single_reads(self.ids, self._single, self._what))
 
     def _assemble(self, values: dict[int, dict[str, int]]) -> list[Row]:

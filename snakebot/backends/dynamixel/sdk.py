@@ -440,4 +440,5 @@ class BulkReader:
     def data(self, dxl_id: int) -> list[int] | bytearray:
         """Raw block bytes of ``dxl_id`` from the last read (``data_dict`` holds
         ``[data, address, length]`` per ID)."""
-        return self._group.data_dict[dxl_id][0]
+        data: list[int] | bytearray = self._group.data_dict[dxl_id][0]
+        return data
