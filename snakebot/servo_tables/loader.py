@@ -328,10 +328,13 @@ def build_table(source: Path) -> ServoTable:
     }
     _check_overlaps(source, registers)
     protocols = _protocols(source, model)
+    protocol = model.get("protocol", protocols[0])
+    if protocol not in protocols:
+        raise ConfigError(source, "model.protocol", f"{protocol!r} is not in protocols {protocols}")
     return ServoTable(
         model=str(model["name"]),
         model_number=int(model["model_number"]),
-        protocol=float(model.get("protocol", protocols[0])),
+        protocol=float(protocol),
         registers=registers,
         specs=specs,
         family=str(model.get("family", "dynamixel")),

@@ -145,3 +145,8 @@ def test_a_missing_base_and_bad_toml_are_named(tmp_path: Path) -> None:
     models._catalogue.cache_clear()
     with pytest.raises(ConfigError, match=r"ax_12w\.toml"):
         supported_models()
+
+
+def test_a_default_protocol_the_model_cannot_speak_is_refused(tmp_path: Path) -> None:
+    error = _error(tmp_path, AX_12W.replace("[registers]", "protocol = 2.0\n\n[registers]"))
+    assert error.key == "model.protocol"
