@@ -8,6 +8,7 @@ Reboot, one Factory Reset that resets everything), asked of ``snakebot.families`
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
@@ -201,3 +202,120 @@ def test_calibrate_on_protocol_1_reads_each_servo_without_sync_read(
     assert code == 0, err
     offsets = [j.zero_offset_rad for j in load_robot(p1_robot).joints]
     assert offsets == pytest.approx([0.05 * (i % 3) for i in range(12)], abs=2e-3)
+
+
+# --- AX-12A and MX-28: Protocol 1.0 firmware, their own control tables -------------------------
+
+AX_SHAFTS = [0.05, -0.12, 0.0, 0.2, -0.07, 0.11, -0.2, 0.03, 0.09, -0.15, 0.01, 0.17]
+
+
+@pytest.fixture
+def ax_snake() -> Iterator[Bus]:
+    """snake12-ax12a's twelve AX-12A at IDs 1..12, 1 Mbps, otherwise as from the factory."""
+    chain = EmulatedChain(robot_servos("AX-12A", range(1, 13), ROBOT_BAUD), baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        yield Bus(chain, url)
+
+
+@pytest.fixture
+def ax_robot(config_dir: Path) -> Path:
+    """snake12-ax12a, as a file calibrate may write."""
+    return config_dir / "robots" / "snake12-ax12a.toml"
+
+
+@pytest.fixture
+def mx_robot(config_dir: Path) -> Path:
+    """snake12-ax12a built from MX-28 (Protocol 1.0 firmware) with its P/I/D gains."""
+    path = edit_robot(config_dir, "snake12-ax12a", 'servo = "AX-12A"', 'servo = "MX-28"')
+    text = path.read_text().replace("compliance_slope = 32",
+                                    "position_p = 32\nposition_i = 0\nposition_d = 0")
+    path.write_text(text)
+    return path
+
+
+def test_scan_reads_ax_and_mx_firmware_where_their_tables_keep_it(cli: Cli) -> None:
+    servos = robot_servos("AX-12A", (1, 2), ROBOT_BAUD) + robot_servos("MX-28", (3,), ROBOT_BAUD)
+    servos[0].poke("firmware_version", 24)
+    servos[2].poke("firmware_version", 41)
+    chain = EmulatedChain(servos, baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        code, out, err = cli("scan", "--port", url, "--ids", "0-10", "--json")
+    assert code == 0, err
+    found = [(s["id"], s["protocol"], s["model"], s["model_number"], s["firmware"])
+             for s in json.loads(out)["servos"]]
+    # Firmware Version sits at address 2 on an AX or MX (6 on the X series).
+    assert found == [(1, 1.0, "AX-12A", 12, 24), (2, 1.0, "AX-12A", 12, servos[1].peek(
+        "firmware_version")), (3, 1.0, "MX-28", 29, 41)]
+    assert json.loads(out)["mixed"] is False
+
+
+def test_config_apply_writes_an_ax_chains_compliance_and_angle_limits(
+    ax_snake: Bus, cli: Cli
+) -> None:
+    code, out, err = cli("config", "diff", "--robot", "snake12-ax12a", "--port", ax_snake.url,
+                         "--json")
+    assert code == 1, err
+    wanted = {d["setting"] for d in json.loads(out)["differences"]}
+    assert {"min_position_limit", "max_position_limit", "return_delay_time"} <= wanted
+    code, _, err = cli("config", "apply", "--robot", "snake12-ax12a", "--port", ax_snake.url,
+                       "--yes")
+    assert code == 0, err
+    assert cli("config", "diff", "--robot", "snake12-ax12a", "--port", ax_snake.url)[0] == 0
+    six = ax_snake.servo(6)
+    assert (six.peek("min_position_limit"), six.peek("max_position_limit")) == (137, 887)
+    assert (six.peek("cw_compliance_slope"), six.peek("lock")) == (32, 0)
+
+
+def test_a_locked_ax_eeprom_is_refused_with_a_power_cycle_hint(ax_snake: Bus, cli: Cli) -> None:
+    ax_snake.servo(6).poke("lock", 1)
+    code, _, err = cli("config", "apply", "--robot", "snake12-ax12a", "--port", ax_snake.url,
+                       "--yes")
+    assert code == 1
+    assert "servo 6 has its EEPROM locked (Lock = 1)" in err and "power-cycle it" in err
+    assert ax_snake.servo(1).peek("return_delay_time") == 250  # nothing was written
+
+
+def test_calibrate_an_ax_chain_with_its_1024_ticks_over_300_degrees(
+    ax_snake: Bus, ax_robot: Path, cli: Cli
+) -> None:
+    assert cli("config", "apply", "--robot", str(ax_robot), "--port", ax_snake.url,
+               "--yes")[0] == 0
+    for servo, shaft in zip(ax_snake.chain.servos, AX_SHAFTS, strict=True):
+        servo.state = replace(servo.state, position_rad=shaft)
+    code, out, err = cli("calibrate", "--robot", str(ax_robot), "--port", ax_snake.url,
+                         "--yes")
+    assert code == 0, err
+    ticks = [s.peek("present_position") for s in ax_snake.chain.servos]
+    assert ticks[3] == 512 + round(0.2 / (math.radians(300) / 1024))  # 552: 0.293 deg a tick
+    offsets = [j.zero_offset_rad for j in load_robot(ax_robot).joints]
+    half_tick = math.radians(300) / 1024 / 2
+    assert offsets == pytest.approx(AX_SHAFTS, abs=half_tick)
+    assert "wrote 12 zero offsets" in out
+
+
+def test_factory_reset_of_an_ax_and_an_mx_lands_at_their_own_factory_rates(
+    ax_snake: Bus, mx_robot: Path, cli: Cli
+) -> None:
+    reset = ("servo", "reset", "--robot", "snake12-ax12a", "--id", "4", "--yes")
+    code, _, err = cli(*reset, "--port", ax_snake.url)
+    assert code == 1  # servo 1 of the chain is where a reset AX lands
+    assert "answers as ID 1 at 1000000 baud, where another servo already answers" in err
+    assert ax_snake.servo(4).peek("return_delay_time") == 250
+
+    ax = VirtualServo("AX-12A", 4, baud=57600)
+    chain = EmulatedChain([ax], baud=57600)
+    with registered(chain) as url:
+        code, out, err = cli(*reset, "--port", url, "--baud", "57600")
+    assert code == 0, err
+    assert out.strip() == "servo 4: factory reset; it now answers as ID 1 at 1000000 baud"
+    assert "`snakebot scan --port" in err and "--ids 1` finds it" in err
+    assert (ax.servo_id, ax.baud, ax.protocol) == (1, ROBOT_BAUD, 1.0)
+
+    mx = VirtualServo("MX-28", 9, baud=ROBOT_BAUD)
+    chain = EmulatedChain([mx], baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        code, out, err = cli("servo", "reset", "--robot", str(mx_robot), "--port", url,
+                             "--id", "9", "--yes")
+    assert code == 0, err
+    assert out.strip() == "servo 9: factory reset; it now answers as ID 1 at 57600 baud"
+    assert (mx.servo_id, mx.baud) == (1, 57600)
