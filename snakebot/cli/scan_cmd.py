@@ -72,8 +72,8 @@ def add_parser(subparsers: Any) -> None:
     bauds.add_argument(
         "--all-bauds",
         action="store_true",
-        help="try every rate the protocol's models have (Protocol 2.0: "
-        f"{_rates(2.0)}; 1.0: {_rates(1.0)})",
+        help="try every rate the protocol's models can be set to (X series: 57600, 1000000, "
+        "115200, 2000000, 3000000, 4000000, 9600; AX/MX also 500000, 2500000, 19200)",
     )
     parser.add_argument(
         "--protocol", type=protocol_arg,
@@ -88,11 +88,6 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(handler=run, writes=False)
-
-
-def _rates(protocol: float) -> str:
-    found = [f for f in FAMILIES if f.protocol == protocol]
-    return ", ".join(map(str, family_bauds(found[0]))) if found else "none"
 
 
 def model_name(model_number: int) -> str:
