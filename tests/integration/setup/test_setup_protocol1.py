@@ -319,3 +319,23 @@ def test_factory_reset_of_an_ax_and_an_mx_lands_at_their_own_factory_rates(
     assert code == 0, err
     assert out.strip() == "servo 9: factory reset; it now answers as ID 1 at 57600 baud"
     assert (mx.servo_id, mx.baud) == (1, 57600)
+
+
+def test_jog_an_ax_joint_at_its_moving_speed_then_hold_it(ax_snake: Bus, cli: Cli) -> None:
+    robot = ("--robot", "snake12-ax12a", "--port", ax_snake.url)
+    assert cli("config", "apply", *robot, "--yes")[0] == 0
+    servo = ax_snake.servo(4)
+    start = servo.peek("present_position")
+    code, out, err = cli("servo", "jog", *robot, "4", "15", "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    per_deg = 1024 / 300
+    assert abs(servo.peek("present_position") - (512 + 15 * per_deg)) <= 6
+    assert abs(result["end_deg"] - 15.0) < 1.5
+    # Moving Speed limited the move to about 30 deg/s; it is back to the settings' 0 afterwards.
+    assert result["seconds"] >= 0.8 * abs(512 + 15 * per_deg - start) / (30 * per_deg)
+    assert servo.torque_enabled and servo.peek("moving_speed") == 0
+    code, _, err = cli("servo", "torque", "off", *robot, "--id", "4", "--yes")
+    assert code == 0, err
+    assert not servo.torque_enabled
+    assert cli("config", "diff", *robot)[0] == 0
