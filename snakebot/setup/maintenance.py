@@ -45,8 +45,9 @@ def check_reboot(link: Link, servo_id: int | None = None) -> None:
     """SetupError unless servos of the link's model and family have a Reboot instruction."""
     if not link.family.capabilities(link.bus.table).reboot:
         who = "the servos" if servo_id is None else f"servo {servo_id}"
+        have = "have" if servo_id is None else "has"
         raise SetupError(
-            f"{link.port}: {who} ({_protocol(link)}) have no Reboot instruction: power-cycle "
+            f"{link.port}: {who} ({_protocol(link)}) {have} no Reboot instruction: power-cycle "
             "(switch the supply off and on) to restart and clear a shutdown"
         )
 
