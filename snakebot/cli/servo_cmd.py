@@ -93,7 +93,7 @@ def run_reboot(args: argparse.Namespace) -> int:
     with _link(args, "reboot") as link:
         bus = link.bus
         check_reboot(link, args.id)
-        ids = sorted(bus.broadcast_ping()) if args.all else [args.id]
+        ids = sorted(link.listening(args.baud)) if args.all else [args.id]
         if not ids:
             raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
         before = {i: {"torque_enable": bus.read(i, "torque_enable"),

@@ -93,7 +93,7 @@ def run_torque(args: argparse.Namespace) -> int:
     with Link(args.port, args.baud, model=robot.servo.name,
               protocol=robot.bus.protocol) as link:
         if args.all:
-            ids = sorted(link.bus.broadcast_ping())
+            ids = sorted(link.listening(args.baud))
             if not ids:
                 raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
         else:

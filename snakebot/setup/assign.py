@@ -55,28 +55,19 @@ def search_bauds(link: Link) -> tuple[int, ...]:
     return model_bauds(link.bus.table)
 
 
-def _listening(link: Link, baud: int) -> set[int]:
-    """The IDs answering at ``baud``: a broadcast ping (about a second), or in a family without
-    one every ID pinged on its own (one SDK timeout, about 34 ms, per silent ID)."""
-    if link.family.broadcast_ping:
-        return set(link.at(baud).broadcast_ping())
-    return {i for i in range(link.family.max_id + 1)
-            if (probe := link.probe(i, baud, tries=1)).models or probe.corrupt}
-
-
 def find_servos(
     link: Link, *, from_id: int | None = None, bauds: Sequence[int] | None = None
 ) -> list[Found]:
     """Every servo answering (as ``from_id``, if given) at ``bauds`` (default: every rate of
     the link's model); DuplicateIdError on clashes.
 
-    Without ``from_id`` every ID is listed at each rate (:func:`_listening`); ID 1 is always
+    Without ``from_id`` every ID is listed at each rate (:meth:`Link.listening`); ID 1 is always
     checked too, since new servos collide there.
     """
     found: list[Found] = []
     clashes: list[tuple[int, int, str]] = []
     for baud in search_bauds(link) if bauds is None else bauds:
-        ids = {from_id} if from_id is not None else {FACTORY_ID, *_listening(link, baud)}
+        ids = {from_id} if from_id is not None else {FACTORY_ID, *link.listening(baud)}
         for servo_id in sorted(ids):
             reason = collision_reason(link, servo_id, baud)
             if reason:

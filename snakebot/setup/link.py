@@ -181,6 +181,15 @@ class Link:
         pinged = {int(i): (int(v[0]), int(v[1])) for i, v in found.items()}
         return pinged, result in (sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL)
 
+    def listening(self, baud: int) -> set[int]:
+        """The IDs answering at ``baud``: a broadcast ping (about a second), or in a family without
+        one (Protocol 1.0) every ID pinged on its own (one SDK timeout, about 34 ms, per silent
+        ID: some 9 s for all 254)."""
+        if self.family.broadcast_ping:
+            return set(self.at(baud).broadcast_ping())
+        return {i for i in range(self.family.max_id + 1)
+                if (probe := self.probe(i, baud, tries=1)).models or probe.corrupt}
+
     def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
         """One Read without retries: (data, SDK result code); for collision checks."""
         data, result, _error = self.bus.run(

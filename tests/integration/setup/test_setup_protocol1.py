@@ -336,7 +336,7 @@ def test_jog_an_ax_joint_at_its_moving_speed_then_hold_it(ax_snake: Bus, cli: Cl
     # Moving Speed limited the move to about 30 deg/s; it is back to the settings' 0 afterwards.
     assert result["seconds"] >= 0.8 * abs(512 + 15 * per_deg - start) / (30 * per_deg)
     assert servo.torque_enabled and servo.peek("moving_speed") == 0
-    code, _, err = cli("servo", "torque", "off", *robot, "--id", "4", "--yes")
-    assert code == 0, err
-    assert not servo.torque_enabled
+    code, _, err = cli("servo", "torque", "off", *robot, "--all", "--yes", "--json")
+    assert code == 0, err  # --all: every ID pinged on its own, no broadcast ping in 1.0
+    assert not any(s.torque_enabled for s in ax_snake.chain.servos)
     assert cli("config", "diff", *robot)[0] == 0
