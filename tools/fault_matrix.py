@@ -1,19 +1,22 @@
 """Every fault the emulated bus can inject, at several rates, under both stop policies.
 
-Each case runs the real DynamixelBackend and runner (snake12, sidewinding, 100 Hz) through the
-unmodified dynamixel_sdk on the in-process emulator (``dxlemu://``, virtual time), injects one
-fault through the emulated chain, lets the run end however it ends, then checks:
+Each case runs the real DynamixelBackend and runner (snake12 by default, ``--robot`` another:
+snake12-ax12a for Protocol 1.0; sidewinding, 100 Hz) through the unmodified dynamixel_sdk on the
+in-process emulator (``dxlemu://``, virtual time), the servos speaking the robot's protocol,
+injects one fault through the emulated chain, lets the run end however it ends, then checks:
 
 - how it ended: completed, a typed error (a SnakebotError subclass, exit 1 in the CLI), or an
   untyped one (anything else: a bug, exit 3). Untyped errors must be 0.
-- every Goal Position the servos received (Sync Write or Write to register 116, decoded from the
-  bytes the host sent) against the robot's joint limits. Out-of-limit goals must be 0.
+- every Goal Position the servos received (Sync Write or Write to the model's Goal Position,
+  decoded from the bytes the host sent in the robot's protocol) against the robot's joint
+  limits. Out-of-limit goals must be 0.
 - each servo's final state against the stop policy, 1 s after the end with nobody on the bus:
-  hold = torque on, Bus Watchdog disarmed (not tripped); limp = torque off. A servo the fault took
+  hold = torque on, Bus Watchdog disarmed (not tripped; where the family has one); limp =
+  torque off. A servo the fault took
   off the bus (silent, wrong baud) cannot be reached and is not counted; one whose firmware cut
   its torque (a latched hardware error, a reboot) must be off. Mismatches must be 0.
 
-Usage: python tools/fault_matrix.py [--quick] [--duration 2.0] [--json]
+Usage: python tools/fault_matrix.py [--robot snake12] [--quick] [--duration 2.0] [--json]
 Exit status 1 if any must-be-zero figure is not zero.
 """
 
@@ -43,15 +46,16 @@ from snakebot.emulation import (
     HardwareError,
     VirtualServo,
     make_chain_for_ids,
+    protocol1,
     registered,
 )
+from snakebot.emulation import protocol as protocol2
 from snakebot.emulation.port import EmulatedPortHandler
-from snakebot.emulation.protocol import Instruction, StreamParser
 from snakebot.errors import SnakebotError
+from snakebot.families import family_for
 from snakebot.gaits import make_gait
+from snakebot.servo_tables import ServoTable
 
-GOAL_POSITION = 116
-SAFE_TICKS = 2048  # snake12's safe pose: every joint straight, zero offsets
 FAULT_CYCLE = 30
 TARGET = 5  # the servo most faults hit
 
@@ -124,6 +128,12 @@ class SilenceAtTorqueOn:
         self.chain = chain
 
 
+def _wrong_baud(chain: EmulatedChain, clock: HostClock) -> None:
+    servo = chain.servo(TARGET)
+    other = next(v for v, rate in servo.table.baud_rates.items() if rate != chain.baud)
+    servo.poke("baud_rate", other)
+
+
 def _twin(chain: EmulatedChain, clock: HostClock) -> None:
     chain.add(VirtualServo(chain.servo(TARGET).table, TARGET, baud=chain.baud))
 
@@ -146,8 +156,7 @@ def faults(quick: bool = False) -> list[Fault]:
             lambda c, h, d=delay: c.delay_replies(TARGET, d))))
     out.append(Fault("silence", "", at_cycle(lambda c, h: c.silence(TARGET)),
                      unreachable=(TARGET,)))
-    out.append(Fault("wrong_baud", "", at_cycle(
-        lambda c, h: c.servo(TARGET).poke("baud_rate", 1)), unreachable=(TARGET,)))
+    out.append(Fault("wrong_baud", "", at_cycle(_wrong_baud), unreachable=(TARGET,)))
     for bits, level in ((HardwareError.OVERLOAD, "overload"),
                         (HardwareError.OVERHEATING, "overheating")):
         if quick and level != "overload":
@@ -166,28 +175,40 @@ def faults(quick: bool = False) -> list[Fault]:
 
 
 class GoalAudit:
-    """Decodes the host's instruction bytes and checks every Goal Position against joint limits."""
+    """Decodes the host's instruction bytes (in the robot's protocol, with the emulator's codec
+    for framing only) and checks every Goal Position against joint limits."""
 
-    def __init__(self, robot: RobotConfig) -> None:
+    def __init__(self, robot: RobotConfig, table: ServoTable) -> None:
         converter = TickConverter.for_robot(robot)
         self.limits = {servo_id: (int(lo), int(hi)) for servo_id, lo, hi in zip(
             robot.servo_ids, converter.lower_ticks, converter.upper_ticks, strict=True)}
-        self.parser = StreamParser(stale_after_s=None)
+        self.p1 = family_for(table, robot.bus.protocol).protocol == 1.0
+        self.parser: Any = (protocol1 if self.p1 else protocol2).StreamParser(stale_after_s=None)
+        goal = table["goal_position"]
+        self.goal, self.size, self.signed = goal.address, goal.size, goal.signed
+        self.address_bytes = 1 if self.p1 else 2
+        self.sync_write = protocol2.Instruction.SYNC_WRITE  # 0x83 in both protocols
+        self.write = protocol2.Instruction.WRITE
         self.goals = 0
         self.out_of_limits: list[tuple[int, int]] = []
 
+    def _value(self, data: bytes) -> int:
+        return int.from_bytes(data, "little", signed=self.signed)
+
     def feed(self, data: bytes) -> None:
+        fmt = "<BB" if self.p1 else "<HH"
+        head = 2 * self.address_bytes
         for packet in self.parser.feed(data):
             params = packet.params
-            if packet.instruction == Instruction.SYNC_WRITE and len(params) >= 4:
-                address, size = struct.unpack_from("<HH", params)
-                if address == GOAL_POSITION and size == 4:
-                    for at in range(4, len(params) - 4, 5):
-                        servo_id = params[at]
-                        self._check(servo_id, struct.unpack_from("<i", params, at + 1)[0])
-            elif (packet.instruction == Instruction.WRITE and len(params) == 6
-                  and struct.unpack_from("<H", params)[0] == GOAL_POSITION):
-                self._check(packet.servo_id, struct.unpack_from("<i", params, 2)[0])
+            if packet.instruction == self.sync_write and len(params) >= head:
+                address, size = struct.unpack_from(fmt, params)
+                if address == self.goal and size == self.size:
+                    for at in range(head, len(params) - size, size + 1):
+                        self._check(params[at], self._value(params[at + 1 : at + 1 + size]))
+            elif (packet.instruction == self.write
+                  and len(params) == self.address_bytes + self.size
+                  and int.from_bytes(params[: self.address_bytes], "little") == self.goal):
+                self._check(packet.servo_id, self._value(params[self.address_bytes :]))
 
     def _check(self, servo_id: int, ticks: int) -> None:
         self.goals += 1
@@ -226,19 +247,24 @@ class CaseResult:
         return not (self.untyped or self.out_of_limits or self.final_mismatches)
 
 
-def snake12(policy: str, ramp_s: float) -> RobotConfig:
-    base = load_robot("snake12")
+def with_policy(name: str, policy: str, ramp_s: float) -> RobotConfig:
+    base = load_robot(name)
     return dataclasses.replace(base, safety=dataclasses.replace(
         base.safety, stop_policy=policy, ramp_s=ramp_s))
 
 
-def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0) -> CaseResult:
-    """One run of snake12 with ``fault``; see the module docstring for what is checked."""
-    robot = snake12(policy, ramp_s=0.3)
+def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0,
+             robot_name: str = "snake12") -> CaseResult:
+    """One run of the robot with ``fault``; see the module docstring for what is checked."""
+    robot = with_policy(robot_name, policy, ramp_s=0.3)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud, seed=seed)
+    table = chain.servos[0].table
+    version = family_for(table, robot.bus.protocol).protocol
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
-    audit = GoalAudit(robot)
+        if "protocol_type" in table:
+            servo.poke("protocol_type", int(version))
+    audit = GoalAudit(robot, table)
     clock = HostClock(chain)
     if fault.mode == "silence_at_torque_on":
         chain.physics = SilenceAtTorqueOn(chain)
@@ -263,15 +289,21 @@ def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0) 
     chain.physics = None
     chain.clear_faults()
     chain.advance(1.0)  # nobody on the bus: an armed watchdog would trip now
-    mismatches = final_mismatches(chain, policy, fault, started=audit.goals > robot.joint_count)
+    safe = dict(zip(robot.servo_ids, (int(t) for t in TickConverter.for_robot(robot).to_ticks(
+        SafetyLayer.for_robot(robot).rest_rad)), strict=True))
+    mismatches = final_mismatches(chain, policy, fault, started=audit.goals > robot.joint_count,
+                                  safe_ticks=safe, watchdog=family_for(
+                                      table, robot.bus.protocol).capabilities(table).bus_watchdog)
     return CaseResult(fault.name, policy, outcome, message, audit.goals, len(audit.out_of_limits),
                       mismatches, trips)
 
 
-def final_mismatches(chain: EmulatedChain, policy: str, fault: Fault, started: bool = True
+def final_mismatches(chain: EmulatedChain, policy: str, fault: Fault, started: bool = True,
+                     safe_ticks: dict[int, int] | None = None, watchdog: bool = True
                      ) -> list[str]:
     """Servos whose final state is not what the stop policy (or their firmware) says; with hold,
-    after a run that got going (``started``), that includes the safe pose (Goal Position)."""
+    after a run that got going (``started``), that includes the safe pose (Goal Position at
+    ``safe_ticks``, by servo ID). ``watchdog``: whether the servos have a Bus Watchdog."""
     out = []
     seen: set[int] = set()
     for servo in chain.servos:
@@ -286,20 +318,22 @@ def final_mismatches(chain: EmulatedChain, policy: str, fault: Fault, started: b
             continue
         if torque != (policy == "hold"):
             out.append(f"servo {servo_id}: torque {'on' if torque else 'off'} with {policy}")
+        safe = (safe_ticks or {}).get(servo_id, 2048)
         if servo.watchdog_tripped:
             out.append(f"servo {servo_id}: Bus Watchdog tripped after the stop")
-        elif torque and servo.peek("bus_watchdog") != 0:
+        elif torque and watchdog and servo.peek("bus_watchdog") != 0:
             out.append(f"servo {servo_id}: Bus Watchdog left armed")
-        elif torque and started and abs(servo.peek("goal_position") - SAFE_TICKS) > 2:
+        elif torque and started and abs(servo.peek("goal_position") - safe) > 2:
             out.append(f"servo {servo_id}: holds goal {servo.peek('goal_position')}, not the "
                        "safe pose")
     return out
 
 
 def run_matrix(fault_list: Sequence[Fault], policies: Sequence[str] = ("hold", "limp"),
-               duration_s: float = 2.0) -> list[CaseResult]:
+               duration_s: float = 2.0, robot_name: str = "snake12") -> list[CaseResult]:
     """Every fault under every policy."""
-    return [run_case(f, p, duration_s) for f in fault_list for p in policies]
+    return [run_case(f, p, duration_s, robot_name=robot_name)
+            for f in fault_list for p in policies]
 
 
 def totals(results: Sequence[CaseResult]) -> dict[str, int]:
@@ -317,6 +351,8 @@ def totals(results: Sequence[CaseResult]) -> dict[str, int]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", default="snake12",
+                        help="robot name or file (default snake12; snake12-ax12a: Protocol 1.0)")
     parser.add_argument("--quick", action="store_true", help="one rate per fault mode")
     parser.add_argument("--duration", type=float, default=2.0, help="gait seconds per case")
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
@@ -325,7 +361,7 @@ def main() -> int:
     if not args.verbose:
         logging.getLogger("snakebot").setLevel(logging.ERROR)
     started = time.perf_counter()
-    results = run_matrix(faults(args.quick), duration_s=args.duration)
+    results = run_matrix(faults(args.quick), duration_s=args.duration, robot_name=args.robot)
     summary = totals(results)
     summary["wall_s"] = round(time.perf_counter() - started, 1)
     bad = summary["untyped_errors"] + summary["out_of_limit_goals"]

@@ -3,7 +3,10 @@
 Each input (tools/fuzz_packets.py: random bytes, field-aware packets, bit flips, truncations,
 wrong and huge lengths, stuffing edge cases, bad CRCs, splices) goes to a chain of three XL430
 servos (IDs 1-3), followed by 1024 zero bytes whenever it could leave a packet half-received.
-Then the campaign checks:
+With `--protocol 1` the inputs are Protocol 1.0 ones (tools/fuzz_packets1.py: the same families
+with checksums instead of CRCs and Protocol 2.0 packets mixed in instead of stuffing cases), sent
+to two AX-12As and an XL430 in Protocol 1.0 mode, followed by 256 zero bytes. Then the campaign
+checks:
 
 - crash: the chain raised (in-process) or the pty server thread died;
 - hang: the chain spent over 1 s of CPU on one input, or answered nothing (input or probe) for
@@ -12,15 +15,16 @@ Then the campaign checks:
 - corruption: a probe (a ping and a read of Model Number, one servo in turn) was not answered
   exactly right; a servo that no valid packet in the input addressed with a write-like
   instruction changed a control-table byte (present values aside); an input without any valid
-  packet got a reply; a reply packet outgrew 1024 bytes; a lone unicast Write the servo
-  rejected changed its table, or one it accepted is not in its table (in-process, where the
-  replies are seen).
+  packet got a reply (in Protocol 1.0, other than a Checksum-error status from the servo a
+  damaged frame names); a reply packet outgrew 1024 bytes (250 in Protocol 1.0); a lone
+  unicast Write the servo rejected changed its table, or one it accepted is not in its table
+  (in-process, where the replies are seen).
 
 State a valid input changed legitimately is put back (fresh servos) before the probe. "Valid"
 is judged by tools/fuzz_packets.candidates, which uses the SDK's CRC, not the emulator's.
 
 Usage: python tools/fuzz_emulator.py [--packets 100000] [--seed 1] [--transport inproc|pty|both]
-       [--pty-packets N] [--json] [--replay INDEX]
+       [--protocol 2|1] [--pty-packets N] [--json] [--replay INDEX]
 """
 
 from __future__ import annotations
@@ -32,9 +36,11 @@ import platform
 import sys
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import fuzz_packets1
 from fuzz_packets import (
     BROADCAST,
     READ_ONLY,
@@ -66,7 +72,51 @@ VOLATILE = (
     "present_input_voltage", "present_temperature",
 )
 IDENTITY = (7, 8, 12, 13, 68)  # ID, baud, secondary ID, protocol, status return level
+IDENTITY_P1 = (3, 4, 16, *IDENTITY)  # AX-12A ID, baud, status return level; and the X table's
 GOAL_ITEMS = ("goal_pwm", "goal_current", "goal_velocity", "goal_position")
+P1_REJECTIONS = 0x02 | 0x08 | 0x40  # angle limit, range, instruction bits
+
+
+@dataclass(frozen=True)
+class Dialect:
+    """What the campaign needs to know of one protocol's packets."""
+
+    protocol: int
+    inputs: Any
+    candidates: Callable[[bytes], list[Candidate]]
+    may_leave_partial: Callable[[bytes], bool]
+    filler: bytes
+    read_only: frozenset[int]
+    identity: tuple[int, ...]
+    address_bytes: int
+    max_reply: int
+
+    def write_target(self, params: bytes) -> tuple[int, bytes]:
+        """(address, data) of a Write's parameters."""
+        if self.address_bytes == 1:
+            return params[0], params[1:]
+        return params[0] | params[1] << 8, params[2:]
+
+    def answers_damage(self, status: Candidate) -> bool:
+        """Whether a status answers a damaged frame (Protocol 1.0's Checksum bit), not a
+        valid instruction."""
+        return self.protocol == 1 and bool(status.instruction & fuzz_packets1.CHECKSUM_BIT)
+
+    def rejected(self, status: Candidate) -> int:
+        """The error a status reports for the instruction (not the alarms it carries)."""
+        if self.protocol == 1:
+            return status.instruction & P1_REJECTIONS
+        return status.params[0] & 0x7F if status.params else 0
+
+
+def dialect(protocol: int) -> Dialect:
+    """The packets of Protocol `protocol` (2 or 1)."""
+    if protocol == 1:
+        return Dialect(1, fuzz_packets1.Inputs1(IDS), fuzz_packets1.candidates,
+                       fuzz_packets1.may_leave_partial, bytes(256), fuzz_packets1.READ_ONLY,
+                       IDENTITY_P1, 1, fuzz_packets1.MAX_PACKET)
+    return Dialect(2, Inputs(IDS), candidates, may_leave_partial, FILLER, READ_ONLY, IDENTITY,
+                   2, 1024)
 MODE_RESETS = (
     "velocity_i_gain", "velocity_p_gain", "position_d_gain", "position_i_gain", "position_p_gain",
     "profile_acceleration", "profile_velocity", "goal_pwm", "goal_current",
@@ -110,6 +160,7 @@ class Report:
 
     transport: str
     seed: int
+    protocol: int = 2
     packets: int = 0
     seconds: float = 0.0
     crashes: int = 0
@@ -129,7 +180,8 @@ class Report:
 
     def as_dict(self) -> dict[str, Any]:
         rate = self.packets / self.seconds if self.seconds else 0.0
-        return {"transport": self.transport, "seed": self.seed, "packets": self.packets,
+        return {"transport": self.transport, "seed": self.seed, "protocol": self.protocol,
+                "packets": self.packets,
                 "seconds": round(self.seconds, 2), "packets_per_s": round(rate),
                 "crashes": self.crashes, "hangs": self.hangs, "corruptions": self.corruptions,
                 "slowest_input_s": round(self.slowest_s, 3),
@@ -140,12 +192,13 @@ class Report:
 class Campaign:
     """Runs inputs of campaign `seed` against one target, noting what goes wrong in `report`."""
 
-    def __init__(self, target: Target, seed: int, report: Report) -> None:
+    def __init__(self, target: Target, seed: int, report: Report, protocol: int = 2) -> None:
         self.target = target
         self.seed = seed
         self.report = report
-        self.inputs = Inputs(IDS)
-        self.layout = Layout(make_servos(1_000_000)[0])
+        self.dialect = dialect(protocol)
+        self.inputs = self.dialect.inputs
+        self.layouts = [Layout(servo) for servo in make_servos(1_000_000, protocol)]
         self.baseline = self.target.tables().memory
 
     def run(self, indices: range) -> None:
@@ -158,7 +211,7 @@ class Campaign:
     def one(self, index: int) -> None:
         family, data = self.inputs.make(self.seed, index)
         self.report.families[family] += 1
-        sent = data + FILLER if may_leave_partial(data) else data
+        sent = data + self.dialect.filler if self.dialect.may_leave_partial(data) else data
         before = self.target.tables()
         began = time.perf_counter()
         try:
@@ -172,8 +225,8 @@ class Campaign:
         self.report.slowest_s = max(self.report.slowest_s, time.perf_counter() - began)
         for kind, detail in self.judge(sent, before, after, replies):
             self.report.note("corruptions", kind, index, family, data, detail)
-        if any(self.layout.changed(b, a) for b, a in zip(self.baseline, after.memory,
-                                                          strict=False)) \
+        if any(layout.changed(b, a) for layout, b, a in zip(self.layouts, self.baseline,
+                                                             after.memory, strict=False)) \
                 or len(after.memory) != len(self.baseline):
             self.target.restore()
         try:
@@ -192,18 +245,19 @@ class Campaign:
     def judge(self, sent: bytes, before: Tables, after: Tables,
               replies: list[bytes] | None) -> list[tuple[str, str]]:
         """Corruption findings for one input (see the module docstring)."""
-        found = candidates(sent)
+        found = self.dialect.candidates(sent)
         problems: list[tuple[str, str]] = []
         if replies is not None:
-            if not found and replies:
+            if not found and replies and not self._checksum_replies(sent, replies):
                 problems.append(("reply to garbage", b"".join(replies).hex(" ")))
-            if _long_header(b"".join(replies)):
-                problems.append(("oversized reply", "a LEN field beyond 1017"))
-        writers = [c for c in found if c.instruction not in READ_ONLY]
+            if _long_header(b"".join(replies)) or any(len(r) > self.dialect.max_reply
+                                                      for r in replies):
+                problems.append(("oversized reply", f"a packet over {self.dialect.max_reply}"))
+        writers = [c for c in found if c.instruction not in self.dialect.read_only]
         identities = list(before.identities)
-        addressed = _addressed(writers, identities)
+        addressed = _addressed(writers, identities, self.dialect)
         for number, (old, new) in enumerate(zip(before.memory, after.memory, strict=False)):
-            changed = self.layout.changed(old, new)
+            changed = self.layouts[number].changed(old, new)
             if changed and number not in addressed:
                 problems.append(("unexplained change",
                                  f"servo #{number} (ID {identities[number][0]}) bytes {changed}"))
@@ -212,6 +266,16 @@ class Campaign:
                                           after.memory, replies)
         return problems
 
+    def _checksum_replies(self, sent: bytes, replies: list[bytes]) -> bool:
+        """Protocol 1.0: whether every reply is a Checksum-error status from a servo that a
+        damaged frame in `sent` names (the only reply an input without a valid packet gets)."""
+        if self.dialect.protocol != 1:
+            return False
+        statuses = fuzz_packets1.candidates(b"".join(replies))
+        framed = fuzz_packets1.framed_ids(sent)
+        return bool(statuses) and len(statuses) == len(replies) and all(
+            s.instruction & fuzz_packets1.CHECKSUM_BIT and s.servo_id in framed for s in statuses)
+
     def _check_write(self, write: Candidate, found: list[Candidate],
                      identities: list[tuple[int, int | None]], before: tuple[bytes, ...],
                      after: tuple[bytes, ...], replies: list[bytes]) -> list[tuple[str, str]]:
@@ -219,34 +283,37 @@ class Campaign:
         owners = [n for n, (servo_id, _) in enumerate(identities) if servo_id == write.servo_id]
         others = [c for c in found if c is not write
                   and c.servo_id in (write.servo_id, BROADCAST)]
-        statuses = [s for s in candidates(b"".join(replies)) if s.servo_id == write.servo_id]
-        if len(owners) != 1 or others or len(statuses) != 1 or len(write.params) < 3:
+        statuses = [s for s in self.dialect.candidates(b"".join(replies))
+                    if s.servo_id == write.servo_id and not self.dialect.answers_damage(s)]
+        if len(owners) != 1 or others or len(statuses) != 1 \
+                or len(write.params) < self.dialect.address_bytes + 1:
             return []
         number = owners[0]
-        error = statuses[0].params[0] & 0x7F if statuses[0].params else 0
+        layout = self.layouts[number]
+        error = self.dialect.rejected(statuses[0])
         if error:
-            changed = self.layout.changed(before[number], after[number])
+            changed = layout.changed(before[number], after[number])
             return [("rejected write changed state", f"error {error}, bytes {changed}")] \
                 if changed else []
-        address = write.params[0] | write.params[1] << 8
-        data = write.params[2:]
-        keys = {self.layout.owner[a] for a in range(address, address + len(data))
-                if a < self.layout.size}
+        address, data = self.dialect.write_target(write.params)
+        keys = {layout.owner[a] for a in range(address, address + len(data))
+                if a < layout.size}
         skip = {"torque_enable"} if keys & set(GOAL_ITEMS) else set()
         skip |= set(MODE_RESETS) if "operating_mode" in keys else set()
         wrong = [
             a for a, byte in zip(range(address, address + len(data)), data, strict=False)
-            if a < self.layout.size and (key := self.layout.owner[a]) is not None
+            if a < layout.size and (key := layout.owner[a]) is not None
             and not key.startswith("indirect_data") and key not in skip
             and after[number][a] != byte
         ]
         return [("accepted write not stored", f"addresses {wrong}")] if wrong else []
 
 
-def _addressed(writers: list[Candidate], identities: list[tuple[int, int | None]]) -> set[int]:
+def _addressed(writers: list[Candidate], identities: list[tuple[int, int | None]],
+               dialect: Dialect) -> set[int]:
     """Servos (by position) that the write-like packets may have changed."""
     everyone = set(range(len(identities)))
-    if any(c.servo_id == BROADCAST or c.instruction == RESET or _touches_identity(c)
+    if any(c.servo_id == BROADCAST or c.instruction == RESET or _touches_identity(c, dialect)
            for c in writers):
         return everyone
     ids = {c.servo_id for c in writers}
@@ -254,11 +321,11 @@ def _addressed(writers: list[Candidate], identities: list[tuple[int, int | None]
             if servo_id in ids or shadow in ids}
 
 
-def _touches_identity(candidate: Candidate) -> bool:
-    if len(candidate.params) < 3:
+def _touches_identity(candidate: Candidate, dialect: Dialect) -> bool:
+    if len(candidate.params) < dialect.address_bytes + 1:
         return False
-    address = candidate.params[0] | candidate.params[1] << 8
-    return any(address <= a < address + len(candidate.params) - 2 for a in IDENTITY)
+    address, data = dialect.write_target(candidate.params)
+    return any(address <= a < address + len(data) for a in dialect.identity)
 
 
 def _long_header(data: bytes) -> bool:
@@ -271,12 +338,14 @@ def _long_header(data: bytes) -> bool:
     return False
 
 
-def run_campaign(transport: str, seed: int, count: int, first: int = 0) -> Report:
-    """Fuzz `count` inputs of campaign `seed` over `transport` ("inproc" or "pty")."""
-    target: Target = InProcess() if transport == "inproc" else OverPty()
-    report = Report(transport, seed)
+def run_campaign(transport: str, seed: int, count: int, first: int = 0,
+                 protocol: int = 2) -> Report:
+    """Fuzz `count` inputs of campaign `seed` over `transport` ("inproc" or "pty") in
+    Protocol `protocol` (2 or 1)."""
+    target: Target = InProcess(protocol) if transport == "inproc" else OverPty(protocol)
+    report = Report(transport, seed, protocol)
     try:
-        Campaign(target, seed, report).run(range(first, first + count))
+        Campaign(target, seed, report, protocol).run(range(first, first + count))
     finally:
         target.close()
     return report
@@ -288,6 +357,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pty-packets", type=int, help="inputs over the pty (default --packets)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--transport", choices=("inproc", "pty", "both"), default="both")
+    parser.add_argument("--protocol", type=int, choices=(2, 1), default=2,
+                        help="the protocol of the inputs and the servos (default 2)")
     parser.add_argument("--replay", type=int, metavar="INDEX", help="run only input INDEX")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
@@ -298,7 +369,7 @@ def main(argv: list[str] | None = None) -> int:
         first = 0
         if args.replay is not None:
             count, first = 1, args.replay
-        reports.append(run_campaign(transport, args.seed, count, first))
+        reports.append(run_campaign(transport, args.seed, count, first, args.protocol))
     summary = {
         "command": "python tools/fuzz_emulator.py " + " ".join(argv or sys.argv[1:]),
         "python": platform.python_version(), "machine": platform.machine(),
@@ -309,7 +380,8 @@ def main(argv: list[str] | None = None) -> int:
     else:
         for r in reports:
             d = r.as_dict()
-            print(f"{d['transport']:>6}: {d['packets']} inputs (seed {d['seed']}) in "
+            print(f"{d['transport']:>6}: {d['packets']} Protocol {d['protocol']} inputs "
+                  f"(seed {d['seed']}) in "
                   f"{d['seconds']} s, {d['packets_per_s']}/s: {d['crashes']} crashes, "
                   f"{d['hangs']} hangs, {d['corruptions']} corruptions {d['kinds'] or ''}")
             for example in d["examples"][:5]:

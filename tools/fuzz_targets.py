@@ -1,9 +1,10 @@
 """Ways into an emulated chain for tools/fuzz_emulator.py: in-process, and over a real pty.
 
-Both start from the same three XL430 servos (IDs 1-3, return delay 0). The pty target runs the
-chain and its `PtyServer` in a child process, as `snakebot emulate` does, and probes it through
-the unmodified SDK; the child says an input was taken in once its parser has counted the bytes
-and no reply is left in flight, and sends the control tables back over a pipe.
+Both start from the same three servos (IDs 1-3, return delay 0): XL430s for Protocol 2.0; for
+Protocol 1.0 two AX-12As and an XL430 with Protocol Type 1 (the two P1 control tables). The pty
+target runs the chain and its `PtyServer` in a child process, as `snakebot emulate` does, and
+probes it through the unmodified SDK; the child says an input was taken in once its parser has
+counted the bytes and no reply is left in flight, and sends the control tables back over a pipe.
 """
 
 from __future__ import annotations
@@ -19,11 +20,13 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Protocol
 
+import fuzz_packets1
 from fuzz_packets import packet
 
 from snakebot.emulation import EmulatedChain, VirtualServo
 
 MODEL, MODEL_NUMBER, IDS = "XL430-W250", 1060, (1, 2, 3)
+P1_MODELS = {1: ("AX-12A", 12), 2: ("AX-12A", 12), 3: ("XL430-W250", 1060)}
 HANG_S = 1.0
 """CPU time the emulator may spend on one input before it counts as hung."""
 STALL_S = 30.0
@@ -47,14 +50,28 @@ class Tables:
     identities: tuple[tuple[int, int | None], ...]
 
 
-def make_servos(baud: int) -> list[VirtualServo]:
+def model_number(servo_id: int, protocol: int) -> int:
+    """The Model Number the servo with `servo_id` reports."""
+    return MODEL_NUMBER if protocol == 2 else P1_MODELS[servo_id][1]
+
+
+def make_servos(baud: int, protocol: int = 2) -> list[VirtualServo]:
     """The three servos every input starts from (return delay 0, so the pty runs fast)."""
     servos = []
     for serial, servo_id in enumerate(IDS, start=1):
-        servo = VirtualServo(MODEL, servo_id, baud=baud, processing_time_s=20e-6 + 4e-6 * serial)
+        model = MODEL if protocol == 2 else P1_MODELS[servo_id][0]
+        servo = VirtualServo(model, servo_id, baud=baud, processing_time_s=20e-6 + 4e-6 * serial)
         servo.poke("return_delay_time", 0)
+        if protocol == 1 and servo.memory.has("protocol_type"):
+            servo.poke("protocol_type", 1)
         servos.append(servo)
     return servos
+
+
+def received(chain: EmulatedChain, protocol: int) -> int:
+    """Bytes the chain's receiver for `protocol` has taken in."""
+    stats = chain.parser_stats if protocol == 2 else chain.parser1_stats
+    return stats.received_bytes
 
 
 def tables(chain: EmulatedChain) -> Tables:
@@ -67,12 +84,12 @@ def tables(chain: EmulatedChain) -> Tables:
         )
 
 
-def restore(chain: EmulatedChain) -> None:
+def restore(chain: EmulatedChain, protocol: int) -> None:
     """Fresh servos in place of the fuzzed ones (same chain, so the transport stays)."""
     with chain.lock:
         for servo in chain.servos:
             chain.remove(servo)
-        for servo in make_servos(chain.baud):
+        for servo in make_servos(chain.baud, protocol):
             chain.add(servo)
 
 
@@ -105,22 +122,29 @@ class InProcess:
 
     BAUD = 1_000_000
 
-    def __init__(self) -> None:
+    def __init__(self, protocol: int = 2) -> None:
+        self.protocol = protocol
         self.restart()
 
     def restart(self) -> None:
-        self.chain = EmulatedChain(make_servos(self.BAUD), baud=self.BAUD)
-        firmware = self.chain.servos[0].peek("firmware_version")
-        model = MODEL_NUMBER.to_bytes(2, "little")
-        self._probes = {
-            servo_id: [
+        self.chain = EmulatedChain(make_servos(self.BAUD, self.protocol), baud=self.BAUD)
+        self._probes = {}
+        for servo, servo_id in zip(self.chain.servos, IDS, strict=True):
+            model = model_number(servo_id, self.protocol).to_bytes(2, "little")
+            if self.protocol == 1:  # status = an instruction packet with the error byte
+                p1 = fuzz_packets1.packet
+                self._probes[servo_id] = [
+                    (p1(servo_id, 0x01, b""), p1(servo_id, 0x00, b"")),
+                    (p1(servo_id, 0x02, b"\x00\x02"), p1(servo_id, 0x00, model)),
+                ]
+                continue
+            firmware = servo.peek("firmware_version")
+            self._probes[servo_id] = [
                 (packet(servo_id, 0x01, b""), packet(servo_id, 0x55, b"\x00" + model +
                                                       bytes([firmware]))),
                 (packet(servo_id, 0x02, b"\x00\x00\x02\x00"), packet(servo_id, 0x55,
                                                                      b"\x00" + model)),
             ]
-            for servo_id in IDS
-        }
 
     def tables(self) -> Tables:
         return tables(self.chain)
@@ -136,7 +160,7 @@ class InProcess:
         return replies, tables(self.chain)
 
     def restore(self) -> None:
-        restore(self.chain)
+        restore(self.chain, self.protocol)
 
     def probe(self, servo_id: int) -> None:
         for question, answer in self._probes[servo_id]:
@@ -147,22 +171,22 @@ class InProcess:
         pass
 
 
-def _serve(conn: Connection, baud: int) -> None:
+def _serve(conn: Connection, baud: int, protocol: int) -> None:
     """The child process: a chain on a PtyServer, and commands from the campaign on `conn`."""
     from snakebot.emulation.pty_server import PtyServer
 
-    chain = EmulatedChain(make_servos(baud), baud=baud)
+    chain = EmulatedChain(make_servos(baud, protocol), baud=baud)
     server = PtyServer(chain).start()
     conn.send(server.device_path)
     while True:
         command, argument = conn.recv()
         if command == "tables":
             with chain.lock:
-                conn.send((chain.parser_stats.received_bytes, tables(chain)))
+                conn.send((received(chain, protocol), tables(chain)))
         elif command == "settle":
-            conn.send(_settle(chain, server, argument))
+            conn.send(_settle(chain, server, argument, protocol))
         elif command == "restore":
-            restore(chain)
+            restore(chain, protocol)
             conn.send(None)
         else:
             server.stop()
@@ -170,21 +194,21 @@ def _serve(conn: Connection, baud: int) -> None:
             return
 
 
-def _settle(chain: EmulatedChain, server: Any, received: int) -> tuple[str, Any]:
+def _settle(chain: EmulatedChain, server: Any, total: int, protocol: int) -> tuple[str, Any]:
     """Wait until `received` bytes are in and answered; the server thread's CPU time judges."""
     thread = next(t for t in threading.enumerate() if t.name.startswith("pty-server"))
     clock = time.pthread_getcpuclockid(thread.ident or 0)
     cpu, wall = time.clock_gettime(clock), time.monotonic()
     while True:
         with chain.lock:
-            if chain.parser_stats.received_bytes >= received and server.replies_in_flight == 0:
+            if received(chain, protocol) >= total and server.replies_in_flight == 0:
                 return "ok", tables(chain)
         if server.failure is not None:
             return "crash", repr(server.failure)
         busy = time.clock_gettime(clock) - cpu
         if busy > HANG_S or time.monotonic() - wall > STALL_S:
-            taken = chain.parser_stats.received_bytes
-            return "hang", f"{taken} of {received} bytes taken in; {busy:.2f} s of CPU"
+            taken = received(chain, protocol)
+            return "hang", f"{taken} of {total} bytes taken in; {busy:.2f} s of CPU"
         time.sleep(100e-6)
 
 
@@ -194,7 +218,8 @@ class OverPty:
 
     BAUD = 1_000_000
 
-    def __init__(self) -> None:
+    def __init__(self, protocol: int = 2) -> None:
+        self.protocol = protocol
         self._start()
 
     def _start(self) -> None:
@@ -202,14 +227,14 @@ class OverPty:
 
         self._conn, child = multiprocessing.get_context("fork").Pipe()
         self._process = multiprocessing.get_context("fork").Process(
-            target=_serve, args=(child, self.BAUD), daemon=True
+            target=_serve, args=(child, self.BAUD, self.protocol), daemon=True
         )
         self._process.start()
         device = self._conn.recv()
         self.port = dxl.PortHandler(device)
         if not (self.port.openPort() and self.port.setBaudRate(self.BAUD)):
             raise RuntimeError(f"cannot open {device}")
-        self.packets = dxl.PacketHandler(2.0)
+        self.packets = dxl.PacketHandler(float(self.protocol))
         self._dxl = dxl
         self._received = 0
 
@@ -246,9 +271,13 @@ class OverPty:
         )
         for ask in questions:
             while True:
-                model, result, error = ask()
+                try:
+                    model, result, error = ask()
+                except IndexError as exc:  # the SDK indexes a status without data: a bad reply
+                    raise AssertionError(f"ID {servo_id}: a status too short to read") from exc
                 if result == dxl.COMM_SUCCESS:
-                    assert (model, error) == (MODEL_NUMBER, 0), f"ID {servo_id}: {model}, {error}"
+                    expected = model_number(servo_id, self.protocol)
+                    assert (model, error) == (expected, 0), f"ID {servo_id}: {model}, {error}"
                     break
                 if time.monotonic() > deadline:
                     raise HangError(f"ID {servo_id}: no answer (SDK result {result})")

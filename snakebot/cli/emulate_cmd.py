@@ -374,15 +374,13 @@ def _command(args: argparse.Namespace, bench: ServoBench, command: str) -> None:
 def _summary(
     args: argparse.Namespace, robot: RobotConfig, motion: TwinMotion, bench: ServoBench
 ) -> None:
-    stats, servos = bench.chain.parser_stats, bench.chain.servos
-    bus = {
-        "received_bytes": stats.received_bytes,
-        "packets": stats.packets,
-        "dropped_bytes": stats.dropped_bytes,
-        "crc_errors": stats.crc_errors,
-        "stale_resets": stats.stale_resets,
-        "watchdog_trips": sum(s.watchdog_trips for s in servos),
-    }
+    # Both protocols' receivers (one of them idle unless the chain is mixed); a checksum
+    # failure counts as a CRC error.
+    both, servos = (bench.chain.parser_stats, bench.chain.parser1_stats), bench.chain.servos
+    fields = ("received_bytes", "packets", "dropped_bytes", "crc_errors", "stale_resets")
+    bus = {name: max(getattr(s, name) for s in both) if name == "received_bytes"
+           else sum(getattr(s, name) for s in both) for name in fields}
+    bus["watchdog_trips"] = sum(s.watchdog_trips for s in servos)
     summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary(), "bus": bus}
     if args.json:
         print_json(summary)

@@ -85,6 +85,16 @@ def _write(servo: VirtualServo, params: bytes, *, registered: bool) -> int:
     return error_byte(servo, error, goal_position=_covers_goal(servo, address, len(data)))
 
 
+def _factory_reset(servo: VirtualServo) -> None:
+    """Everything back to factory defaults, ID and baud rate included (Protocol 1.0 has no
+    options). An X servo keeps Protocol Type 1: it answers on in the protocol it was reset in
+    (an assumption, no ROBOTIS text says; ROBOTIS's Protocol 1.0 factory-reset example reads the
+    servo back in 1.0 after the reset)."""
+    servo.factory_reset(0xFF)
+    if servo.memory.has("protocol_type"):
+        servo.memory.set("protocol_type", 1)
+
+
 def _unicast(packet: Packet, servo: VirtualServo) -> tuple[int, bytes]:
     """Execute a single-target instruction on `servo`; returns (error byte, params) of its reply."""
     inst, params = packet.instruction, packet.params
@@ -98,7 +108,7 @@ def _unicast(packet: Packet, servo: VirtualServo) -> tuple[int, bytes]:
         return error_byte(servo, servo.action()), b""
     if inst == Instruction.FACTORY_RESET:
         error = error_byte(servo)  # the reply leaves before the reset (old ID and baud)
-        servo.factory_reset(0xFF)
+        _factory_reset(servo)
         return error, b""
     return error_byte(servo, StatusError.INSTRUCTION), b""
 

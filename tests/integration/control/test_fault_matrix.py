@@ -10,8 +10,9 @@ from __future__ import annotations
 import struct
 
 from snakebot.config import load_robot
-from snakebot.emulation import make_chain_for_ids
+from snakebot.emulation import make_chain_for_ids, protocol1
 from snakebot.emulation.protocol import Instruction, build_instruction
+from snakebot.servo_tables import table_for_model
 from tools.fault_matrix import Fault, GoalAudit, faults, final_mismatches, run_matrix, totals
 
 
@@ -32,13 +33,26 @@ def test_reduced_fault_matrix_has_no_untyped_errors_bad_goals_or_wrong_final_sta
 
 
 def test_the_goal_audit_sees_a_goal_outside_the_joint_limits() -> None:
-    audit = GoalAudit(load_robot("snake12"))  # ±1.5 rad: ticks 1071..3025
+    audit = GoalAudit(load_robot("snake12"), table_for_model("XL430-W250"))  # ticks 1071..3025
     params = struct.pack("<HH", 116, 4) + bytes([1]) + struct.pack("<i", 2048)
     params += bytes([2]) + struct.pack("<i", 3100)
     audit.feed(build_instruction(0xFE, Instruction.SYNC_WRITE, params))
     audit.feed(build_instruction(3, Instruction.WRITE, struct.pack("<Hi", 116, 1000)))
     assert audit.goals == 3
     assert audit.out_of_limits == [(2, 3100), (3, 1000)]
+
+
+def test_the_goal_audit_reads_protocol_1_goals_of_an_ax_robot() -> None:
+    robot = load_robot("snake12-ax12a")
+    audit = GoalAudit(robot, table_for_model("AX-12A"))
+    low, high = audit.limits[robot.servo_ids[0]]
+    assert 0 < low < 512 < high < 1023  # ten-bit ticks around the AX centre
+    params = bytes([30, 2, 1]) + (512).to_bytes(2, "little") + bytes([2]) + high.to_bytes(
+        2, "little") + bytes([3]) + (high + 1).to_bytes(2, "little")
+    audit.feed(protocol1.build_instruction(0xFE, protocol1.Instruction.SYNC_WRITE, params))
+    audit.feed(protocol1.build_instruction(4, protocol1.Instruction.WRITE, bytes([30, 0, 0])))
+    assert audit.goals == 4
+    assert audit.out_of_limits == [(3, high + 1), (4, 0)]
 
 
 def test_the_final_state_check_sees_a_servo_left_wrong() -> None:
