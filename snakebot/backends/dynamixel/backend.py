@@ -47,6 +47,7 @@ from snakebot.backends.dynamixel.rate import (
     CycleBudget,
     check_rate,
     cycle_budget,
+    fastest_baud,
     usb_tail_s,
     wanted_return_delay_s,
 )
@@ -179,7 +180,7 @@ class DynamixelBackend(Backend):
         return cycle_budget(
             self.bus.family, self._state_plan.method, len(self.ids), self._state_plan.block.size,
             table["goal_position"].size, self.bus.baud, wanted_return_delay_s(self.robot, table),
-            tail, usb_assumed=assumed,
+            tail, usb_assumed=assumed, fastest_baud=fastest_baud(table),
         )
 
     def check_rate(self, rate_hz: float) -> None:
@@ -279,16 +280,19 @@ class DynamixelBackend(Backend):
 
     def fault_error(self, faults: dict[int, int]) -> HardwareFaultError:
         """The HardwareFaultError for ``{id: fault bits}`` (Hardware Error Status, or the
-        status byte's condition bits where the model has no such register)."""
-        if self.capabilities.hardware_error_status:
+        status byte's condition bits where the model has no such register), with the remedy
+        the family allows (a Reboot instruction, or a power cycle)."""
+        caps, family = self.capabilities, self.bus.family
+        if caps.reboot:
             return HardwareFaultError(self.port, faults)
-        family = self.bus.family
-        return HardwareFaultError(
-            self.port, faults, decode=family.status_errors,
-            remedy="Its torque is off where its Alarm Shutdown names the fault: remove the cause "
-                   "(stalled or overloaded joint, supply voltage, heat), let it cool, then "
-                   f"power-cycle it ({family.name} has no Reboot) and run again",
-        )
+        cause = "remove the cause (stalled or overloaded joint, supply voltage, heat)"
+        if caps.hardware_error_status:
+            return HardwareFaultError(self.port, faults, remedy=(
+                f"Its torque is off until it restarts: {cause}, then power-cycle it "
+                f"({family.name} has no Reboot)"))
+        return HardwareFaultError(self.port, faults, decode=family.status_errors, remedy=(
+            f"Its torque is off where its Alarm Shutdown names the fault: {cause}, let it "
+            f"cool, then power-cycle it ({family.name} has no Reboot) and run again"))
 
     def _check_settings(self) -> None:
         settings = self.bus.sync_read(settings_keys(self.bus.table), self.ids)

@@ -190,21 +190,33 @@ class ReadPlan:
                                     self._what, self._assemble, attempts=transport.retries)
 
     def _read_each(self) -> list[Row]:
-        """One Read per servo; unpacked straight into rows while every servo answers."""
-        link, block, unpack = self._link, self.block, self._unpacker.unpack
-        transport, rows = self._transport, []
-        for servo_id in self.ids:
-            def read(i: int = servo_id) -> tuple[list[int], int, int]:
-                return link.read(i, block.address, block.size)
-            data, result, error = transport.run((servo_id,), self._what, read)
-            if (result != sdk.COMM_SUCCESS or len(data) != block.size
-                    or link.family.instruction_error(error)):
-                break  # the single reads below retry it and name what is wrong
-            transport.note_condition(servo_id, error)
-            rows.append(unpack(bytes(data)))
-        else:
+        """One Read per servo; unpacked straight into rows while every servo answers, else
+        each servo read alone with its retries, naming the silent ones."""
+        rows = self._transport.run(self.ids, self._what, self._read_each_once)
+        if rows is not None:
             return self._values(rows)
-        return self._assemble(transport.single_reads(self.ids, self._single, self._what))
+        return self._assemble(self._transport.single_reads(self.ids, self._single, self._what))
+
+    def _read_each_once(self) -> list[Row] | None:
+        """The servos' blocks in ID order, or None at the first that fails (no retry here)."""
+        link, transport = self._link, self._transport
+        packet, port, family = link.packet, link.port, link.family
+        address, size, unpack = self.block.address, self.block.size, self._unpacker.unpack
+        alerts, rows = transport.alerts, []
+        try:  # guard() spelled out: this runs every control cycle
+            for servo_id in self.ids:
+                data, result, error = packet.readTxRx(port, servo_id, address, size)
+                if result != sdk.COMM_SUCCESS or len(data) != size:
+                    return None
+                if error or servo_id in alerts:
+                    if family.instruction_error(error):
+                        return None
+                    transport.note_condition(servo_id, error)
+                rows.append(unpack(bytes(data)))
+        except BaseException:
+            link.release()
+            raise
+        return rows
 
     def _assemble(self, values: dict[int, dict[str, int]]) -> list[Row]:
         keys = self.block.keys

@@ -53,11 +53,7 @@ class RateTooHighError(ConfigError):
         self.budget = budget
         super().__init__("rate_hz", f"{rate_hz:g}", (
             f"the servo bus cannot hold {rate_hz:g} Hz: at most {budget.max_rate_hz:.0f} Hz. "
-            f"{budget.describe()}. For more: a faster baud rate ([bus] baud, written to the "
-            "servos by `snakebot config apply`), Return Delay Time 0 (return_delay_time_us = 0 "
-            "in the robot's [settings], then `snakebot config apply`), and the USB adapter's "
-            "latency timer at 1 ms (echo 1 | sudo tee /sys/bus/usb-serial/devices/ttyUSB0/"
-            "latency_timer)"
+            f"{budget.describe()}. For more: {'; '.join(budget.remedies())}"
         ))
 
 
@@ -79,6 +75,8 @@ class CycleBudget:
     round_trips: int
     usb_tail_s: float
     usb_assumed: bool
+    fastest_baud: int = 0
+    """The fastest baud rate the model and the SDK both take (0: not known)."""
 
     @property
     def cycle_s(self) -> float:
@@ -90,6 +88,23 @@ class CycleBudget:
     def max_rate_hz(self) -> float:
         """The highest control rate the bus holds."""
         return 1.0 / self.cycle_s
+
+    def remedies(self) -> list[str]:
+        """What would make the cycle shorter here, biggest lever first where it applies."""
+        out = []
+        if self.fastest_baud > self.baud:
+            out.append(f"a faster baud rate (up to {self.fastest_baud} bit/s for this model: "
+                       "[bus] baud, written to the servos by `snakebot config apply`)")
+        if self.return_delay_s > 0:
+            out.append("Return Delay Time 0 (return_delay_time_us = 0 in the robot's "
+                       "[settings], then `snakebot config apply`)")
+        if self.usb_tail_s > ASSUMED_USB_TAIL_S or self.usb_assumed:
+            out.append("the USB adapter's latency timer at 1 ms (echo 1 | sudo tee "
+                       "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer)")
+        if self.round_trips > 1:
+            out.append("fewer servos per port (each Read waits for its own reply: split the "
+                       "chain over two adapters)")
+        return out or ["a lower rate: this bus is at its fastest settings"]
 
     def describe(self) -> str:
         """One sentence: what a cycle costs and why."""
@@ -114,14 +129,26 @@ def cycle_budget(
     usb_tail_s: float = ASSUMED_USB_TAIL_S,
     *,
     usb_assumed: bool = True,
+    fastest_baud: int = 0,
 ) -> CycleBudget:
     """The budget of one cycle: Sync Write of ``write_bytes`` per servo, read of ``read_bytes``
-    per servo by ``method`` (one of ``snakebot.families.READ_METHODS``)."""
+    per servo by ``method`` (one of ``snakebot.families.READ_METHODS``); ``fastest_baud`` is
+    what a remedy may suggest."""
     read, turnarounds = family.read_cycle_bytes(method, servo_count, read_bytes)
     wire = (read + family.sync_write_bytes(servo_count, write_bytes)) * 10.0 / baud
     round_trips = servo_count if method == "read" else 1
     return CycleBudget(family, method, servo_count, baud, wire, turnarounds, return_delay_s,
-                       round_trips, usb_tail_s, usb_assumed)
+                       round_trips, usb_tail_s, usb_assumed, fastest_baud)
+
+
+SDK_MAX_BAUD = 4_000_000
+"""dynamixel_sdk's PortHandler takes rates up to 4 Mbps (4.5 Mbps needs a custom handler)."""
+
+
+def fastest_baud(table: ServoTable) -> int:
+    """The fastest rate model ``table`` has that the SDK opens."""
+    rates = [b for b in table.baud_rates.values() if b <= SDK_MAX_BAUD]
+    return max(rates, default=0)
 
 
 def usb_tail_s(port: str) -> tuple[float, bool]:

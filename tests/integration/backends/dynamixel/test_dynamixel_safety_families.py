@@ -2,7 +2,9 @@
 
 Each test runs once per family bench (``FAMILIES``): X-series on Protocol 2.0 (Fast Sync Read,
 Bus Watchdog), X-series switched to Protocol 1.0 (Bulk Read; its watchdog and Hardware Error
-Status registers sit below address 256, so it keeps them), and the models without a watchdog.
+Status registers sit below address 256, so it keeps them), and the models without a watchdog or
+Hardware Error Status: AX-12A (no group read: one Read per servo) and MX-28 with its Protocol 1.0
+firmware (Bulk Read).
 A failed connect ends in the stop policy, a second Ctrl-C during the stop ramp too, a joint found
 outside its limits comes in at the slew limit, and a port that vanishes is a BusError saying what
 the servos do now.
@@ -12,14 +14,18 @@ from __future__ import annotations
 
 import dataclasses
 import errno
+import shutil
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
 from snakebot.backends.dynamixel.backend import DynamixelBackend
+from snakebot.backends.dynamixel.faults import HardwareFaultError
+from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -29,6 +35,7 @@ from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.errors import BusError
 from snakebot.gaits import make_gait
 from snakebot.types import JointCommand
+from tests.conftest import CONFIGS
 from tests.integration.backends.dynamixel.conftest import BAUD, ChainWatcher, robot_variant
 
 
@@ -51,15 +58,71 @@ class Family:
 
 
 def x_series(protocol: float) -> Callable[..., RobotConfig]:
-    def robot(**safety: Any) -> RobotConfig:
+    def robot(folder: Path, **safety: Any) -> RobotConfig:
         base = robot_variant("snake12", **safety)
         return dataclasses.replace(base, bus=dataclasses.replace(base.bus, protocol=protocol))
     return robot
 
 
+def shipped(name: str) -> Callable[..., RobotConfig]:
+    def robot(folder: Path, **safety: Any) -> RobotConfig:
+        return robot_variant(name, **safety)
+    return robot
+
+
+MX28_ROBOT = """name = "snake12-mx28"
+servo = "MX-28"
+
+[bus]
+port = "/dev/ttyUSB0"
+baud = 1000000
+protocol = 1.0
+
+[link]
+length_m = 0.07
+radius_m = 0.025
+mass_kg = 0.1
+
+[gains]
+position_p = 32
+
+[safety]
+ramp_s = 1.0
+max_speed_fraction = 0.9
+stop_policy = "hold"
+
+[twin]
+timestep_s = 0.002
+ground = "isotropic"
+axial_friction = 0.7
+lateral_friction = 0.7
+
+[joint_defaults]
+zero_offset_rad = 0.0
+direction = 1
+lower_rad = -1.5
+upper_rad = 1.5
+""" + "".join(f'\n[[joints]]\nservo_id = {i}\naxis = "{("yaw", "pitch")[(i - 1) % 2]}"\n'
+              for i in range(1, 13))
+
+
+def mx28(folder: Path, **safety: Any) -> RobotConfig:
+    """A 12-joint MX-28 (Protocol 1.0 firmware) snake: a robot file beside a copy of the shipped
+    servo files in ``folder`` (no MX-28 robot ships; its servo file does)."""
+    path = folder / "robots" / "snake12-mx28.toml"
+    if not path.exists():
+        path.parent.mkdir(parents=True)
+        shutil.copytree(CONFIGS / "servos", folder / "servos")
+        path.write_text(MX28_ROBOT)
+    base = load_robot(path)
+    return dataclasses.replace(base, safety=dataclasses.replace(base.safety, **safety))
+
+
 FAMILIES = [
     Family("x-p2", "XL430-W250", 2.0, x_series(2.0)),
     Family("x-p1", "XL430-W250", 1.0, x_series(1.0)),
+    Family("ax12a", "AX-12A", 1.0, shipped("snake12-ax12a")),
+    Family("mx28", "MX-28", 1.0, mx28),
 ]
 
 
@@ -68,6 +131,10 @@ class FamilyBench:
     family: Family
     chain: EmulatedChain
     url: str
+    folder: Path
+
+    def robot(self, **safety: Any) -> RobotConfig:
+        return self.family.robot(self.folder, **safety)
 
     def backend(self, robot: RobotConfig, **kwargs: Any) -> DynamixelBackend:
         chain = self.chain
@@ -78,11 +145,11 @@ class FamilyBench:
 
 
 @pytest.fixture(params=FAMILIES, ids=[f.name for f in FAMILIES])
-def fbench(request: pytest.FixtureRequest) -> Iterator[FamilyBench]:
+def fbench(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[FamilyBench]:
     family: Family = request.param
     chain = family.chain(tuple(range(1, 13)))
     with registered(chain) as url:
-        yield FamilyBench(family, chain, url)
+        yield FamilyBench(family, chain, url, tmp_path)
 
 
 def assert_left_per_policy(bench: FamilyBench, backend: DynamixelBackend, policy: str,
@@ -101,8 +168,9 @@ def assert_left_per_policy(bench: FamilyBench, backend: DynamixelBackend, policy
 
 
 def test_each_family_reads_by_its_own_method(fbench: FamilyBench) -> None:
-    backend = fbench.backend(fbench.family.robot(ramp_s=0.2))
-    expected = {"x-p2": "fast_sync_read", "x-p1": "bulk_read"}[fbench.family.name]
+    backend = fbench.backend(fbench.robot(ramp_s=0.2))
+    expected = {"x-p2": "fast_sync_read", "x-p1": "bulk_read", "ax12a": "read",
+                "mx28": "bulk_read"}[fbench.family.name]
     assert backend.bus.capabilities.read_method == expected
     with backend:
         state = backend.read_state()
@@ -121,7 +189,7 @@ def test_a_servo_lost_right_after_torque_on_fails_connect_with_the_policy_applie
             chain.silence(7)
 
     fbench.chain.physics = ChainWatcher(fbench.chain, watch)
-    backend = fbench.backend(fbench.family.robot(ramp_s=0.2, stop_policy=policy))
+    backend = fbench.backend(fbench.robot(ramp_s=0.2, stop_policy=policy))
     with pytest.raises(BusError) as info:
         backend.connect()
     assert 7 in info.value.servo_ids
@@ -144,7 +212,7 @@ def test_a_second_ctrl_c_during_the_stop_ramp_still_ends_in_the_policy(
             raise KeyboardInterrupt
         chain.advance(dt)
 
-    backend = fbench.backend(fbench.family.robot(ramp_s=1.0, stop_policy=policy), sleep=sleep)
+    backend = fbench.backend(fbench.robot(ramp_s=1.0, stop_policy=policy), sleep=sleep)
     backend.connect()
     for _ in range(150):
         backend.send_command(JointCommand(np.linspace(-0.8, 0.8, 12)))
@@ -160,7 +228,7 @@ def test_a_second_ctrl_c_during_the_stop_ramp_still_ends_in_the_policy(
 def test_a_joint_found_outside_its_limits_is_brought_in_at_the_slew_limit(
     fbench: FamilyBench,
 ) -> None:
-    robot = fbench.family.robot(ramp_s=0.5)
+    robot = fbench.robot(ramp_s=0.5)
     ticks = robot.servo.physics.ticks
     servo = fbench.chain.servo(3)
     servo.state = dataclasses.replace(servo.state, position_rad=2.5)
@@ -203,7 +271,7 @@ def test_the_port_vanishing_mid_run_is_a_bus_error_saying_what_the_servos_do(
     fbench: FamilyBench, policy: str
 ) -> None:
     UnpluggablePort.unplugged = False
-    robot = fbench.family.robot(ramp_s=0.2, stop_policy=policy)
+    robot = fbench.robot(ramp_s=0.2, stop_policy=policy)
     backend = fbench.backend(robot, port_handler_factory=UnpluggablePort)
     backend.connect()
 
@@ -233,3 +301,37 @@ def test_the_port_vanishing_mid_run_is_a_bus_error_saying_what_the_servos_do(
         fbench.chain.advance(1.0)
         assert all(s.torque_enabled for s in fbench.chain.servos)  # what the text says
 
+
+
+def test_an_overload_mid_run_stops_it_naming_the_servo(fbench: FamilyBench) -> None:
+    """Hardware Error Status where the model has it, else the status byte's overload bit (a Bulk
+    Read hides it: one servo per slow check is read alone, so all are seen within 12 checks)."""
+    backend = fbench.backend(fbench.robot(ramp_s=0.2))
+    backend.connect()
+    try:
+        for _ in range(20):
+            backend.send_command(JointCommand(np.full(12, 0.2)))
+            backend.advance(0.01)
+            backend.read_state()
+        fbench.chain.servo(5).latch_error(0x20)  # overload: torque off (Shutdown / Alarm Shutdown)
+        with pytest.raises(HardwareFaultError) as info:
+            for _ in range(12 * backend.slow_every + 1):
+                backend.send_command(JointCommand(np.full(12, 0.2)))
+                backend.advance(0.01)
+                backend.read_state()
+    finally:
+        backend.close()
+    assert info.value.servo_id == 5 and "overload" in info.value.flags
+    if backend.capabilities.reboot:
+        assert "snakebot servo reboot" in str(info.value)
+    else:
+        assert "power-cycle it (dynamixel-p1 has no Reboot)" in str(info.value)
+
+
+def test_a_servo_in_overload_at_connect_refuses_it(fbench: FamilyBench) -> None:
+    fbench.chain.servo(4).latch_error(0x20)
+    backend = fbench.backend(fbench.robot(ramp_s=0.2))
+    with pytest.raises(HardwareFaultError) as info:
+        backend.connect()
+    assert info.value.servo_id == 4 and "overload" in info.value.flags
+    assert not any(s.torque_enabled for s in fbench.chain.servos)

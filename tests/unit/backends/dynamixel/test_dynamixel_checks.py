@@ -109,6 +109,23 @@ def test_settings_that_cost_rate_are_warnings(converter: TickConverter) -> None:
     assert any("Return Delay Time up to 500 µs on servo(s) 1, 4" in w for w in warnings)
 
 
+def test_without_a_watchdog_alarm_shutdown_must_cover_overload_and_heat() -> None:
+    ax = TickConverter.for_robot(load_robot("snake12-ax12a"))
+    ids = tuple(range(1, 13))
+    # AX-12A: no Operating or Drive Mode register; CW/CCW Angle Limit 0..1023, Alarm Shutdown 36
+    settings = {i: {"return_delay_time": 0, "min_position_limit": 0, "max_position_limit": 1023,
+                    "shutdown": 36} for i in ids}
+    assert check_settings(settings, ids, ax, watchdog=False) == ([], [])
+    settings[3]["shutdown"] = 4  # overheating only
+    settings[5]["min_position_limit"] = settings[5]["max_position_limit"] = 0  # wheel mode
+    errors, _ = check_settings(settings, ids, ax, watchdog=False)
+    assert len(errors) == 2
+    assert "servo 3: Alarm Shutdown is 4, needs bits 2 and 5" in errors[0]
+    assert "servo 5: CW and CCW Angle Limit are both 0, which is wheel mode" in errors[1]
+    settings[5]["max_position_limit"] = 1023
+    assert check_settings(settings, ids, ax, watchdog=True) == ([], [])  # a watchdog guards it
+
+
 def test_latency_timer_is_read_through_symlinks(tmp_path: Path) -> None:
     sysfs = tmp_path / "sys"
     (sysfs / "ttyUSB3").mkdir(parents=True)
