@@ -20,7 +20,6 @@ from snakebot.cli.console import confirm
 from snakebot.cli.servo_hands_on import add_actions
 from snakebot.config import load_robot
 from snakebot.errors import BusError, UsageError
-from snakebot.families import family_for
 from snakebot.servo import FACTORY_ID
 from snakebot.servo_tables import model_dirs, model_entries, table_for_model
 from snakebot.servo_tables.units import display
@@ -31,6 +30,7 @@ from snakebot.setup.maintenance import (
     factory_reset,
     hardware_error,
     reboot,
+    reset_families,
     reset_option,
     servo_info,
 )
@@ -149,10 +149,13 @@ def run_reset(args: argparse.Namespace) -> int:
                            f"scan --port {args.port} --all-bauds` shows where the servos are")
         was = link.family
         if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, factory):
-            link.speak(family_for(link.bus.table))  # a full reset restores the protocol too
-            other = link.probe(FACTORY_ID, factory, tries=1)
+            taken = False
+            for family in reset_families(link, "all"):  # the protocol it may come back in
+                link.speak(family)
+                other = link.probe(FACTORY_ID, factory, tries=1)
+                taken |= bool(other.models or other.corrupt)
             link.speak(was)
-            if other.models or other.corrupt:
+            if taken:
                 keep = ("reset with --keep-id, or unplug it"
                         if "keep_id" in link.family.capabilities(link.bus.table)
                         .factory_reset_options else "unplug it first")

@@ -95,25 +95,51 @@ def factory_reset(link: Link, servo_id: int, baud: int, *, keep_id: bool,
 
     The firmware keeps the baud only together with the ID (option 0x02); without the ID the servo
     comes back as ID 1 at its model's factory rate (57600 on the X series and the MX, 1 Mbps on
-    the AX) and in its factory protocol (an X-series servo in Protocol 1.0 mode comes back in
-    2.0: Protocol Type is reset too). Protocol 1.0 servos always come back that way (SetupError
-    if asked to keep either). The link is left speaking the family the servo answers in.
+    the AX), looked for in the protocol it spoke and in its model's factory one
+    (:func:`reset_families`). Protocol 1.0 servos always come back that way (SetupError if asked
+    to keep either). The link is left speaking the family the servo answers in.
     """
     option = reset_option(link, keep_id=keep_id, keep_baud=keep_baud)
     bus = link.at(baud)
     table = bus.table
     if bus.read(servo_id, "torque_enable"):
         bus.write(servo_id, "torque_enable", 0)
+    families = reset_families(link, option)
     if option == "all":
         with unanswered_ok():  # the status may already come as ID 1, at the factory rate
             bus.factory_reset(servo_id, keep=option)
-        link.speak(family_for(table))
     else:
         bus.factory_reset(servo_id, keep=option)
     new_id = servo_id if keep_id else table["id"].default
     new_baud = baud if keep_baud else factory_baud(table)
-    wait_for_boot(link, new_id, new_baud)
-    return new_id, new_baud, link.family
+    return new_id, new_baud, _find_after_reset(link, new_id, new_baud, families)
+
+
+def reset_families(link: Link, option: str) -> tuple[ServoFamily, ...]:
+    """The families a servo may answer in after a Factory Reset with ``option``: the one it
+    speaks, and after a full reset also its model's factory protocol (whether an X-series servo
+    in Protocol 1.0 mode keeps Protocol Type 1 through a reset, ROBOTIS does not say)."""
+    if option != "all":
+        return (link.family,)
+    return tuple(dict.fromkeys((link.family, family_for(link.bus.table))))
+
+
+def _find_after_reset(link: Link, servo_id: int, baud: int,
+                      families: tuple[ServoFamily, ...]) -> ServoFamily:
+    """Ping ``servo_id`` at ``baud`` in each of ``families`` until it answers; the link is left
+    speaking the family it answered in."""
+    deadline = time.monotonic() + BOOT_TIMEOUT_S
+    while True:
+        for family in families:
+            link.speak(family)
+            if link.ping_clean(servo_id, baud, tries=1) is not None:
+                return family
+        if time.monotonic() > deadline:
+            spoken = " or ".join(f"{f.protocol:.1f}" for f in families)
+            raise SetupError(f"{link.port}: servo {servo_id} did not answer at {baud} baud in "
+                             f"Protocol {spoken} within {BOOT_TIMEOUT_S:.0f} s of a factory "
+                             "reset; power-cycle it")
+        time.sleep(0.05)
 
 
 @dataclass(frozen=True)
