@@ -230,7 +230,7 @@ def mx_robot(config_dir: Path) -> Path:
     """snake12-ax12a built from MX-28 (Protocol 1.0 firmware) with its P/I/D gains."""
     path = edit_robot(config_dir, "snake12-ax12a", 'servo = "AX-12A"', 'servo = "MX-28"')
     text = path.read_text().replace("compliance_slope = 32",
-                                    "position_p = 32\nposition_i = 0\nposition_d = 0")
+                                    "position_p = 48\nposition_i = 0\nposition_d = 4")
     path.write_text(text)
     return path
 
@@ -341,3 +341,29 @@ def test_jog_an_ax_joint_at_its_moving_speed_then_hold_it(ax_snake: Bus, cli: Cl
     assert code == 0, err  # --all: every ID pinged on its own, no broadcast ping in 1.0
     assert not any(s.torque_enabled for s in ax_snake.chain.servos)
     assert cli("config", "diff", *robot)[0] == 0
+
+
+def test_config_apply_writes_an_mx_chains_pid_gains(mx_robot: Path, cli: Cli) -> None:
+    chain = EmulatedChain(robot_servos("MX-28", range(1, 13), ROBOT_BAUD), baud=ROBOT_BAUD)
+    with registered(chain) as url:
+        robot = ("--robot", str(mx_robot), "--port", url)
+        assert cli("config", "diff", *robot)[0] == 1
+        code, _, err = cli("config", "apply", *robot, "--yes")
+        assert code == 0, err
+        assert cli("config", "diff", *robot)[0] == 0
+    wanted = load_robot(mx_robot).gain_writes
+    assert wanted["position_p_gain"] == 48 and wanted["position_d_gain"] == 4  # not the defaults
+    assert {k: chain.servo(7).peek(k) for k in wanted} == dict(wanted)
+
+
+def test_assign_id_gives_a_new_ax_its_id_at_its_factory_1_mbps(cli: Cli) -> None:
+    chain = EmulatedChain(robot_servos("AX-12A", range(2, 13), ROBOT_BAUD), baud=ROBOT_BAUD)
+    new = chain.add(VirtualServo("AX-12A", 1, baud=ROBOT_BAUD))  # from the box: ID 1, 1 Mbps
+    chain.servo(12).poke("id", 13)  # make room: the chain is 2..11 and 13
+    with registered(chain) as url:
+        code, out, err = cli("config", "assign-id", "--robot", "snake12-ax12a", "--port", url,
+                             "--from", "1", "--to", "12")
+    assert code == 0, err
+    assert out.strip() == "servo ID 1 at 1000000 baud is now ID 12 at 1000000 baud"
+    assert "no broadcast ping" not in err  # --from 1 pings only ID 1
+    assert (new.servo_id, new.baud) == (12, ROBOT_BAUD)
