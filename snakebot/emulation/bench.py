@@ -1,7 +1,7 @@
 """Bring-up on the emulator: factory-fresh servos plugged in one at a time, EEPROM kept on disk.
 
 A :class:`ServoBench` wraps a chain: servos already on it (with stable serial numbers), a count of
-factory-fresh servos waiting to be plugged in (each arrives as ID 1 at 57600 with factory
+factory-fresh servos waiting to be plugged in (each arrives as ID 1 at its factory rate with factory
 defaults), and an optional state file that keeps every servo's EEPROM across emulated power
 cycles. :func:`scramble` gives a chain the wrong settings a second-hand snake arrives with.
 """
@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from snakebot.emulation.case import cases_of
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.servo import VirtualServo
@@ -46,12 +47,14 @@ def new_servo(
 def robot_servos(
     model: str | int | ServoTable, ids: Sequence[int], baud: int
 ) -> list[VirtualServo]:
-    """Factory-default servos already given the chain's IDs and baud, serials 1..N head to tail."""
+    """Factory-default servos already given the chain's IDs and baud, serials 1..N head to tail;
+    the axes of a multi-axis model paired into cases in that order (`cases_of`)."""
     out = []
     for serial, servo_id in enumerate(ids, start=1):
         servo = VirtualServo(model, servo_id, baud=baud)
         servo.serial_number = serial
         out.append(servo)
+    cases_of(out)
     return out
 
 
@@ -90,7 +93,8 @@ class ServoBench:
         return max(0, self._fresh_total - plugged)
 
     def plug(self) -> VirtualServo:
-        """Connect the next factory-fresh servo (ID 1 at 57600); EmulationError if none is left."""
+        """Connect the next factory-fresh servo (ID 1, factory rate); EmulationError if none is
+        left."""
         if self.waiting <= 0:
             raise EmulationError(f"all {self._fresh_total} fresh servos are plugged in already")
         serial = max((s.serial_number for s in self.chain.servos), default=0) + 1

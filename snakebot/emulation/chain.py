@@ -3,19 +3,28 @@
 Transport-free: a transport feeds what the host wrote (`receive`) and delivers each `BusReply` at
 its time; `advance` lets virtual time pass for the servos' motion and watchdogs. Faults are set
 per servo (or per ID, for every servo carrying it) through the methods below.
+
+Servos are stepped lazily: `advance` only counts time; each servo's step for the time passed runs
+once, when something needs its state (a packet arrives, the chain's servos are looked up, or
+`settle` is called), and in whole `STEP_S` steps once `SETTLE_AFTER_S` has piled up. A transport
+that advances the chain once per reply byte group (a Fast Sync Read of N servos: N + 2 advances a
+cycle) thus costs each servo two steps per cycle, not N + 2. How the time between two packets is
+cut does not change the motion: it is stepped as whole `STEP_S` steps and one remainder.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Iterable
 
 from snakebot.emulation import instructions, instructions1, protocol, protocol1
+from snakebot.emulation.case import cases_of
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
 from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.instructions import Slot
-from snakebot.emulation.motion import ChainPhysics, MotionModel
+from snakebot.emulation.motion import STEP_S, ChainPhysics, MotionModel
 from snakebot.emulation.protocol import ParserStats
 from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
@@ -23,6 +32,9 @@ from snakebot.servo import FACTORY_BAUD
 from snakebot.servo_tables import ServoTable, table_for_model
 
 Target = int | VirtualServo
+# A servo held from outside lags the bus clock by less than this (the Bus Watchdog counts in
+# 20 ms units, so it still fires within one unit of its time).
+SETTLE_AFTER_S = 0.01
 
 
 class EmulatedChain:
@@ -54,28 +66,36 @@ class EmulatedChain:
         self.lock = threading.RLock()
         self._parser = protocol.StreamParser(stale_after_s=stale_after_s)
         self._parser1 = protocol1.StreamParser(stale_after_s=stale_after_s)
+        self._unstepped_s = 0.0  # bus time the servos have not been stepped through yet
+        self._judge_watchdog = True
 
     # ------------------------------------------------------------------ servos
     @property
     def servos(self) -> tuple[VirtualServo, ...]:
-        """Every servo on the bus, in the order they were added."""
-        return tuple(self._servos)
+        """Every servo on the bus, in the order they were added, stepped up to now."""
+        with self.lock:
+            self.settle()
+            return tuple(self._servos)
 
     def add(self, servo: VirtualServo) -> VirtualServo:
         """Connect a servo to the bus and return it."""
         with self.lock:
+            self.settle()
             self._servos.append(servo)
         return servo
 
     def remove(self, servo: VirtualServo) -> None:
         """Disconnect a servo (and forget its faults)."""
         with self.lock:
+            self.settle()
             self._servos.remove(servo)
             self.faults.clear(servo)
 
     def servos_with_id(self, servo_id: int) -> list[VirtualServo]:
-        """Every servo whose ID register holds `servo_id`."""
-        return [s for s in self._servos if s.servo_id == servo_id]
+        """Every servo whose ID register holds `servo_id`, stepped up to now."""
+        with self.lock:
+            self.settle()
+            return [s for s in self._servos if s.servo_id == servo_id]
 
     def servo(self, servo_id: int) -> VirtualServo:
         """The (first) servo with `servo_id`; EmulationError naming the IDs present if none."""
@@ -98,7 +118,8 @@ class EmulatedChain:
 
     # ------------------------------------------------------------------ time and traffic
     def advance(self, dt_s: float, *, bytes_waiting: bool = False) -> None:
-        """Let `dt_s` seconds of bus time pass: `physics` (if any), then every servo's own step.
+        """Let `dt_s` seconds of bus time pass: `physics` (if any) now, the servos' own steps
+        when their state is next needed (see the module docstring).
 
         `bytes_waiting`: host bytes that arrived at some unknown moment within `dt_s` are still
         unread (a transport that was starved of CPU); feed them next with `receive`. The Bus
@@ -111,9 +132,27 @@ class EmulatedChain:
             self.now_s += dt_s
             if self.physics is not None:
                 self.physics.advance(self._servos, dt_s)
-            judge = not bytes_waiting
-            for servo in self._servos:
-                servo.step(dt_s, judge_watchdog=judge)
+            self._unstepped_s += dt_s
+            self._judge_watchdog = not bytes_waiting
+            if self._unstepped_s >= SETTLE_AFTER_S:
+                self._step_servos(math.floor(self._unstepped_s / STEP_S) * STEP_S)
+
+    def settle(self) -> None:
+        """Step every servo through the bus time that passed since its last step.
+
+        The chain does this itself before it executes a packet and when its servos are looked
+        up; call it before reading a servo held from earlier (its `state`, `peek`, ...).
+        """
+        with self.lock:
+            self._step_servos(self._unstepped_s)
+
+    def _step_servos(self, dt_s: float) -> None:
+        if dt_s <= 0.0:
+            return
+        self._unstepped_s = max(0.0, self._unstepped_s - dt_s)
+        judge = self._judge_watchdog
+        for servo in self._servos:
+            servo.step(dt_s, judge_watchdog=judge)
 
     def byte_time_s(self) -> float:
         """Seconds per byte at the line rate."""
@@ -135,9 +174,11 @@ class EmulatedChain:
             # Each receiver sees every byte; one that no servo on the bus speaks is skipped (its
             # servos could only appear by an `add` or a Protocol Type write, which resets it).
             # Within one call, Protocol 2.0 packets are served before Protocol 1.0 ones: a host
-            # waits for each reply, so one call rarely holds both.
+            # waits for each reply, so one call rarely holds both. Each packet acts at now: the
+            # servos are stepped up to it first.
             if 2.0 in speaks:
                 for packet in self._parser.feed(data, self.now_s, idle_s=idle_s):
+                    self.settle()
                     hearing = self._hearing(2.0)
                     timed = self._timed(instructions.execute(packet, hearing), offset)
                     replies += timed
@@ -146,6 +187,7 @@ class EmulatedChain:
                 self._parser.reset()
             if 1.0 in speaks:
                 for packet1 in self._parser1.feed(data, self.now_s, idle_s=idle_s):
+                    self.settle()
                     hearing = self._hearing(1.0)
                     timed = self._timed(instructions1.execute(packet1, hearing), offset)
                     replies += timed
@@ -181,6 +223,7 @@ class EmulatedChain:
     # ------------------------------------------------------------------ fault injection
     def _targets(self, target: Target) -> list[VirtualServo]:
         if isinstance(target, VirtualServo):
+            self.settle()
             return [target]
         found = self.servos_with_id(target)
         if not found:
@@ -188,10 +231,13 @@ class EmulatedChain:
         return found
 
     def silence(self, target: Target, silent: bool = True) -> None:
-        """Take servos off the bus (they hear and answer nothing), or put them back."""
+        """Take servos off the bus (they hear and answer nothing), or put them back; an axis of
+        a multi-axis servo takes its whole case (one connector, one module)."""
         with self.lock:
             for servo in self._targets(target):
-                self.faults.update(servo, silent=silent)
+                axes = servo.case.axes if servo.case is not None else (servo,)
+                for axis in axes:
+                    self.faults.update(axis, silent=silent)
 
     def drop_replies(self, target: Target, *, next_n: int = 0, probability: float = 0.0) -> None:
         """Lose the next `next_n` replies, then each with `probability`; instructions still run."""
@@ -240,8 +286,10 @@ def make_chain_for_ids(
     """A chain of identical servos with the given IDs, all configured for and listening at `baud`.
 
     `motion` is shared by every servo when given (an external physics bridge); otherwise each gets
-    its own kinematic `ProfileMotion`.
+    its own kinematic `ProfileMotion`. A multi-axis model (2XL430) pairs the IDs into cases in
+    the order given (`cases_of`): EmulationError unless they fill whole cases.
     """
     table = model if isinstance(model, ServoTable) else table_for_model(model)
     servos = [VirtualServo(table, servo_id, baud=baud, motion=motion) for servo_id in ids]
+    cases_of(servos)
     return EmulatedChain(servos, baud=baud, seed=seed)

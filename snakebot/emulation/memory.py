@@ -58,6 +58,8 @@ class _Layout:
     owner: tuple[int, ...]
     indirect: dict[int, int]
     defaults: bytes
+    # key: (start, end, signed, writable, the register itself where it is sign-magnitude)
+    spans: dict[str, tuple[int, int, bool, bool, Register | None]]
 
 
 _layouts: dict[ServoTable, _Layout] = {}
@@ -82,7 +84,17 @@ def _layout(table: ServoTable) -> _Layout:
         for register in items.values()
         if register.key.startswith("indirect_data_")
     }
-    layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image))
+    spans = {
+        key: (
+            r.address,
+            r.address + r.size,
+            r.signed,
+            r.access == "RW",
+            r if r.sign_bit is not None else None,
+        )
+        for key, r in by_key.items()
+    }
+    layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image), spans)
     _layouts[table] = layout
     return layout
 
@@ -96,31 +108,30 @@ class ControlTableMemory:
         self._layout = layout
         self.items, self.by_key = layout.items, layout.by_key
         self._owner, self._indirect = layout.owner, layout.indirect
+        self._spans = layout.spans
+        self._indirect_span = (min(self._indirect, default=0), max(self._indirect, default=0))
         self.data = bytearray(layout.defaults)
         self.version = 0
 
     # `version` counts changes of writable items so that the motor command can be cached.
     def get(self, key: str) -> int:
         """Decode the item `key` from memory (signed where the item is)."""
-        register = self.by_key[key]
-        address = register.address
-        raw = self.data[address : address + register.size]
-        if register.sign_bit is not None:
-            return register.decode(raw)
-        return int.from_bytes(raw, "little", signed=register.signed)
+        start, end, signed, _, magnitude = self._spans[key]  # per packet per servo: kept lean
+        if magnitude is not None:
+            return magnitude.decode(self.data[start:end])
+        return int.from_bytes(self.data[start:end], "little", signed=signed)
 
     def set(self, key: str, value: int) -> None:
         """Store `value` in item `key` without any rule; values are wrapped to the item's size."""
-        register = self.by_key[key]
-        if register.access == "RW":
+        start, end, _, writable, magnitude = self._spans[key]
+        if writable:
             self.version += 1
-        bits = 8 * register.size
-        if register.sign_bit is not None:
+        size = end - start
+        if magnitude is not None and magnitude.sign_bit is not None:
             # Sign-magnitude (P1 Present Speed/Load): clipped to what the magnitude bits hold.
-            limit = (1 << register.sign_bit) - 1
-            value = register.raw_of(max(-limit, min(limit, value)))
-        encoded = (value & ((1 << bits) - 1)).to_bytes(register.size, "little")
-        self.data[register.address : register.address + register.size] = encoded
+            limit = (1 << magnitude.sign_bit) - 1
+            value = magnitude.raw_of(max(-limit, min(limit, value)))
+        self.data[start:end] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
 
     def has(self, key: str) -> bool:
         """Whether the model has item `key`."""
@@ -149,7 +160,10 @@ class ControlTableMemory:
             return StatusError.DATA_LENGTH, b""
         if address < 0 or address + length > len(self.data):
             return StatusError.ACCESS, b""
-        return 0, bytes(self.data[self._target(a)] for a in range(address, address + length))
+        end = address + length
+        if not self._indirect or end <= self._indirect_span[0] or address > self._indirect_span[1]:
+            return 0, bytes(self.data[address:end])
+        return 0, bytes(self.data[self._target(a)] for a in range(address, end))
 
     def plan_write(self, address: int, payload: bytes) -> WritePlan:
         """Check a write against layout, access, length and static range; nothing is stored."""

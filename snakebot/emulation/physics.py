@@ -27,9 +27,9 @@ from snakebot.emulation.servo import VirtualServo
 class TwinMotion:
     """A `MotionModel` shared by every servo of the chain, backed by one `TwinBackend`.
 
-    The first servo's step of each chain advance applies what changed in the control tables
-    (goals, torque, gains), steps the twin by the elapsed time (whole physics steps; the
-    remainder carries over) and writes every servo's state.
+    The first servo's step of each chain step (`EmulatedChain.settle`) applies what changed in
+    the control tables (goals, torque, gains), steps the twin by the elapsed time (whole physics
+    steps; the remainder carries over) and writes every servo's state.
     """
 
     def __init__(self, robot: RobotConfig, twin: TwinBackend) -> None:
@@ -65,8 +65,9 @@ class TwinMotion:
         self._publish()
 
     def step(self, servo: VirtualServo, dt_s: float) -> None:
-        """Advance the twin once per chain advance (on the first servo's step)."""
-        if servo is not self._leader:
+        """Advance the twin once per chain step (on the first servo's step); a closed twin
+        leaves the servos where it last put them."""
+        if servo is not self._leader or not self.twin.connected:
             return
         self._read_tables()
         self._pending_s += dt_s

@@ -12,12 +12,14 @@ from dataclasses import dataclass, replace
 from typing import Protocol
 
 from snakebot.emulation import firmware, firmware_p1
+from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotionModel, MotorState, ProfileMotion, ServoCommand
 from snakebot.emulation.protocol import ALERT_BIT, MAX_ID, StatusError
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
+from snakebot.servo.ticks import centre_tick
 from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
@@ -72,9 +74,13 @@ class VirtualServo:
         if not 0 <= servo_id <= MAX_ID:
             raise EmulationError(f"servo ID {servo_id} is outside 0..{MAX_ID}")
         self.memory = ControlTableMemory(self.table)
+        # ID and Baud Rate are one byte each, looked up for every packet by every servo.
+        self._id_address = self.memory.by_key["id"].address
+        self._baud_address = self.memory.by_key["baud_rate"].address
         # X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX Protocol 1.0 layout.
         self.firmware: Firmware = firmware if "operating_mode" in self.table else firmware_p1
         self._alarms = 0  # latched faults, on tables without Hardware Error Status
+        self._protocol: tuple[int, float] = (-1, 2.0)  # (memory version, protocol)
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
         if processing_time_s is None:
@@ -91,7 +97,9 @@ class VirtualServo:
         self._registered: bytes | None = None
         self._registered_address = 0
         self._command: tuple[int, ServoCommand] | None = None
+        self._goal_frame = (1, 0, 0, 0.0)  # direction, homing offset, centre, rad per tick
         self._rules: tuple[int, _StepRules] | None = None
+        self.case: ServoCase | None = None  # the other axes of a multi-axis servo (2XL430)
         self.memory.load_defaults()
         self.memory.set("id", servo_id)
         self.memory.set("baud_rate", self.table.baud_index(baud))
@@ -101,12 +109,12 @@ class VirtualServo:
     @property
     def servo_id(self) -> int:
         """ID(7)."""
-        return self.memory.get("id")
+        return self.memory.data[self._id_address]
 
     @property
     def baud(self) -> int:
         """The rate the servo listens at, in bit/s, from Baud Rate(8)."""
-        return self.table.baud_rates.get(self.memory.get("baud_rate"), 0)
+        return self.table.baud_rates.get(self.memory.data[self._baud_address], 0)
 
     @property
     def return_delay_s(self) -> float:
@@ -130,9 +138,16 @@ class VirtualServo:
     def protocol(self) -> float:
         """The protocol the servo answers: Protocol Type(13) where the model has it (1 selects
         1.0, anything else 2.0), otherwise the model's only protocol (AX, MX 1.0 firmware)."""
-        if self.memory.has("protocol_type"):
-            return 1.0 if self.memory.get("protocol_type") == 1 else 2.0
-        return float(self.table.protocol)
+        memory = self.memory
+        cached = self._protocol
+        if cached[0] == memory.version:  # asked on every packet: decode once per table change
+            return cached[1]
+        if memory.has("protocol_type"):
+            version = 1.0 if memory.get("protocol_type") == 1 else 2.0
+        else:
+            version = float(self.table.protocol)
+        self._protocol = (memory.version, version)
+        return version
 
     @property
     def speaks_protocol_2(self) -> bool:
@@ -194,17 +209,20 @@ class VirtualServo:
     def write(self, address: int, data: bytes) -> int:
         """Serve a WRITE; returns the error number (0 on success) and changes nothing on error."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or self.firmware.check_write(self, plan)
+        error = plan.error or self.firmware.check_write(self, plan) or self._check_case(plan)
         if error:
             return error
+        follow = self._goal_only(plan.values)
         self.memory.store(plan)
         self._after_write(plan.values)
+        if follow is not None and self.memory.version == follow + 1:
+            self._follow_goal(follow)
         return 0
 
     def reg_write(self, address: int, data: bytes) -> int:
         """Serve a REG WRITE: check now, apply on ACTION; sets Registered Instruction(69)."""
         plan = self.memory.plan_write(address, data)
-        error = plan.error or self.firmware.check_write(self, plan)
+        error = plan.error or self.firmware.check_write(self, plan) or self._check_case(plan)
         if not error:
             self._registered, self._registered_address = bytes(data), address
             self.memory.set("registered_instruction", 1)
@@ -230,6 +248,8 @@ class VirtualServo:
         self.memory.load_defaults(keep)
         self._registered = None
         self._boot()
+        if self.case is not None:
+            self.case.follow(self)  # the reset baud and protocol are the module's
         return 0
 
     def clear(self, params: bytes) -> int:
@@ -288,8 +308,16 @@ class VirtualServo:
         """The control table's current request in SI, in the motor's frame (see motion.py)."""
         if self._command is not None and self._command[0] == self.memory.version:
             return self._command[1]
+        memory = self.memory
         command = self.firmware.command(self)
-        self._command = (self.memory.version, command)
+        self._command = (memory.version, command)
+        if self.firmware is firmware:
+            self._goal_frame = (
+                firmware.direction(memory),
+                firmware.homing_offset(memory),
+                centre_tick(self.table.specs.ticks),
+                memory.by_key["goal_position"].scale,
+            )
         return command
 
     # ----------------------------------------------------------------- internals
@@ -314,8 +342,39 @@ class VirtualServo:
             self.memory.set("torque_enable", self.memory.get("startup_configuration") & 0x01)
         self.firmware.refresh_present(self)
 
+    def _goal_only(self, values: dict[str, int]) -> int | None:
+        """The memory version before a write of Goal Position alone, when the command and the
+        step rules of that version are cached (a control cycle's write: see `_follow_goal`)."""
+        version = self.memory.version
+        if len(values) != 1 or "goal_position" not in values or self._command is None:
+            return None
+        if self.firmware is not firmware:  # the X-series decode only (see `command`)
+            return None
+        return version if self._command[0] == version else None
+
+    def _follow_goal(self, version: int) -> None:
+        """Carry the cached command and step rules over a Goal Position write: only the goal
+        changed, so the rest of `firmware.command`'s work (a dozen registers) is not redone."""
+        assert self._command is not None
+        sign, offset, centre, scale = self._goal_frame
+        goal = self.memory.get("goal_position")
+        # The expression of firmware.command, so the value is bit for bit the same.
+        goal_rad = sign * (goal - offset - centre) * scale
+        # A field-for-field copy: `dataclasses.replace` re-runs __init__ over every field, six
+        # times slower, once per servo per control cycle.
+        command = object.__new__(ServoCommand)
+        command.__dict__.update(self._command[1].__dict__, goal_position_rad=goal_rad)
+        self._command = (self.memory.version, command)
+        if self._rules is not None and self._rules[0] == version:
+            self._rules = (self.memory.version, self._rules[1])
+
+    def _check_case(self, plan: WritePlan) -> int:
+        return 0 if self.case is None else self.case.check_write(self, plan)
+
     def _after_write(self, values: dict[str, int]) -> None:
         self.firmware.apply_side_effects(self, values)
+        if self.case is not None and not SHARED_KEYS.isdisjoint(values):
+            self.case.follow(self)
         if values.get("bus_watchdog") == 0:
             self._watchdog_tripped = False
         if "bus_watchdog" in values:

@@ -82,6 +82,13 @@ class ServoFamily(ABC):
     """What the vendor SDK's packet-handler factory takes for this family."""
     broadcast_id: int
     max_id: int
+    broadcast_ping: bool
+    """Whether the protocol has a broadcast Ping (every servo answers one request in turn); a
+    family without one is searched for by pinging each ID on its own."""
+    firmware_address: int
+    """Where Firmware Version sits in the protocol's native control tables: the fallback for a
+    model number snakebot has no data for (a known model's table says where, e.g. an X-series
+    servo in Protocol 1.0 mode keeps its X-series map)."""
     status_overhead_bytes: int
     """Bytes of one status packet beyond its data (header, ID, length, error, checksum)."""
     read_overhead_bytes: int

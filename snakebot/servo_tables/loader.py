@@ -52,6 +52,7 @@ _SPEC_FIELDS = {
     "no_load_speed_rad_s",
     "stall_torque_nm",
     "stall_current_a",
+    "axes",
 }
 
 
@@ -261,7 +262,15 @@ def _specs(source: Path, model: dict[str, Any]) -> ServoSpecs:
         no_load_speed_rad_s=float(model.get("no_load_speed_rad_s", 5.0)),
         stall_torque_nm=float(model.get("stall_torque_nm", 1.0)),
         stall_current_a=float(model.get("stall_current_a", 1.0)),
+        axes=_axes(source, model),
     )
+
+
+def _axes(source: Path, model: dict[str, Any]) -> int:
+    axes = model.get("axes", 1)
+    if not isinstance(axes, int) or isinstance(axes, bool) or axes < 1:
+        raise ConfigError(source, "model.axes", f"must be a whole number >= 1, not {axes!r}")
+    return axes
 
 
 def _model_file_rows(

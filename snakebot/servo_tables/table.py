@@ -162,7 +162,9 @@ class ServoSpecs:
     (first Indirect Address, first Indirect Data, count) per bank; `ticks` is how the position
     registers count; `fast_sync_read`/`bulk_read` whether the model's firmware has those group
     reads (the family decides whether its protocol has them at all); `gains` how its position
-    loop is set: "pid" (Position P/D Gain registers) or "compliance" (AX compliance slope).
+    loop is set: "pid" (Position P/D Gain registers) or "compliance" (AX compliance slope);
+    `axes` how many motors share one case and its one communication module (2 on a 2XL430),
+    each with its own ID and control table.
     """
 
     firmware_version: int = 46
@@ -178,6 +180,7 @@ class ServoSpecs:
     no_load_speed_rad_s: float = 5.0
     stall_torque_nm: float = 1.0
     stall_current_a: float = 1.0
+    axes: int = 1
 
     @property
     def resolution(self) -> int:
@@ -216,8 +219,11 @@ class ServoTable:
         object.__setattr__(self, "_by_address", MappingProxyType(by_address))
 
     def _find(self, key: str) -> Register | None:
+        found = self.registers.get(key)  # a key as such: no normalising (hot in the emulator)
+        if found is not None:
+            return found
         normal = register_key(key)
-        return self.registers.get(key) or self.registers.get(normal) or self._by_name.get(normal)
+        return self.registers.get(normal) or self._by_name.get(normal)
 
     def __getitem__(self, key: str) -> Register:
         """Return the register for a key ("goal_position", "min_position_limit") or its

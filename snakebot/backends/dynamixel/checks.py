@@ -175,8 +175,8 @@ def latency_warning(
 ) -> str | None:
     """A warning with the fix when the latency timer caps the loop rate (above 1 ms).
 
-    ``turnarounds`` is how many replies the host waits for one after another in a cycle (one
-    per servo with a Read per servo, else one): each may wait a whole latency timer.
+    ``turnarounds`` is how many replies the cycle waits for one at a time (one per servo with
+    a Read per servo): each may wait a whole latency timer.
     """
     if latency_ms <= 1:
         return None
@@ -196,6 +196,6 @@ def cycle_wire_time_s(
     """(bus seconds, reply turnarounds) of one control cycle at Return Delay Time 0: one Sync
     Write of ``write_bytes`` per servo (goal position) plus one read of ``read_bytes`` per servo
     by ``method``, at 10 bits per byte (``family.read_cost``, ``sync_write_bytes``)."""
-    read = family.read_cost(method, servo_count, read_bytes)
-    total = read.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)
-    return total * 10.0 / baud, read.return_delays
+    cost = family.read_cost(method, servo_count, read_bytes)
+    total = cost.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)
+    return total * 10.0 / baud, cost.return_delays

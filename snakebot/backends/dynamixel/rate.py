@@ -2,8 +2,8 @@
 
 One cycle is one Sync Write of goals plus one state read by the family's read method. It costs
 
-- the wire: ``family.read_cost`` + ``family.sync_write_bytes`` at the baud, 10 bits a byte
-  (8N1);
+- the wire: ``family.read_cost`` + ``family.sync_write_bytes`` at the baud, 10 bits a
+  byte (8N1);
 - the Return Delay Time of every reply turnaround the read has (one per servo for a Sync Read,
   a Bulk Read or a Read per servo; one for a Fast Sync Read);
 - a USB latency tail for every time the host waits for a reply before it sends again: once for a
@@ -134,10 +134,10 @@ def cycle_budget(
     """The budget of one cycle: Sync Write of ``write_bytes`` per servo, read of ``read_bytes``
     per servo by ``method`` (one of ``snakebot.families.READ_METHODS``); ``fastest_baud`` is
     what a remedy may suggest."""
-    read = family.read_cost(method, servo_count, read_bytes)
-    wire = (read.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)) * 10.0 / baud
-    return CycleBudget(family, method, servo_count, baud, wire, read.return_delays,
-                       return_delay_s, read.round_trips, usb_tail_s, usb_assumed, fastest_baud)
+    cost = family.read_cost(method, servo_count, read_bytes)
+    wire = (cost.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)) * 10.0 / baud
+    return CycleBudget(family, method, servo_count, baud, wire, cost.return_delays,
+                       return_delay_s, cost.round_trips, usb_tail_s, usb_assumed, fastest_baud)
 
 
 SDK_MAX_BAUD = 4_000_000

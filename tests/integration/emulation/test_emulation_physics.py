@@ -63,8 +63,10 @@ def twin_bus(robot: RobotConfig) -> Iterator[tuple[Bus, TwinMotion]]:
         port.closePort()
 
 
-def actuator_gains(motion: TwinMotion) -> tuple[np.ndarray, np.ndarray]:
-    """The twin's position actuators' kp and kv, shape (N,)."""
+def actuator_gains(chain: EmulatedChain, motion: TwinMotion) -> tuple[np.ndarray, np.ndarray]:
+    """The twin's position actuators' kp and kv, shape (N,), once the chain has stepped up to
+    now (the twin takes up the registers when it next steps, as the chain steps lazily)."""
+    chain.settle()
     model = motion.twin.model
     return model.actuator_gainprm[:, 0].copy(), -model.actuator_biasprm[:, 2].copy()
 
@@ -94,11 +96,11 @@ def test_the_twin_starts_with_the_factory_gains_of_the_registers(
     robot: RobotConfig, twin_bus: tuple[Bus, TwinMotion]
 ) -> None:
     bus, motion = twin_bus
-    kp, _ = actuator_gains(motion)
+    kp, _ = actuator_gains(bus.chain, motion)
     assert np.all(kp == 0.0)  # factory Torque Enable is off: limp
     for servo_id in range(1, 9):
         bus.write(servo_id, "torque_enable", 1)
-    kp, kv = actuator_gains(motion)
+    kp, kv = actuator_gains(bus.chain, motion)
     factory = expected(robot, XL430_FACTORY, float(motion.twin.model.opt.timestep))
     assert kp == pytest.approx(np.full(8, factory[0]))
     assert kv == pytest.approx(np.full(8, factory[1]))
@@ -126,14 +128,15 @@ def test_gains_written_with_torque_off_wait_and_position_i_is_ignored(
     timestep = float(motion.twin.model.opt.timestep)
     bus.write(3, "position_p_gain", 1200)
     bus.write(3, "position_d_gain", 100)
-    kp, kv = actuator_gains(motion)
+    kp, kv = actuator_gains(bus.chain, motion)
     assert kp[2] == 0.0 and kv[2] == 0.0  # the joint stays limp until its torque comes on
     bus.write(3, "torque_enable", 1)
-    kp, kv = actuator_gains(motion)
+    kp, kv = actuator_gains(bus.chain, motion)
     assert (kp[2], kv[2]) == pytest.approx(expected(robot, GainRegisters(1200, 0, 100), timestep))
     assert kp[1] == 0.0  # torque still off there
     bus.write(3, "position_i_gain", 500)  # the twin's loop is PD: no I term
-    assert actuator_gains(motion)[0][2] == kp[2] and actuator_gains(motion)[1][2] == kv[2]
+    kp_after, kv_after = actuator_gains(bus.chain, motion)
+    assert kp_after[2] == kp[2] and kv_after[2] == kv[2]
 
 
 def test_an_ax_twin_takes_its_stiffness_from_the_compliance_slope_registers() -> None:
@@ -151,11 +154,11 @@ def test_an_ax_twin_takes_its_stiffness_from_the_compliance_slope_registers() ->
 
         for servo_id in robot.servo_ids:
             write(servo_id, "torque_enable", 1)
-        factory = actuator_gains(motion)[0]
+        factory = actuator_gains(chain, motion)[0]
         write(3, "cw_compliance_slope", 16)
         write(3, "ccw_compliance_slope", 16)
         port.closePort()
-    kp = actuator_gains(motion)[0]
+    kp = actuator_gains(chain, motion)[0]
     stiff = robot.servo.gains_from({"cw_compliance_slope": 16, "ccw_compliance_slope": 16})
     assert factory == pytest.approx(np.full(12, robot.gains.kp_nm_per_rad))  # slope 32
     assert kp[2] == pytest.approx(stiff.kp_nm_per_rad) == pytest.approx(2 * factory[2])

@@ -4,7 +4,7 @@ condition, which error is worth sending again, and what a cycle's read costs on 
 from __future__ import annotations
 
 from snakebot.emulation.protocol import build_fast_status
-from snakebot.families import family_named
+from snakebot.families import WireCost, family_named
 
 P1 = family_named("dynamixel-p1")
 P2 = family_named("dynamixel-p2")
@@ -28,4 +28,4 @@ def test_protocol_1_overload_heat_and_voltage_are_conditions_the_rest_errors() -
 def test_a_fast_sync_read_reply_is_as_long_as_the_emulator_builds_it() -> None:
     for n in (1, 2, 12):
         reply = len(build_fast_status([(i + 1, 0, bytes(10)) for i in range(n)]))
-        assert P2.read_cost("fast_sync_read", n, 10) == (14 + n + reply, 1, 1)
+        assert P2.read_cost("fast_sync_read", n, 10) == WireCost(14 + n + reply, 1, 1)
