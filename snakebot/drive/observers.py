@@ -43,7 +43,10 @@ def backend_readings(
         if bus is not None:
             retries = sum(bus.retry_counts.values()) + bus.group_retries
             found += [f"retries {retries}"] if retries else []
-            found += [f"alert bit: servo {i}" for i in sorted(bus.alerts)]
+            for i in sorted(bus.alerts):  # Alert bit (P2), or a P1 status byte's alarms
+                bits = bus.conditions.get(i, 0)
+                names = [n for n in bus.family.status_errors(bits) if n != "alert"]
+                found.append(f"{', '.join(names)}: servo {i}" if names else f"alert bit: servo {i}")
         return tuple(found)
 
     return backend.health, alerts

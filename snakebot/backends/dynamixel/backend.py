@@ -29,7 +29,6 @@ from snakebot.backends.dynamixel.checks import (
     chain_error,
     chain_report,
     check_settings,
-    cycle_wire_time_s,
     latency_warning,
     settings_keys,
     usb_latency_timer_ms,
@@ -311,10 +310,8 @@ class DynamixelBackend(Backend):
             raise ServoSettingsError(self.port, errors)
         latency = usb_latency_timer_ms(self.port)
         if latency is not None:
-            wire, turnarounds = cycle_wire_time_s(
-                self.bus.family, self._state_plan.method, len(self.ids),
-                self._state_plan.block.size, self.bus.baud)
-            note = latency_warning(self.port, latency, wire, turnarounds)
+            budget = self.rate_budget()  # waits per cycle: one per Read, else one
+            note = latency_warning(self.port, latency, budget.wire_s, budget.round_trips)
             notes += [note] if note else []
         for note in notes:
             warnings.warn(note, DynamixelSettingsWarning, stacklevel=4)

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from snakebot.backends.dynamixel import sdk
-from snakebot.backends.dynamixel.blocks import Block, magnitude_value
+from snakebot.backends.dynamixel.blocks import Block
 from snakebot.families import READ_METHODS
 from snakebot.servo_tables import Register, RegisterValueError
 
@@ -126,27 +126,27 @@ class ReadPlan:
 
     def _transact(self, fast: bool) -> list[Row] | None:
         """One group transaction: each ID's field values in ID order, or None to retry."""
-        block = self.block
-        available: Callable[[int], bool]
-        data: Callable[[int], list[int] | bytearray]
-        if self._sync is not None:
-            result = self._sync.transact(fast and self.method == "fast_sync_read")
-            available, data = self._sync.available, self._sync.data
-        else:
-            assert self._bulk is not None
-            bulk = self._bulk
-            result = bulk.transact()
-            available = lambda i: bulk.available(i, block.address, block.size)  # noqa: E731
-            data = bulk.data
+        if self._bulk is not None:
+            result = self._bulk.transact()
+            if result != sdk.COMM_SUCCESS:
+                self._transport.retry_or_raise(result, self.ids, self._what)
+                return None
+            joined = self._bulk.joined()
+            if joined is None or len(joined) != self._total:
+                return None
+            return self._values(list(self._unpacker.iter_unpack(joined)))
+        assert self._sync is not None
+        reader = self._sync
+        result = reader.transact(fast and self.method == "fast_sync_read")
         if result != sdk.COMM_SUCCESS:
             self._transport.retry_or_raise(result, self.ids, self._what)
             return None
         buffer = bytearray()
         for servo_id in self.ids:
             # isAvailable per ID: after a failed read the SDK hands out zeros (reference §1.7).
-            if not available(servo_id):
+            if not reader.available(servo_id):
                 return None
-            buffer.extend(data(servo_id))
+            buffer.extend(reader.data(servo_id))
         # No servo's data can be longer than the block, so the total catches any short one.
         if len(buffer) != self._total:
             return None
@@ -156,11 +156,14 @@ class ReadPlan:
         """Rows with sign-magnitude fields turned from raw bits into values."""
         if not self._magnitude:
             return rows
+        fields = self._magnitude
         out = []
         for row in rows:
             values = list(row)
-            for k, bit in self._magnitude:
-                values[k] = magnitude_value(values[k], bit)
+            for k, bit in fields:
+                raw = values[k]
+                size = raw & ((1 << bit) - 1)  # bits above the sign bit are not the value
+                values[k] = -size if raw >> bit & 1 else size
             out.append(tuple(values))
         return out
 

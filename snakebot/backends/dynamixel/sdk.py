@@ -142,6 +142,7 @@ class GroupBulkReadLike(Protocol):
 
     data_dict: dict[int, list[Any]]
     param: list[int]
+    last_result: bool
 
     def makeParam(self) -> None:  # noqa: N802
         """Build ``param`` from the added IDs and blocks."""
@@ -436,6 +437,21 @@ class BulkReader:
     def available(self, dxl_id: int, address: int, size: int) -> bool:
         """Whether the last read holds fresh data for that block."""
         return bool(self._group.isAvailable(dxl_id, address, size))
+
+    def joined(self) -> bytearray | None:
+        """Every block of the last read, in the order they were added, or None unless the
+        whole read succeeded (``isAvailable``'s test: the SDK keeps stale data otherwise)."""
+        group = self._group
+        if not group.last_result:
+            return None
+        out = bytearray()
+        entries = group.data_dict
+        for dxl_id, _, size in self.blocks:
+            data = entries[dxl_id][0]
+            if len(data) != size:
+                return None
+            out += bytes(data)
+        return out
 
     def data(self, dxl_id: int) -> list[int] | bytearray:
         """Raw block bytes of ``dxl_id`` from the last read (``data_dict`` holds
