@@ -24,7 +24,7 @@ from snakebot.errors import ConfigError, OutputError
 from snakebot.servo.ticks import TickModel, ticks_to_rad
 from snakebot.setup.errors import SetupError
 from snakebot.setup.link import Link
-from snakebot.setup.settings import ChainSettings
+from snakebot.setup.settings import ChainSettings, has_watchdog
 from snakebot.setup.toml_edit import format_float, set_in_joints, write_atomic
 
 MAX_OFFSET_DEG = 20.0
@@ -105,7 +105,8 @@ def refusals(
         return out
     robot = with_offsets(chain.robot, [z.new_offset_rad for z in zeros])
     values = {s.servo_id: {x.key: x.raw for x in s.settings} for s in chain.servos}
-    errors, _ = check_settings(values, robot.servo_ids, TickConverter.for_robot(robot))
+    errors, _ = check_settings(values, robot.servo_ids, TickConverter.for_robot(robot),
+                               watchdog=has_watchdog(chain))
     return [f"{e}: widen the Position Limits in the settings" for e in errors]
 
 

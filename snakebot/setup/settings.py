@@ -18,6 +18,7 @@ from snakebot.config.fields import read_toml
 from snakebot.config.schema import JointConfig, RobotConfig
 from snakebot.config.servo_settings import GAIN_KEYS, Setting, parse_settings
 from snakebot.errors import ConfigError
+from snakebot.families import family_for
 from snakebot.servo_tables import ServoTable, table_for_model
 
 __all__ = ["REBOOT_KEYS", "ChainSettings", "ServoSettings", "Setting", "load_settings"]
@@ -93,19 +94,30 @@ def load_settings(robot: RobotConfig) -> ChainSettings:
     return _checked(chain, servo_file, robot.joints)
 
 
+def has_watchdog(chain: ChainSettings) -> bool:
+    """Whether the chain's servos have a Bus Watchdog on its bus's protocol."""
+    family = family_for(chain.table, chain.robot.bus.protocol)
+    return family.capabilities(chain.table).bus_watchdog
+
+
 def _checked(
     chain: ChainSettings, servo_file: Path, joints: tuple[JointConfig, ...]
 ) -> ChainSettings:
     values: dict[int, dict[str, int]] = {}
+    watchdog = has_watchdog(chain)
+    # Without a Bus Watchdog, Alarm Shutdown is what cuts torque after the host died.
+    required = REQUIRED if watchdog else (*REQUIRED, "shutdown")
     for servo in chain.servos:
         keys = {s.key: s.raw for s in servo.settings}
-        missing = [k for k in REQUIRED if k not in keys and k in chain.table]
+        missing = [k for k in required if k not in keys and k in chain.table]
         if missing:
             raise ConfigError(servo_file, "settings", f"missing {', '.join(missing)}: `snakebot "
                               "run --backend dynamixel` checks them at connect, so set them here")
         values[servo.servo_id] = keys
     ids = [j.servo_id for j in joints]
-    errors, notes = check_settings(values, ids, TickConverter.for_robot(chain.robot))
+    errors, notes = check_settings(
+        values, ids, TickConverter.for_robot(chain.robot), watchdog=watchdog
+    )
     if errors:
         raise ConfigError(
             chain.robot.source, "settings", "`snakebot run --backend dynamixel` would refuse "

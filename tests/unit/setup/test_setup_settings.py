@@ -115,3 +115,25 @@ def test_lock_and_protocol_type_are_never_settings(
     with pytest.raises(ConfigError, match=message) as info:
         load_settings(load_robot(path))
     assert str(path) in str(info.value)
+
+
+def test_without_a_bus_watchdog_config_apply_refuses_what_run_refuses(config_dir: Path) -> None:
+    # An AX has no Bus Watchdog: Alarm Shutdown must cut torque on overload and heat (bits 2, 5),
+    # or the servo holds its last goal against an obstacle after the host died. `run` refuses
+    # that at connect; `config apply` must not write it in the first place.
+    path = edit_robot(config_dir, "snake12-ax12a", "[settings]", "[settings]\nshutdown = 4")
+    with pytest.raises(ConfigError, match="Alarm Shutdown is 4, needs bits 2 and 5"):
+        load_settings(load_robot(path))
+    # The same value on an X-series chain is the user's choice: its watchdog protects it.
+    x_series = edit_robot(config_dir, "snake12", "[settings]", "[settings]\nshutdown = 4")
+    assert load_settings(load_robot(x_series)).servos
+
+
+def test_without_a_bus_watchdog_alarm_shutdown_must_be_set(config_dir: Path) -> None:
+    servo = config_dir / "servos" / "ax-12a.toml"
+    text = servo.read_text()
+    servo.write_text("\n".join(
+        line for line in text.splitlines() if not line.startswith("shutdown")) + "\n")
+    with pytest.raises(ConfigError, match="missing shutdown") as info:
+        load_settings(load_robot(config_dir / "robots" / "snake12-ax12a.toml"))
+    assert info.value.source.endswith("ax-12a.toml")
