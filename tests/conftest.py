@@ -14,6 +14,8 @@ import snakebot.backends  # noqa: F401
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "firmware_configs"
+SHIPPED_ROBOT_FILES = sorted(p.name for p in (CONFIGS / "robots").iterdir())
+"""The file names in firmware_configs/robots/: what a copy holds when nothing was left over."""
 
 # A suite started in the background by a non-interactive shell inherits SIGINT ignored, and so would
 # every `snakebot` it spawns: the Ctrl-C tests would then send a signal nobody hears. Restore

@@ -24,15 +24,19 @@ from snakebot.servo_tables import ServoTable, table_for_model
 
 def new_servo(
     model: str | int | ServoTable, serial: int, *, servo_id: int = FACTORY_ID,
-    baud: int = FACTORY_BAUD,
+    baud: int | None = None,
 ) -> VirtualServo:
-    """A servo with factory defaults and serial number ``serial``.
+    """A servo with factory defaults and serial number ``serial``, at ``baud`` (default: the
+    model's factory rate: 57600 on X and MX, 1 Mbps on an AX).
 
     Units differ as real ones do: the reply timing varies by 12 µs steps (so two servos sharing an
     ID garble each other's replies) and the shaft sits within ±0.3 rad of centre, where assembly
     left it.
     """
-    servo = VirtualServo(model, servo_id, baud=baud, processing_time_s=20e-6 + 12e-6 * (serial % 3))
+    table = model if isinstance(model, ServoTable) else table_for_model(model)
+    if baud is None:
+        baud = table.baud_rates.get(table["baud_rate"].default, FACTORY_BAUD)
+    servo = VirtualServo(table, servo_id, baud=baud, processing_time_s=20e-6 + 12e-6 * (serial % 3))
     servo.serial_number = serial
     angle = ((serial * 0.6180339887) % 1.0 - 0.5) * 0.6
     servo.state = replace(servo.state, position_rad=angle)
@@ -130,7 +134,11 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
     middle = len(servos) // 2
     with chain.lock:
         for index, servo in enumerate(servos):
-            poke = servo.poke
+            def poke(key: str, value: int, servo: VirtualServo = servo) -> None:
+                if servo.memory.has(key):  # an AX has no drive or operating mode, no offset
+                    servo.poke(key, min(value, servo.table[key].maximum))
+
+            count = servo.table.specs.ticks.count
             poke("return_delay_time", rng.randint(50, 250))
             poke("temperature_limit", rng.randint(50, 70))
             poke("shutdown", rng.choice((0, 4, 36)))
@@ -140,8 +148,8 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
             if index % 4 == 2:
                 poke("operating_mode", 4)
             if index % 3 == 0:
-                poke("min_position_limit", 1500)
-                poke("max_position_limit", 2600)
+                poke("min_position_limit", round(1500 * count / 4096))
+                poke("max_position_limit", round(2600 * count / 4096))
             if index % 5 == 3:
                 poke("homing_offset", rng.randint(-200, 200))
             if index == 1:

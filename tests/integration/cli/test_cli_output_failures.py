@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from snakebot.telemetry import read_log
-from tests.conftest import edit_robot
+from tests.conftest import SHIPPED_ROBOT_FILES, edit_robot
 from tests.pty_emulator import emulator
 
 pytestmark = [
@@ -109,4 +109,4 @@ def test_calibrate_that_cannot_write_leaves_the_robot_file_as_it_was(config_dir:
     assert run.returncode == 1, run.stderr
     assert f"snakebot: error: {robot}: cannot write the offsets (File too large)" in run.stderr
     assert robot.read_bytes() == before
-    assert sorted(p.name for p in robot.parent.iterdir()) == ["snake12.toml", "snake8.toml"]
+    assert sorted(p.name for p in robot.parent.iterdir()) == SHIPPED_ROBOT_FILES

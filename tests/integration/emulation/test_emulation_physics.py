@@ -137,3 +137,29 @@ def test_gains_written_with_torque_off_wait_and_position_i_is_ignored(
     bus.write(3, "position_i_gain", 500)  # the twin's loop is PD: no I term
     kp_after, kv_after = actuator_gains(bus.chain, motion)
     assert kp_after[2] == kp[2] and kv_after[2] == kv[2]
+
+
+def test_an_ax_twin_takes_its_stiffness_from_the_compliance_slope_registers() -> None:
+    robot = load_robot("snake12-ax12a")
+    chain, motion = make_twin_chain(robot, BAUD)
+    packet = dxl.PacketHandler(1.0)
+    table = chain.servos[0].table
+    with registered(chain) as url:
+        port = EmulatedPortHandler(url)
+        assert port.openPort() and port.setBaudRate(BAUD)
+
+        def write(servo_id: int, key: str, value: int) -> None:
+            send = packet.write1ByteTxRx if table[key].size == 1 else packet.write2ByteTxRx
+            assert send(port, servo_id, table[key].address, value) == (dxl.COMM_SUCCESS, 0)
+
+        for servo_id in robot.servo_ids:
+            write(servo_id, "torque_enable", 1)
+        factory = actuator_gains(chain, motion)[0]
+        write(3, "cw_compliance_slope", 16)
+        write(3, "ccw_compliance_slope", 16)
+        port.closePort()
+    kp = actuator_gains(chain, motion)[0]
+    stiff = robot.servo.gains_from({"cw_compliance_slope": 16, "ccw_compliance_slope": 16})
+    assert factory == pytest.approx(np.full(12, robot.gains.kp_nm_per_rad))  # slope 32
+    assert kp[2] == pytest.approx(stiff.kp_nm_per_rad) == pytest.approx(2 * factory[2])
+    assert np.all(np.delete(kp, 2) == np.delete(factory, 2))

@@ -12,7 +12,7 @@ import pytest
 
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
-from tests.conftest import edit_robot
+from tests.conftest import SHIPPED_ROBOT_FILES, edit_robot
 from tests.integration.setup.conftest import Bus, Cli
 
 # Where each servo's shaft sits when its joint is straight (rad from the centre tick).
@@ -109,7 +109,7 @@ def test_the_robot_file_keeps_its_permissions(
     assert code == 0, err
     assert stat.S_IMODE(robot_file.stat().st_mode) == mode
     assert load_robot(robot_file).joints[3].zero_offset_rad == pytest.approx(0.2, abs=2e-3)
-    assert sorted(p.name for p in robot_file.parent.iterdir()) == ["snake12.toml", "snake8.toml"]
+    assert sorted(p.name for p in robot_file.parent.iterdir()) == SHIPPED_ROBOT_FILES
 
 
 def test_a_linked_robot_file_stays_a_link(snake: Bus, cli: Cli, robot_file: Path) -> None:

@@ -11,9 +11,16 @@ import pytest
 import snakebot
 from snakebot.config import load_robot
 from snakebot.config.loader import load_servo_model
-from snakebot.config.schema import GainRegisters
+from snakebot.config.schema import COMPLIANCE_GAIN_KEYS, GainRegisters
 from snakebot.errors import ConfigError
-from snakebot.servo import FACTORY_BAUD, FACTORY_ID, GainMapping, centre_tick, rad_per_tick
+from snakebot.servo import (
+    COMPLIANCE_SLOPES,
+    FACTORY_BAUD,
+    FACTORY_ID,
+    GainMapping,
+    centre_tick,
+    rad_per_tick,
+)
 from snakebot.servo_tables import supported_models, table_for_model
 from snakebot.types import PDGains
 from tests.conftest import edit_robot
@@ -27,11 +34,21 @@ SERVO_MODELS = [m for m in supported_models() if (SERVO_DIR / f"{m.lower()}.toml
 
 @pytest.mark.parametrize("model", SERVO_MODELS)
 def test_every_register_value_survives_the_trip_to_si_and_back(model: str) -> None:
-    mapping = load_servo_model(model, ROBOT_FILE).gain_mapping
-    assert (mapping.p_max, mapping.d_max) == (16383, 16383)  # from the control table
+    servo = load_servo_model(model, ROBOT_FILE)
+    table = table_for_model(model)
+    if servo.gain_kind == "compliance":  # AX: the seven Compliance Slope levels
+        for level in COMPLIANCE_SLOPES:
+            values = dict.fromkeys(COMPLIANCE_GAIN_KEYS, level)
+            assert servo.gain_writes(servo.gains_from(values)) == values
+        return
+    mapping = servo.gain_mapping
+    maxima = (table["position_p_gain"].maximum, table["position_d_gain"].maximum)
+    assert (mapping.p_max, mapping.d_max) == maxima  # 16383 on X and MX 2.0, 254 on MX P1
     for register in range(mapping.p_max + 1):
         assert mapping.position_p(mapping.kp_nm_per_rad(register)) == register
         assert mapping.position_d(mapping.kd_nms_per_rad(register)) == register
+        values = {"position_p_gain": register, "position_i_gain": 3, "position_d_gain": register}
+        assert servo.gain_writes(servo.gains_from(values), position_i=3) == values
 
 
 def test_the_xl430_mapping_is_the_datasheet_arithmetic() -> None:
@@ -103,14 +120,18 @@ def test_the_datasheet_facts_come_from_the_control_table(model: str) -> None:
     assert physics.no_load_speed_rad_s == table.specs.no_load_speed_rad_s
     assert physics.nominal_voltage_v == table.specs.nominal_voltage_v
     assert physics.ticks == table.specs.ticks
-    assert centre_tick(physics.ticks) == 2048
+    # 4096 a turn centred at 2048 (X, MX); 1024 over 300 deg centred at 512 (AX).
+    assert centre_tick(physics.ticks) == (512 if model.startswith("AX") else 2048)
     # The position registers' SI scale (what the emulator and the bus tables use) is the same
-    # tick as the tick <-> radian formula's.
-    for key in ("goal_position", "present_position", "homing_offset"):
-        assert table[key].scale == pytest.approx(rad_per_tick(physics.ticks), rel=1e-15)
-    # What a servo answers as from the factory: the ID and Baud Rate registers' defaults.
+    # tick as the tick <-> radian formula's (the P1 tables write it to 8 digits).
+    for key in ("goal_position", "present_position", "homing_offset", "multi_turn_offset"):
+        if key in table:
+            assert table[key].scale == pytest.approx(rad_per_tick(physics.ticks), rel=1e-7)
+    # What a servo answers as from the factory: the ID and Baud Rate registers' defaults (an AX
+    # leaves the factory at 1 Mbps, e-Manual ax-12a.md).
     assert table["id"].default == FACTORY_ID
-    assert table.baud_rates[table["baud_rate"].default] == FACTORY_BAUD
+    factory_baud = 1_000_000 if model.startswith("AX") else FACTORY_BAUD
+    assert table.baud_rates[table["baud_rate"].default] == factory_baud
 
 
 # Numbers that are servo facts: resolution and centre tick, gain register maximum, factory baud,

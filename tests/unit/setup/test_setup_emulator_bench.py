@@ -90,3 +90,13 @@ def test_scramble_gives_settings_the_backend_refuses() -> None:
     assert sorted(s.baud for s in chain.servos)[:2] == [57600, 115200]
     assert chain.servo(2).peek("status_return_level") == 1
     assert chain.servo(12).torque_enabled
+
+
+def test_fresh_and_scrambled_ax12a_servos_keep_to_their_own_table() -> None:
+    fresh = new_servo("AX-12A", 1)
+    assert (fresh.servo_id, fresh.baud, fresh.protocol) == (1, 1_000_000, 1.0)  # AX factory
+    chain = EmulatedChain(robot_servos("AX-12A", range(1, 13), 1_000_000), baud=1_000_000)
+    scramble(chain, 3)  # used to look up X-only registers (drive mode, homing offset)
+    limits = [(s.peek("min_position_limit"), s.peek("max_position_limit")) for s in chain.servos]
+    assert (375, 650) in limits and all(0 <= lo <= hi <= 1023 for lo, hi in limits)
+    assert chain.servos[1].peek("status_return_level") == 1

@@ -119,6 +119,23 @@ def test_si_gains_are_written_to_the_position_pid_registers(bench: Bench) -> Non
     assert got == {(900, 12, 34)}
 
 
+def test_an_mx_on_the_2_0_firmware_gets_its_own_registers_for_the_same_si_gains() -> None:
+    # The MX-28 (2.0) has the X map but its own torque and speed: its servo model maps SI gains
+    # to its registers; the backend writes what the model says, nothing X-specific.
+    mx = load_servo_model("MX-28-2", robot_variant().source)
+    robot = dataclasses.replace(robot_variant(ramp_s=0.2), servo=mx)
+    chain = make_chain_for_ids("MX-28-2", robot.servo_ids, baud=BAUD)
+    for servo in chain.servos:
+        servo.poke("return_delay_time", 0)
+    wanted = PDGains(kp_nm_per_rad=4.0, kd_nms_per_rad=0.05)
+    with registered(chain) as url, Bench(chain, url).backend(robot) as backend:
+        backend.set_gains(wanted)
+    writes = mx.gain_writes(wanted)
+    assert writes["position_p_gain"] == round(4.0 / mx.gain_mapping.kp_nm_per_rad(1)) == 556
+    got = {tuple(s.peek(key) for key in writes) for s in chain.servos}
+    assert got == {tuple(writes.values())}
+
+
 def test_gains_beyond_the_registers_are_clipped_to_the_control_table(bench: Bench) -> None:
     with bench.backend() as backend:
         backend.set_gains(PDGains(kp_nm_per_rad=1e6, kd_nms_per_rad=1e6))
