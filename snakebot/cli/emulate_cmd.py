@@ -2,8 +2,8 @@
 
 Servos start with factory settings (Return Delay Time 500 µs, Status Return Level 2, default gains
 and limits) at the robot's IDs and baud rate, or, with ``--fresh N``, not at all: each line
-``plug`` on stdin (or SIGUSR1) then connects the next factory-fresh servo (ID 1 at 57600), the
-way a user adds servos one at a time. ``power`` on stdin power-cycles every servo. With
+``plug`` on stdin (or SIGUSR1) then connects the next factory-fresh servo (ID 1 at its factory
+rate), the way a user adds servos one at a time. ``power`` on stdin power-cycles every servo. With
 ``--state-file`` every servo's EEPROM is kept on disk across runs (emulated power cycles).
 
 The servos speak the robot's ``[bus] protocol`` (``--protocol`` overrides it: an X-series servo
@@ -70,8 +70,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--pty", action="store_true", required=True, help="serve on a pty")
     parser.add_argument("--json", action="store_true", help='print {"port": ...} and JSON summary')
     parser.add_argument("--fresh", type=int, default=0, metavar="N",
-                        help="start with no servo connected; N factory-fresh ones (ID 1, 57600) "
-                        "wait to be plugged in")
+                        help="start with no servo connected; N factory-fresh ones (ID 1, "
+                        "factory baud) wait to be plugged in")
     parser.add_argument("--attached", type=int, default=0, metavar="K",
                         help="with --fresh: plug in K at start (K >= 2 share ID 1 and collide)")
     parser.add_argument("--state-file", type=Path,

@@ -1,7 +1,7 @@
 """Bring-up on the emulator: factory-fresh servos plugged in one at a time, EEPROM kept on disk.
 
 A :class:`ServoBench` wraps a chain: servos already on it (with stable serial numbers), a count of
-factory-fresh servos waiting to be plugged in (each arrives as ID 1 at 57600 with factory
+factory-fresh servos waiting to be plugged in (each arrives as ID 1 at its factory rate with factory
 defaults), and an optional state file that keeps every servo's EEPROM across emulated power
 cycles. :func:`scramble` gives a chain the wrong settings a second-hand snake arrives with.
 """
@@ -93,7 +93,8 @@ class ServoBench:
         return max(0, self._fresh_total - plugged)
 
     def plug(self) -> VirtualServo:
-        """Connect the next factory-fresh servo (ID 1 at 57600); EmulationError if none is left."""
+        """Connect the next factory-fresh servo (ID 1, factory rate); EmulationError if none is
+        left."""
         if self.waiting <= 0:
             raise EmulationError(f"all {self._fresh_total} fresh servos are plugged in already")
         serial = max((s.serial_number for s in self.chain.servos), default=0) + 1
