@@ -147,6 +147,12 @@ class Backend(abc.ABC):
             raise ValueError(f"advance needs a positive time step, got {dt_s!r} s")
         self._advance(dt_s)
 
+    def check_rate(self, rate_hz: float) -> None:
+        """Raise ConfigError (``RateTooHighError`` on a servo bus) when the backend cannot hold
+        a ``rate_hz`` control rate, saying the most it can; no bus traffic, connected or not.
+        The default holds any rate (a simulation takes its own time)."""
+        return None
+
     def body_state(self) -> BodyState | None:
         """Whole-body state where the backend can measure it (the twin); None on hardware."""
         self._require_connected()

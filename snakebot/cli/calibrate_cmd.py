@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
     check_robot_copy(args, robot.source)
     chain = load_settings(robot)
     port = args.port or robot.bus.port
-    with Link(port, chain.baud, model=robot.servo.name) as link:
+    with Link(port, chain.baud, model=robot.servo.name,
+              protocol=robot.bus.protocol) as link:
         zeros = measure(link, chain)
     problems = refusals(chain, zeros, args.max_offset_deg)
     if args.json:

@@ -365,15 +365,17 @@ def gait_list_arg(text: str) -> str:
 
 
 def baud_arg(text: str) -> int:
-    """argparse type: a Dynamixel baud rate (one of snakebot.config.loader.BAUD_RATES)."""
+    """argparse type: a Dynamixel baud rate (one of snakebot.config.loader.BAUD_RATES, or a
+    rate the port opens that an AX or MX can be set to, e.g. 500000)."""
     from snakebot.config.loader import BAUD_RATES
+    from snakebot.setup.bauds import PORT_BAUDS
 
     try:
         value = int(text)
     except ValueError:
         value = -1
-    if value not in BAUD_RATES:
-        rates = ", ".join(map(str, BAUD_RATES))
+    if value not in BAUD_RATES and value not in PORT_BAUDS:
+        rates = ", ".join(map(str, sorted({*BAUD_RATES, *PORT_BAUDS})))
         raise argparse.ArgumentTypeError(f"expected one of {rates}, got {text!r}")
     return value
 

@@ -17,8 +17,9 @@ from snakebot.cli.common import (
 from snakebot.cli.console import confirm
 from snakebot.config import load_robot
 from snakebot.setup import Link, Step, apply, assign_id, load_settings, plan_apply, survey
+from snakebot.setup.assign import search_bauds
 from snakebot.setup.diff import ChainDiff
-from snakebot.setup.link import SEARCH_BAUDS
+from snakebot.setup.scan import sweep_seconds
 
 
 def add_parser(subparsers: Any) -> None:
@@ -46,8 +47,9 @@ def add_parser(subparsers: Any) -> None:
     assign = actions.add_parser(
         "assign-id", help="give one (factory-fresh) servo its ID and baud rate",
         description="Finds the one servo on the bus at any baud rate (a new one is ID 1 at "
-        "57600) and sets its ID and baud rate. Refuses if several servos answer or the ID is "
-        "taken. Growing a chain: plug in one new servo at a time and pass --from 1.",
+        "57600, an AX at 1000000) and sets its ID and baud rate. Refuses if several servos "
+        "answer or the ID is taken. Growing a chain: plug in one new servo at a time and pass "
+        "--from 1.",
     )
     _robot_and_port(assign)
     assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
@@ -89,7 +91,8 @@ def run_diff(args: argparse.Namespace) -> int:
     robot = load_robot(robot_name(args, hardware=True, what="config diff"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
-    with Link(port, chain.baud, model=robot.servo.name) as link:
+    with Link(port, chain.baud, model=robot.servo.name,
+              protocol=robot.bus.protocol) as link:
         diff = survey(link, chain)
     if args.json:
         print_json({
@@ -117,7 +120,8 @@ def run_apply(args: argparse.Namespace) -> int:
     robot = load_robot(robot_name(args, hardware=True, what="config apply"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
-    with Link(port, chain.baud, model=robot.servo.name) as link:
+    with Link(port, chain.baud, model=robot.servo.name,
+              protocol=robot.bus.protocol) as link:
         diff = survey(link, chain)
         plan = plan_apply(chain, diff)
         steps = [step.describe() for step in plan.steps]
@@ -163,11 +167,19 @@ def run_assign(args: argparse.Namespace) -> int:
     baud = args.new_baud or robot.bus.baud
     port = args.port or robot.bus.port
     where = f"ID {args.from_id}" if args.from_id is not None else "the servo"
-    print(f"searching for {where} at {', '.join(map(str, SEARCH_BAUDS))} baud ...",
-          file=sys.stderr, flush=True)
-    with Link(port, SEARCH_BAUDS[0], model=robot.servo.name) as link:
+    with Link(port, baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
+        bauds = search_bauds(link)
+        print(f"searching for {where} at {', '.join(map(str, bauds))} baud ...",
+              file=sys.stderr, flush=True)
+        family = link.family
+        if args.from_id is None and not family.broadcast_ping:
+            ids = family.max_id + 1
+            print(f"Protocol {family.protocol:.1f} has no broadcast ping: every ID is pinged on "
+                  f"its own, {ids} IDs at each rate (about "
+                  f"{sum(sweep_seconds(ids, b) for b in bauds):.0f} s on a real port; --from 1 "
+                  "finds a new servo at once)", file=sys.stderr, flush=True)
         result = assign_id(link, to_id=args.to, baud=baud, from_id=args.from_id,
-                           dry_run=args.dry_run)
+                           bauds=bauds, dry_run=args.dry_run)
     found = result.found
     if args.json:
         print_json({"port": port, "found_id": found.servo_id, "found_baud": found.baud,

@@ -181,6 +181,8 @@ def run(args: argparse.Namespace) -> int:
         from snakebot.backends.twin.viewer import check_display
 
         check_display()  # before --log opens: a refused run leaves an existing log as it was
+    # A rate the servo bus cannot hold is refused before anything opens (--rate, exit 2).
+    snake.backend.check_rate(args.rate)
     if args.dry_run:
         return report_dry_run(args, {
             "robot": snake.robot.name, "gait": gait_name, "backend": spec.name,

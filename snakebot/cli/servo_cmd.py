@@ -20,11 +20,20 @@ from snakebot.cli.console import confirm
 from snakebot.cli.servo_hands_on import add_actions
 from snakebot.config import load_robot
 from snakebot.errors import BusError, UsageError
-from snakebot.servo import FACTORY_BAUD, FACTORY_ID
+from snakebot.servo import FACTORY_ID
 from snakebot.servo_tables import model_dirs, model_entries, table_for_model
 from snakebot.servo_tables.units import display
 from snakebot.setup import Link, SetupError
-from snakebot.setup.maintenance import factory_reset, reboot, servo_info
+from snakebot.setup.bauds import factory_baud
+from snakebot.setup.maintenance import (
+    check_reboot,
+    factory_reset,
+    hardware_error,
+    reboot,
+    reset_families,
+    reset_option,
+    servo_info,
+)
 
 
 def add_parser(subparsers: Any) -> None:
@@ -76,17 +85,19 @@ def _link(args: argparse.Namespace, what: str) -> Link:
     robot = load_robot(robot_name(args, hardware=True, what=f"servo {what}"))
     args.port = args.port or robot.bus.port
     args.baud = args.baud or robot.bus.baud
-    return Link(args.port, args.baud, model=robot.servo.name)
+    return Link(args.port, args.baud, model=robot.servo.name, protocol=robot.bus.protocol)
 
 
 def run_reboot(args: argparse.Namespace) -> int:
     """Reboot one servo or all; exit 1 if a hardware error stays latched."""
     with _link(args, "reboot") as link:
         bus = link.bus
-        ids = sorted(bus.broadcast_ping()) if args.all else [args.id]
+        check_reboot(link, args.id)
+        ids = sorted(link.listening(args.baud)) if args.all else [args.id]
         if not ids:
             raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
-        before = {i: bus.read_block(i, ("torque_enable", "hardware_error_status")) for i in ids}
+        before = {i: {"torque_enable": bus.read(i, "torque_enable"),
+                      "hardware_error_status": hardware_error(link, i, args.baud)} for i in ids}
         holding = [i for i, v in before.items() if v["torque_enable"]]
         if args.dry_run:
             return report_dry_run(args, {
@@ -128,29 +139,54 @@ def run_reset(args: argparse.Namespace) -> int:
     if not args.yes and not args.dry_run:
         raise SetupError(f"servo reset erases every setting of servo {args.id}: add --yes")
     with link:
+        try:
+            reset_option(link, keep_id=args.keep_id, keep_baud=args.keep_baud)
+        except SetupError as exc:
+            raise SetupError(f"{exc} (drop --keep-id and --keep-baud)") from None
+        factory = factory_baud(link.bus.table)
         if link.ping_clean(args.id, args.baud) is None:
             raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
                            f"scan --port {args.port} --all-bauds` shows where the servos are")
-        if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, FACTORY_BAUD):
-            other = link.probe(FACTORY_ID, FACTORY_BAUD, tries=1)
-            if other.models or other.corrupt:
+        was = link.family
+        if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, factory):
+            taken = False
+            for family in reset_families(link, "all"):  # the protocol it may come back in
+                link.speak(family)
+                other = link.probe(FACTORY_ID, factory, tries=1)
+                taken |= bool(other.models or other.corrupt)
+            link.speak(was)
+            if taken:
+                keep = ("reset with --keep-id, or unplug it"
+                        if "keep_id" in link.family.capabilities(link.bus.table)
+                        .factory_reset_options else "unplug it first")
                 raise SetupError(
                     f"after a reset without --keep-id the servo answers as ID {FACTORY_ID} at "
-                    f"{FACTORY_BAUD} baud, where another servo already answers: reset with "
-                    "--keep-id, or unplug it"
+                    f"{factory} baud, where another servo already answers: {keep}"
                 )
         if args.dry_run:
             return report_dry_run(args, {
                 "port": args.port, "id": args.id, "baud": args.baud,
                 "then_id": args.id if args.keep_id else FACTORY_ID,
-                "then_baud": args.baud if args.keep_baud else FACTORY_BAUD,
+                "then_baud": args.baud if args.keep_baud else factory,
             })
-        new_id, new_baud = factory_reset(link, args.id, args.baud, keep_id=args.keep_id,
-                                         keep_baud=args.keep_baud)
+        new_id, new_baud, family = factory_reset(link, args.id, args.baud,
+                                                 keep_id=args.keep_id, keep_baud=args.keep_baud)
     if args.json:
-        print_json({"port": args.port, "id": args.id, "new_id": new_id, "new_baud": new_baud})
-    else:
-        print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} baud")
+        print_json({"port": args.port, "id": args.id, "new_id": new_id, "new_baud": new_baud,
+                    "new_protocol": family.protocol})
+        return 0
+    now = f" in Protocol {family.protocol:.1f}" if family != was else ""
+    print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} "
+          f"baud{now}")
+    if family != was:
+        print(f"snakebot: the reset put its Protocol Type back to the factory {family.protocol:.1f}"
+              f": switch it to {was.protocol:.1f} again (Protocol Type, address 13, e.g. with "
+              "Dynamixel Wizard 2.0) before `snakebot config assign-id` gives it its ID and rate "
+              "back", file=sys.stderr)
+    elif (new_id, new_baud) != (args.id, args.baud):
+        print(f"snakebot: `snakebot scan --port {args.port} --baud {new_baud} --protocol "
+              f"{family.protocol:g} --ids {new_id}` finds it; `snakebot config assign-id` gives "
+              "it its ID and rate back", file=sys.stderr)
     return 0
 
 

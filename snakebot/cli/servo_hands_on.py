@@ -90,9 +90,10 @@ def run_torque(args: argparse.Namespace) -> int:
     args.port = args.port or robot.bus.port
     args.baud = args.baud or robot.bus.baud
     on = args.torque == "on"
-    with Link(args.port, args.baud, model=robot.servo.name) as link:
+    with Link(args.port, args.baud, model=robot.servo.name,
+              protocol=robot.bus.protocol) as link:
         if args.all:
-            ids = sorted(link.bus.broadcast_ping())
+            ids = sorted(link.listening(args.baud))
             if not ids:
                 raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
         else:
@@ -133,7 +134,8 @@ def run_jog(args: argparse.Namespace) -> int:
     args.port = args.port or robot.bus.port
     if args.baud is not None and args.baud != chain.baud:
         chain = dataclasses.replace(chain, baud=args.baud)
-    with Link(args.port, chain.baud, model=robot.servo.name) as link:
+    with Link(args.port, chain.baud, model=robot.servo.name,
+              protocol=robot.bus.protocol) as link:
         if args.dry_run:
             (state,) = read_states(link, [args.id], chain.baud)
             return report_dry_run(args, {

@@ -28,8 +28,12 @@ DERIVED = {
 }
 REFUSED = {
     "torque_enable": "is switched by the tools (off for EEPROM writes), not a setting",
-    "protocol_type": "must stay 2: snakebot speaks Protocol 2.0 only",
+    "protocol_type": "is not a setting: the robot file's [bus] protocol says which protocol the "
+    "bus speaks; switch an X-series servo's Protocol Type with Dynamixel Wizard 2.0 (a servo "
+    "that changed protocol in the middle of config apply would stop answering it)",
     "led": "is a status light, not a setting",
+    "lock": "is never written: a locked EEPROM (Lock = 1, AX and MX) takes no more writes "
+    "until the servo is power-cycled",
 }
 
 

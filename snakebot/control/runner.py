@@ -92,8 +92,10 @@ def run_gait(
     of ``observers`` gets the cycle's ``CycleRecord``. ``stop()`` is asked before every gait
     cycle: a reason ends the gait there as Ctrl-C does (ramp-out, then ``RunResult.stopped_by``);
     with ``plan.duration_s`` None only ``stop`` or Ctrl-C ends the gait. Raises what ended the
-    run early (after the ramp-out where the bus still works; see the module doc).
+    run early (after the ramp-out where the bus still works; see the module doc), and, before
+    the first cycle, the backend's ConfigError for a rate it cannot hold (``check_rate``).
     """
+    backend.check_rate(plan.rate_hz)  # a servo bus that cannot hold the rate refuses it here
     schedule = plan.schedule(safety.ramp_s)
     loop = CycleLoop(backend, GaitCycle([gait], safety), schedule, metrics, log=log,
                      on_cycle=on_cycle, observers=observers)

@@ -1,4 +1,5 @@
-"""A byte-level Dynamixel Protocol 2.0 bus emulator that serves the unmodified ROBOTIS SDK.
+"""A byte-level Dynamixel bus emulator (Protocol 2.0 and 1.0 on one wire) that serves the
+unmodified ROBOTIS SDK.
 
 Core (no transport): `VirtualServo` (control table + firmware rules + motion model) and
 `EmulatedChain` (servos on one bus, bytes in, timed bytes out, fault injection). Ways in:

@@ -32,7 +32,7 @@ from snakebot.emulation.servo import VirtualServo
 
 _READS = (Instruction.PING, Instruction.READ, Instruction.BULK_READ)
 # Protocol 2.0 error numbers the firmware returns, as Protocol 1.0 bits.
-_P1_BITS = {
+_P1_BITS: dict[int, ErrorBit] = {
     StatusError.NONE: ErrorBit.NONE,
     StatusError.INSTRUCTION: ErrorBit.INSTRUCTION,
     StatusError.CRC: ErrorBit.CHECKSUM,
@@ -45,7 +45,7 @@ def error_byte(servo: VirtualServo, error: int = 0, *, goal_position: bool = Fal
     if error == StatusError.DATA_LIMIT and goal_position:
         bits = ErrorBit.ANGLE_LIMIT
     else:
-        bits = _P1_BITS.get(StatusError(error), ErrorBit.RANGE) if error else ErrorBit.NONE
+        bits = _P1_BITS.get(error, ErrorBit.RANGE) if error else ErrorBit.NONE
     return int(bits) | servo.alarm_bits()
 
 

@@ -82,10 +82,28 @@ class ServoFamily(ABC):
     """What the vendor SDK's packet-handler factory takes for this family."""
     broadcast_id: int
     max_id: int
+    broadcast_ping: bool
+    """Whether the protocol has a broadcast Ping (every servo answers one request in turn); a
+    family without one is searched for by pinging each ID on its own."""
+    firmware_address: int
+    """Where Firmware Version sits in the protocol's native control tables: the fallback for a
+    model number snakebot has no data for (a known model's table says where, e.g. an X-series
+    servo in Protocol 1.0 mode keeps its X-series map)."""
     status_overhead_bytes: int
     """Bytes of one status packet beyond its data (header, ID, length, error, checksum)."""
     read_overhead_bytes: int
     """Bytes of one Read instruction packet."""
+    condition_bits: int
+    """Bits of a status packet's error byte that report the servo's condition (a latched
+    hardware error, overload, heat) rather than a fault of the instruction it answers: the data
+    that comes with them is valid."""
+    resend_error: int
+    """The error (after :attr:`condition_bits` are masked off) of a servo that received a
+    corrupt instruction: sending it again can help."""
+    access_error: int | None
+    """The error of a write the servo refused for its state (EEPROM with torque on), if any."""
+    factory_reset_takes_option: bool
+    """Whether Factory Reset carries a what-to-keep option (else it always resets everything)."""
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ServoFamily) and other.name == self.name
@@ -99,6 +117,10 @@ class ServoFamily(ABC):
     def speaks(self, table: ServoTable) -> bool:
         """Whether servos of this model can run this family's protocol at all."""
         return table.family == self.vendor and self.protocol in table.protocols
+
+    def instruction_error(self, error: int) -> int:
+        """The part of a status error byte that says the instruction failed (0: it worked)."""
+        return error & ~self.condition_bits & 0xFF
 
     @abstractmethod
     def capabilities(self, table: ServoTable) -> Capabilities:

@@ -42,8 +42,14 @@ class DynamixelProtocol2(ServoFamily):
     sdk_protocol = 2.0
     broadcast_id = 0xFE
     max_id = 252
+    broadcast_ping = True
+    firmware_address = 6  # Model Number 0-1, Model Information 2-5, Firmware Version 6
     status_overhead_bytes = 11  # FF FF FD 00, ID, LEN(2), 0x55, ERR, CRC(2)
     read_overhead_bytes = 14
+    condition_bits = 0x80  # Alert: read Hardware Error Status (70)
+    resend_error = 0x03  # CRC error
+    access_error = 0x07
+    factory_reset_takes_option = True
 
     def capabilities(self, table: ServoTable) -> Capabilities:
         """Every group read; watchdog, hardware error and current sensing where the table has
@@ -56,7 +62,7 @@ class DynamixelProtocol2(ServoFamily):
             hardware_error_status="hardware_error_status" in table,
             current_sensing="present_current" in table,
             reboot=True,
-            broadcast_ping=True,
+            broadcast_ping=self.broadcast_ping,
             indirect_addresses=bool(table.specs.indirect_banks),
             factory_reset_options=("keep_id_baud", "keep_id", "all"),
         )
@@ -100,8 +106,17 @@ class DynamixelProtocol1(ServoFamily):
     sdk_protocol = 1.0
     broadcast_id = 0xFE
     max_id = 253
+    broadcast_ping = False  # the SDK's Protocol 1.0 broadcastPing is COMM_NOT_AVAILABLE
+    firmware_address = 2  # AX/MX/RX: Model Number 0-1, Firmware Version 2 (e-Manual)
     status_overhead_bytes = 6  # FF FF, ID, LEN, ERR, CHK
     read_overhead_bytes = 8
+    # Input voltage, overheating, overload: the servo's state, reported in every status packet
+    # while it lasts (e-Manual protocol1.md "Status Packet"); the Alarm Shutdown register decides
+    # which of them also turn its torque off.
+    condition_bits = 0x25
+    resend_error = 0x10  # checksum error
+    access_error = None
+    factory_reset_takes_option = False
 
     def capabilities(self, table: ServoTable) -> Capabilities:
         """Bulk Read where the model has it (MX, X in 1.0 mode; not AX); the Bus Watchdog and
@@ -117,7 +132,7 @@ class DynamixelProtocol1(ServoFamily):
             hardware_error_status=reachable("hardware_error_status"),
             current_sensing=reachable("present_current"),
             reboot=False,
-            broadcast_ping=False,
+            broadcast_ping=self.broadcast_ping,
             indirect_addresses=False,
             factory_reset_options=("all",),
         )

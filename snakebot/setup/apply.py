@@ -17,7 +17,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
+from snakebot.families import family_for
 from snakebot.servo.ticks import ticks_to_rad
+from snakebot.setup.bauds import port_rate
 from snakebot.setup.diff import ChainDiff, Difference, survey
 from snakebot.setup.errors import SetupError, VerifyError
 from snakebot.setup.link import Link, unanswered_ok
@@ -72,8 +74,34 @@ class ApplyPlan:
         return not self.steps
 
 
+def _refusals(chain: ChainSettings, diff: ChainDiff) -> list[str]:
+    """Why the plan cannot be carried out by any order of writes: a locked EEPROM (AX/MX Lock,
+    which snakebot never sets) or a latched error in a family without Reboot."""
+    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(
+        chain.table).reboot
+    out = []
+    for wanted in chain.servos:
+        state = diff.servos[wanted.servo_id]
+        eeprom = [d.key for d in diff.for_id(wanted.servo_id) if d.setting.eeprom]
+        if state.locked and eeprom:
+            out.append(f"servo {wanted.servo_id} has its EEPROM locked (Lock = 1) and "
+                       f"{', '.join(eeprom)} differ: power-cycle it (the lock clears only then)")
+        if state.hardware_error and not can_reboot:
+            out.append(f"servo {wanted.servo_id} has a latched hardware error and Protocol "
+                       f"{chain.robot.bus.protocol:.1f} has no Reboot: power-cycle it")
+    return out
+
+
 def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
-    """The steps that bring every servo to ``chain``'s settings, given what ``survey`` found."""
+    """The steps that bring every servo to ``chain``'s settings, given what ``survey`` found.
+
+    SetupError where no order of writes can (a locked EEPROM, a latched error without Reboot).
+    """
+    refused = _refusals(chain, diff)
+    if refused:
+        raise SetupError("cannot apply the settings: " + "; ".join(refused))
+    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(
+        chain.table).reboot
     steps: list[Step] = []
     bauds: list[Step] = []
     limp: list[int] = []
@@ -95,7 +123,8 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
             steps.append(Step(servo_id, "torque_off", reason=f"EEPROM writes need it; {why}"))
             steps += [_write(d) for d in eeprom]
             resets |= any(d.key == "operating_mode" for d in eeprom)
-        booted = [d.key for d in eeprom if d.key in REBOOT_KEYS]
+        # Without a Reboot instruction (Protocol 1.0) they act at the next power-up.
+        booted = [d.key for d in eeprom if d.key in REBOOT_KEYS] if can_reboot else []
         if booted:
             steps.append(Step(servo_id, "reboot", reason=f"{', '.join(booted)} acts at boot"))
         if resets or booted:
@@ -157,7 +186,8 @@ class Applier:
 
     def _change_baud(self, servo_id: int, index: int) -> None:
         old = self.where[servo_id]
-        new = self.link.bus.table.baud_rates[index]
+        rate = self.link.bus.table.baud_rates[index]
+        new = port_rate(rate) or rate
         other = self.link.probe(servo_id, new, tries=1)
         if other.models or other.corrupt:
             raise SetupError(

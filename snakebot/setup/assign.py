@@ -1,8 +1,11 @@
-"""Give one servo its ID and baud rate: the factory-fresh servo flow (every new one is ID 1, 57600).
+"""Give one servo its ID and baud rate: the factory-fresh servo flow (every new one is ID 1, at its
+model's factory rate: 57600 on the X series and the MX, 1 Mbps on the AX).
 
-The servo is searched for at every baud rate. Without ``from_id`` it must be the only servo on the
-bus; with it, the only one answering as that ID. The target ID must be free, both at the rate the
-servo is at and at the rate it moves to. The ID changes first, the baud rate last, each verified
+The servo is searched for at every baud rate its model has: by a broadcast ping where the family
+has one, else by pinging every ID on its own (Protocol 1.0; about 8.7 s per rate on a real port,
+so naming the ID, ``from_id``, is much quicker). Without ``from_id`` it must be the only servo on
+the bus; with it, the only one answering as that ID. The target ID must be free, both at the rate
+the servo is at and at the rate it moves to. The ID changes first, the baud rate last, each verified
 by finding the servo again.
 """
 
@@ -14,9 +17,10 @@ from dataclasses import dataclass
 
 from snakebot.servo import FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
+from snakebot.setup.bauds import baud_value, factory_baud, model_bauds
 from snakebot.setup.duplicates import collision_reason
 from snakebot.setup.errors import DuplicateIdError, SetupError, VerifyError
-from snakebot.setup.link import SEARCH_BAUDS, Link, unanswered_ok
+from snakebot.setup.link import Link, unanswered_ok
 from snakebot.setup.maintenance import wait_for_boot
 
 LATE_REPLY_S = 0.1
@@ -46,18 +50,24 @@ class Assignment:
         return (self.servo_id, self.baud) != (self.found.servo_id, self.found.baud)
 
 
-def find_servos(
-    link: Link, *, from_id: int | None = None, bauds: Sequence[int] = SEARCH_BAUDS
-) -> list[Found]:
-    """Every servo answering (as ``from_id``, if given) at ``bauds``; DuplicateIdError on clashes.
+def search_bauds(link: Link) -> tuple[int, ...]:
+    """The rates a servo of the link's model can be at, its factory rate first."""
+    return model_bauds(link.bus.table)
 
-    Without ``from_id`` a broadcast ping lists the IDs at each rate (slow: about a second per
-    rate); ID 1 is always checked too, since new servos collide there.
+
+def find_servos(
+    link: Link, *, from_id: int | None = None, bauds: Sequence[int] | None = None
+) -> list[Found]:
+    """Every servo answering (as ``from_id``, if given) at ``bauds`` (default: every rate of
+    the link's model); DuplicateIdError on clashes.
+
+    Without ``from_id`` every ID is listed at each rate (:meth:`Link.listening`); ID 1 is always
+    checked too, since new servos collide there.
     """
     found: list[Found] = []
     clashes: list[tuple[int, int, str]] = []
-    for baud in bauds:
-        ids = {from_id} if from_id is not None else {FACTORY_ID, *link.at(baud).broadcast_ping()}
+    for baud in search_bauds(link) if bauds is None else bauds:
+        ids = {from_id} if from_id is not None else {FACTORY_ID, *link.listening(baud)}
         for servo_id in sorted(ids):
             reason = collision_reason(link, servo_id, baud)
             if reason:
@@ -82,17 +92,19 @@ def _table(link: Link, servo: Found) -> ServoTable:
         raise SetupError(f"{link.port}: the servo is model {servo.model_number}: {exc}") from None
 
 
-def _lone(link: Link, found: list[Found], from_id: int | None) -> Found:
+def _lone(link: Link, found: list[Found], from_id: int | None, bauds: Sequence[int]) -> Found:
     who = "no servo" if from_id is None else f"no servo as ID {from_id}"
+    table = link.bus.table
     if not found:
         raise SetupError(
-            f"{link.port}: {who} answered at any baud rate ({', '.join(map(str, SEARCH_BAUDS))}). "
-            "Check the servo's power (its LED blinks once at power-up) and cable"
+            f"{link.port}: {who} answered at any baud rate ({', '.join(map(str, bauds))}) in "
+            f"Protocol {link.family.protocol:.1f}. Check the servo's power (its LED blinks once "
+            "at power-up) and cable"
         )
     if len(found) > 1:
         hint = (
             "connect only the new servo, or name the ID to change (option from_id; a new "
-            "servo is ID 1 at 57600)"
+            f"{table.model} is ID {table['id'].default} at {factory_baud(table)})"
         ) if from_id is None else "unplug all but the one to change"
         raise SetupError(f"{link.port}: {len(found)} servos answer ({_describe(found)}); "
                          f"assign-id changes one servo at a time: {hint}")
@@ -113,17 +125,18 @@ def _check_free(link: Link, servo: Found, to_id: int, bauds: set[int]) -> None:
 
 def assign_id(
     link: Link, *, to_id: int, baud: int, from_id: int | None = None,
-    bauds: Sequence[int] = SEARCH_BAUDS, dry_run: bool = False,
+    bauds: Sequence[int] | None = None, dry_run: bool = False,
 ) -> Assignment:
     """Find the lone servo, then set its ID to ``to_id`` and its rate to ``baud`` (verified).
 
     ``dry_run``: every check (one servo, a supported rate, the ID free) and no write; the
     Assignment says what would be set. SetupError (or DuplicateIdError) says why not.
     """
-    servo = _lone(link, find_servos(link, from_id=from_id, bauds=bauds), from_id)
+    bauds = search_bauds(link) if bauds is None else bauds
+    servo = _lone(link, find_servos(link, from_id=from_id, bauds=bauds), from_id, bauds)
     table = _table(link, servo)
     try:
-        index = table.baud_index(baud)
+        index = baud_value(table, baud)
     except ValueError as exc:
         raise SetupError(f"baud rate {baud}: {exc}") from None
     _check_free(link, servo, to_id, {servo.baud, baud})

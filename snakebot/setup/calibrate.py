@@ -2,7 +2,8 @@
 
 The one calibration convention (snakebot.servo.ticks, the Dynamixel backend's): the
 offset lives in the robot config; the servo's Homing Offset stays 0 and its Drive Mode reverse bit
-clear (the settings say so and ``config diff`` checks it). With every joint straight (0 rad), a
+clear (the settings say so and ``config diff`` checks it). An AX has neither register: its offset
+can only live in the robot file. With every joint straight (0 rad), a
 servo reading ``ticks`` gets ``zero_offset_rad = direction * (ticks - centre) * 2 pi /
 ticks`` (centre 2048 of 4096 on the X series, 512 of 1024 on an AX).
 """
@@ -58,9 +59,10 @@ def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
             f"baud; run `snakebot config diff --robot {robot.name} --port {link.port}` first"
         )
     wrong = []
+    prerequisites = [k for k in _PREREQUISITES if k in bus.table]  # an AX has none of them
     for servo in chain.servos:
-        values = bus.read_block(servo.servo_id, _PREREQUISITES)
-        for key in _PREREQUISITES:
+        values = bus.read_block(servo.servo_id, prerequisites) if prerequisites else {}
+        for key in prerequisites:
             if values[key] != servo.get(key).raw:
                 wrong.append(f"servo {servo.servo_id} {key} is {values[key]}")
     if wrong:
@@ -68,7 +70,10 @@ def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
             f"{link.port}: calibration needs the configured settings first ({'; '.join(wrong)}): "
             f"run `snakebot config apply --robot {robot.name} --port {link.port}`"
         )
-    ticks = bus.sync_read("present_position", robot.servo_ids)
+    if link.family.capabilities(bus.table).sync_read:
+        ticks = bus.sync_read("present_position", robot.servo_ids)
+    else:  # Protocol 1.0: no Sync Read; one Read per servo is quick enough once
+        ticks = {i: bus.read_block(i, ("present_position",)) for i in robot.servo_ids}
     tpr = robot.servo.physics.ticks
     return [
         JointZero(index, joint.servo_id, ticks[joint.servo_id]["present_position"],

@@ -13,11 +13,14 @@ from dataclasses import dataclass, field
 from snakebot.backends.dynamixel.faults import decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.servo_tables import table_for_model
+from snakebot.setup.bauds import model_bauds, preferred
 from snakebot.setup.errors import DuplicateIdError, SetupError
-from snakebot.setup.link import Link, search_order
+from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings, Setting
 
-STATE_KEYS = ("torque_enable", "hardware_error_status")
+STATE_KEYS = ("torque_enable", "hardware_error_status", "lock")
+"""Read beside the settings where the model has them (an AX has no Hardware Error Status, an X
+no Lock)."""
 
 
 @dataclass(frozen=True)
@@ -51,13 +54,15 @@ class Difference:
 
 @dataclass(frozen=True)
 class ServoState:
-    """One servo as found: the rate it answered at, its settings' values, torque and faults."""
+    """One servo as found: the rate it answered at, its settings' values, torque and faults;
+    ``locked``: its EEPROM Lock is set (AX/MX: no EEPROM write until a power cycle)."""
 
     servo_id: int
     baud: int
     values: dict[str, int]
     torque_on: bool
     hardware_error: int
+    locked: bool = False
 
 
 @dataclass(frozen=True)
@@ -84,7 +89,7 @@ def locate(link: Link, ids: Sequence[int], model_number: int, first_baud: int) -
     remaining = list(ids)
     collisions: list[tuple[int, int, str]] = []
     wrong_model: list[str] = []
-    for baud in search_order(first_baud):
+    for baud in preferred(model_bauds(link.bus.table), first_baud):
         for servo_id in list(remaining):
             probe = link.probe(servo_id, baud, patient=True)
             if probe.collides:
@@ -126,10 +131,11 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
     """Read every setting of one servo (one Read for EEPROM items, one for RAM items)."""
     bus = link.at(baud)
     keys = [s.key for s in settings]
+    state_keys = [k for k in STATE_KEYS if k in bus.table]
     values: dict[str, int] = {}
     try:
         for group in ([k for k in keys if bus.table[k].eeprom],
-                      [k for k in (*keys, *STATE_KEYS) if not bus.table[k].eeprom]):
+                      [k for k in (*keys, *state_keys) if not bus.table[k].eeprom]):
             if group:
                 values.update(bus.read_block(servo_id, group))
     except BusError as exc:
@@ -137,9 +143,9 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
             f"{link.port}: servo {servo_id} answers ping at {baud} baud but not reads ({exc}). "
             "Its Status Return Level may be 0: `snakebot servo reset` or Dynamixel Wizard fixes it"
         ) from exc
-    state = {k: values.pop(k) for k in STATE_KEYS}
+    state = {k: values.pop(k) for k in state_keys}
     return ServoState(servo_id, baud, values, bool(state["torque_enable"]),
-                      state["hardware_error_status"])
+                      state.get("hardware_error_status", 0), bool(state.get("lock", 0)))
 
 
 def survey(link: Link, chain: ChainSettings) -> ChainDiff:
@@ -159,6 +165,11 @@ def survey(link: Link, chain: ChainSettings) -> ChainDiff:
                 differences.append(Difference(servo_id, setting, current))
         if state.hardware_error:
             flags = ", ".join(decode_hardware_error(state.hardware_error))
-            notes.append(f"servo {servo_id} has a latched hardware error ({flags}); `snakebot "
-                         f"servo reboot --port {link.port} --id {servo_id}` clears it")
+            fix = (f"`snakebot servo reboot --port {link.port} --id {servo_id}` clears it"
+                   if link.family.capabilities(link.bus.table).reboot
+                   else "a power cycle clears it (no Reboot in this protocol)")
+            notes.append(f"servo {servo_id} has a latched hardware error ({flags}); {fix}")
+        if state.locked:
+            notes.append(f"servo {servo_id} has its EEPROM locked (Lock = 1): it takes no EEPROM "
+                         "write until it is power-cycled")
     return ChainDiff(servos, tuple(differences), tuple(notes))

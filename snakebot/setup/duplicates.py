@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from enum import Enum
 
 from snakebot.backends.dynamixel import sdk
+from snakebot.errors import SnakebotError
+from snakebot.servo_tables import Register, table_for_model
 from snakebot.setup.link import Link
 
 TRIES = 4
@@ -21,7 +23,6 @@ TRIES = 4
 replies in a row happen once in 10,000."""
 
 CORRUPT = (sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL)
-_INFO_BYTES = 7  # Model Number (0-1), Model Information (2-5), Firmware Version (6)
 
 
 @dataclass(frozen=True)
@@ -95,13 +96,14 @@ class Verdict:
 
 
 def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Evidence:
-    """Ping ``servo_id`` at ``baud``, then read Present Position and the model and firmware.
+    """Ping ``servo_id`` at ``baud``, then read Present Position and the model and firmware
+    (Model Number at 0, Firmware Version where the model's table, or else the protocol's native
+    tables, keep it: 2 on an AX or MX, 6 on the X series).
 
     Each question is asked up to :data:`TRIES` times, until one clean reply. Unless ``patient``,
     an ID whose first two pings get no reply at all is taken as absent (two timeouts, about 70 ms
     on a real port; one alone can be a hiccup of a busy host).
     """
-    position = link.bus.table["present_position"]
     models: list[int] = []
     clean = corrupt = silent = 0
     for attempt in range(TRIES):
@@ -117,12 +119,25 @@ def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Ev
     pings = Tally(clean, corrupt, silent)
     if not models:
         return Evidence(servo_id, baud, pings, Tally(), Tally(), (), None, None)
-    reads = _ask(link, servo_id, position.address, position.size)[0]
-    info, data = _ask(link, servo_id, 0, _INFO_BYTES, tries=2)
+    position, firmware_at = _layout(link, models[0])
+    reads = Tally()
+    if position is not None:
+        reads = _ask(link, servo_id, position.address, position.size)[0]
+    info, data = _ask(link, servo_id, 0, firmware_at + 1, tries=2)
     model_register = firmware = None
     if data is not None:
-        model_register, firmware = data[0] | data[1] << 8, data[6]
+        model_register, firmware = data[0] | data[1] << 8, data[firmware_at]
     return Evidence(servo_id, baud, pings, reads, info, tuple(models), model_register, firmware)
+
+
+def _layout(link: Link, model_number: int) -> tuple[Register | None, int]:
+    """Present Position and the Firmware Version address of ``model_number`` (its table's;
+    for a model snakebot has no data for: no position, the protocol's firmware address)."""
+    try:
+        table = table_for_model(model_number)
+    except SnakebotError:
+        return None, link.family.firmware_address
+    return table["present_position"], table["firmware_version"].address
 
 
 def _ask(

@@ -1,8 +1,9 @@
 """Hands-on servo tools: torque off (limp) or on (hold where it stands), and jogging one joint.
 
 A jog lets the servo's own profile generator ramp the move (e-Manual X-series: Profile Velocity
-112, Profile Acceleration 108, velocity-based while Drive Mode bit 2 is clear): the profiles are
-set for the move and put back afterwards, so ``config diff`` stays clean. Angles are joint angles
+112, Profile Acceleration 108, velocity-based while Drive Mode bit 2 is clear; an AX or an MX on
+Protocol 1.0 has only Moving Speed 32, no acceleration limit): the registers are set for the move
+and put back afterwards, so ``config diff`` stays clean. Angles are joint angles
 of the robot file (direction and zero offset applied), the ones ``snakebot run`` commands. Time is
 the port's own clock (the SDK's; the emulated bus clock for ``dxlemu://``).
 """
@@ -65,10 +66,11 @@ def read_states(link: Link, ids: Sequence[int], baud: int) -> list[ServoState]:
         raise BusError(link.port, missing, f"no answer at {baud} baud; `snakebot scan --port "
                        f"{link.port} --all-bauds` shows where the servos are")
     states = []
+    keys = [k for k in _STATE if k in bus.table]  # an AX has no Hardware Error Status
     for servo_id in ids:
-        v = bus.read_block(servo_id, _STATE)
+        v = bus.read_block(servo_id, keys)
         states.append(ServoState(servo_id, bool(v["torque_enable"]),
-                                 decode_hardware_error(v["hardware_error_status"]),
+                                 decode_hardware_error(v.get("hardware_error_status", 0)),
                                  v["present_position"],
                                  (v["min_position_limit"], v["max_position_limit"])))
     return states
@@ -121,6 +123,23 @@ def check_jog(chain: ChainSettings, joint: int, target_rad: float, speed_rad_s: 
                          f"{robot.name}'s joint speed limit {math.degrees(limit):.1f} deg/s")
 
 
+def jog_limits(link: Link, speed_rad_s: float) -> dict[str, int]:
+    """The registers (in write order) that make the servo ramp a jog at ``speed_rad_s`` itself:
+    Profile Acceleration and Velocity (X, MX 2.0), or Moving Speed (AX, MX on Protocol 1.0, where
+    0 means no limit: at least 1). SetupError for a model with neither."""
+    table = link.bus.table
+    if "profile_velocity" in table and "profile_acceleration" in table:
+        return {
+            "profile_acceleration": max(1, math.ceil(speed_rad_s / JOG_RAMP_S
+                                                     / table["profile_acceleration"].scale)),
+            "profile_velocity": max(1, math.floor(speed_rad_s / table["profile_velocity"].scale)),
+        }
+    if "moving_speed" in table:
+        return {"moving_speed": max(1, math.floor(speed_rad_s / table["moving_speed"].scale))}
+    raise SetupError(f"{link.port}: a {table.model} has no Profile Velocity or Moving Speed "
+                     "register to limit a jog's speed with")
+
+
 def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
         speed_rad_s: float = JOG_SPEED_RAD_S) -> JogResult:
     """Move one joint from where it stands to ``target_rad`` at ``speed_rad_s``; it then holds
@@ -131,8 +150,9 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
     tpr = robot.servo.physics.ticks
     bus = link.at(chain.baud)
     (state,) = read_states(link, [j.servo_id], chain.baud)
-    values = bus.read_block(j.servo_id, _PREREQUISITES)
-    wrong = [f"{k} is {values[k]}" for k in _PREREQUISITES
+    prerequisites = [k for k in _PREREQUISITES if k in bus.table]
+    values = bus.read_block(j.servo_id, prerequisites) if prerequisites else {}
+    wrong = [f"{k} is {values[k]}" for k in prerequisites
              if values[k] != chain.for_id(j.servo_id).get(k).raw]
     if wrong:
         raise SetupError(f"{link.port}: servo {j.servo_id}: jogging needs the configured settings "
@@ -151,20 +171,19 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
                             direction=j.direction)
 
     table = bus.table
-    saved = bus.read_block(j.servo_id, ("profile_velocity", "profile_acceleration"))
-    velocity = max(1, math.floor(speed_rad_s / table["profile_velocity"].scale))
-    acceleration = max(1, math.ceil(speed_rad_s / JOG_RAMP_S
-                                    / table["profile_acceleration"].scale))
+    limits = jog_limits(link, speed_rad_s)
+    saved = bus.read_block(j.servo_id, tuple(limits))
+    speed_key = next(iter(limits.keys() - {"profile_acceleration"}))
+    speed = limits[speed_key] * table[speed_key].scale  # rad/s, as the register rounds it
     start_s = link.clock_s()
     present = state.present_ticks
     try:
         if not state.torque_on:
             set_torque(link, [j.servo_id], chain.baud, on=True)
-        bus.write(j.servo_id, "profile_acceleration", acceleration)
-        bus.write(j.servo_id, "profile_velocity", velocity)
+        for key, value in limits.items():
+            bus.write(j.servo_id, key, value)
         bus.write(j.servo_id, "goal_position", goal)
-        travel_s = abs(goal - present) / (velocity * table["profile_velocity"].scale
-                                          * tpr.ticks_per_rad)
+        travel_s = abs(goal - present) / (speed * tpr.ticks_per_rad)
         deadline = start_s + travel_s + 2 * JOG_RAMP_S + 2.0
         changed_s = start_s
         while abs(present - goal) > 1 and link.clock_s() < deadline:
@@ -183,7 +202,7 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
         if abs(held - goal) > ARRIVED_TICKS:
             # Stop where it stands before the profiles go back (without them it would race on).
             bus.write(j.servo_id, "goal_position", held)
-        for key in ("profile_velocity", "profile_acceleration"):
+        for key in reversed(limits):
             bus.write(j.servo_id, key, saved[key])
     result = JogResult(joint, j.servo_id, angle(state.present_ticks), target_rad, angle(held),
                        link.clock_s() - start_s)

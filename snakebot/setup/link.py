@@ -17,7 +17,9 @@ from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.errors import BusError
+from snakebot.families import ServoFamily, family_for
 from snakebot.servo import FACTORY_BAUD
+from snakebot.servo_tables import table_for_model
 
 SEARCH_BAUDS = (FACTORY_BAUD, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 """Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
@@ -64,18 +66,33 @@ class Probe:
 class Link:
     """A port opened for setup: ``bus`` (registers by name, typed errors) at a switchable rate.
 
-    ``model`` picks the control table register names resolve in (X-series servos share it).
+    ``model`` picks the control table register names resolve in (X-series servos share it);
+    ``protocol`` the family spoken (None: the model's default; ConfigError if the model cannot
+    speak it). :meth:`speak` switches the family on the same open port (``scan`` tries both).
     """
 
     def __init__(self, port: str, baud: int, *, model: str | int = "XL430-W250",
-                 retries: int = 2) -> None:
+                 protocol: float | None = None, retries: int = 2) -> None:
         self.port = port
         self.handler: sdk.PortHandlerLike
+        self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
-        self.bus = DynamixelBus(port, baud, model=model, retries=retries,
+        self.bus = DynamixelBus(port, baud, model=model, family=self.family, retries=retries,
                                 port_handler_factory=self._make_handler)
-        self._raw = sdk.SdkLink(self.handler, 2.0)
+        self._raw = sdk.SdkLink(self.handler, self.family)
         self._open = False
+
+    def speak(self, family: ServoFamily) -> None:
+        """Talk ``family``'s protocol from now on, on the same port at the same rate (the
+        bus keeps its control table and retries)."""
+        if family == self.family:
+            return
+        old = self.bus
+        self.bus = DynamixelBus(self.port, old.baud, family=family, model=old.table.model,
+                                retries=old.retries,
+                                port_handler_factory=lambda _port: self.handler)
+        self._raw = sdk.SdkLink(self.handler, family)
+        self.family = family
 
     def _make_handler(self, port: str) -> sdk.PortHandlerLike:
         self.handler = sdk.port_handler_for(port)
@@ -163,6 +180,15 @@ class Link:
             self._raw.release()
         pinged = {int(i): (int(v[0]), int(v[1])) for i, v in found.items()}
         return pinged, result in (sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL)
+
+    def listening(self, baud: int) -> set[int]:
+        """The IDs answering at ``baud``: a broadcast ping (about a second), or in a family without
+        one (Protocol 1.0) every ID pinged on its own (one SDK timeout, about 34 ms, per silent
+        ID: some 9 s for all 254)."""
+        if self.family.broadcast_ping:
+            return set(self.at(baud).broadcast_ping())
+        return {i for i in range(self.family.max_id + 1)
+                if (probe := self.probe(i, baud, tries=1)).models or probe.corrupt}
 
     def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
         """One Read without retries: (data, SDK result code); for collision checks."""

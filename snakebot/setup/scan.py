@@ -1,4 +1,8 @@
-"""Find every servo on a port: a broadcast ping per baud rate, then each ID asked on its own.
+"""Find every servo on a port, per protocol and baud rate: a first pass, then each ID on its own.
+
+The first pass is a broadcast ping where the protocol has one (2.0), else a ping of every ID in
+the range, one by one (1.0 has no broadcast ping: each absent ID costs the SDK's reply timeout,
+about 34 ms, so 254 IDs take about 8.7 s per rate on a real port).
 
 The broadcast ping drops any reply slot it cannot parse, so a servo whose slot was lost (to noise
 or a collision) and two servos sharing an ID both vanish from it. Hence every ID it lists, ID 1
@@ -12,23 +16,34 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from snakebot.families import ServoFamily
 from snakebot.servo import FACTORY_ID
 from snakebot.setup.duplicates import Evidence, Kind, Verdict, gather, judge
 from snakebot.setup.link import Link
 
-MAX_ID = 252  # Protocol 2.0 device IDs are 0..252 (e-Manual protocol2, Packet ID)
 LOOK_PAST = 2
 """IDs asked past the highest one that answered (a lost slot at the end of the chain)."""
-SWEEP_S_PER_ID = 0.035
-"""What an unanswered ping costs on a real port (the SDK's timeout), for the sweep estimate."""
+SWEEP_S_PER_ID = 0.034
+"""What an unanswered ping costs on a real port: the SDK's reply timeout (2 x 16 ms latency timer
++ 2 ms), plus the request's own bytes (:func:`sweep_seconds`)."""
+PING_BYTES = 10  # a Protocol 1.0 ping is 6 bytes, 2.0's 10: the estimate takes the longer
+
+
+def sweep_seconds(n_ids: int, baud: int) -> float:
+    """Seconds ``n_ids`` unanswered pings take on a real port at ``baud`` (10 bits a byte)."""
+    return n_ids * (SWEEP_S_PER_ID + PING_BYTES * 10 / baud)
+
+
+Notify = Callable[[str], None]
 
 
 @dataclass(frozen=True)
 class ScanEntry:
-    """One ID at one baud rate that answered at all.
+    """One ID at one baud rate, in one protocol (``family``), that answered at all.
 
     ``verdict`` says whether it is one servo, two sharing the ID, or an ID whose every reply was
-    corrupt; ``in_broadcast`` whether the broadcast ping listed it; ``corrupt``/``replies``
+    corrupt; ``in_broadcast`` whether the first pass (the broadcast ping, or the ping sweep of a
+    protocol without one) found it; ``corrupt``/``replies``
     count its corrupt replies among all it sent.
     """
 
@@ -40,6 +55,12 @@ class ScanEntry:
     in_broadcast: bool
     corrupt: int
     replies: int
+    family: ServoFamily
+
+    @property
+    def line(self) -> tuple[float, int]:
+        """(protocol, baud rate): the servos that hear each other."""
+        return self.family.protocol, self.baud
 
     @property
     def shared(self) -> bool:
@@ -54,19 +75,20 @@ class ScanEntry:
 
 @dataclass(frozen=True)
 class ScanReport:
-    """Every ID that answered, in baud then ID order."""
+    """Every ID that answered, in protocol (as searched), baud and ID order."""
 
     entries: tuple[ScanEntry, ...]
 
     @property
-    def bad_lines(self) -> list[int]:
-        """Baud rates at which several IDs answered and not one reply came back clean: the line
-        is at fault (wiring, termination, a rate the wiring cannot hold), not shared IDs."""
-        bauds = sorted({e.baud for e in self.entries})
+    def bad_lines(self) -> list[tuple[float, int]]:
+        """(protocol, baud) pairs at which several IDs answered and not one reply came back
+        clean: the line is at fault (wiring, termination, a rate the wiring cannot hold), not
+        shared IDs."""
+        lines = list(dict.fromkeys(e.line for e in self.entries))
         return [
-            baud for baud in bauds
-            if len([e for e in self.entries if e.baud == baud]) >= 2
-            and all(e.verdict.kind is Kind.GARBLED for e in self.entries if e.baud == baud)
+            line for line in lines
+            if len([e for e in self.entries if e.line == line]) >= 2
+            and all(e.verdict.kind is Kind.GARBLED for e in self.entries if e.line == line)
         ]
 
     @property
@@ -75,7 +97,7 @@ class ScanReport:
         bad = self.bad_lines
         return [
             e for e in self.entries
-            if e.verdict.kind in (Kind.SHARED, Kind.GARBLED) and e.baud not in bad
+            if e.verdict.kind in (Kind.SHARED, Kind.GARBLED) and e.line not in bad
         ]
 
     @property
@@ -83,22 +105,77 @@ class ScanReport:
         """Single servos that sent corrupt replies now and then (line noise)."""
         return [e for e in self.entries if e.verdict.kind is Kind.ONE_SERVO and e.corrupt]
 
+    @property
+    def protocols(self) -> tuple[float, ...]:
+        """The protocols that single servos answered in, in search order."""
+        return tuple(dict.fromkeys(
+            e.family.protocol for e in self.entries if e.verdict.kind is Kind.ONE_SERVO))
+
+    @property
+    def mixed(self) -> bool:
+        """Whether servos of more than one protocol share the port (one bus speaks one)."""
+        return len(self.protocols) > 1
+
 
 def scan(
-    link: Link, bauds: Sequence[int], *, notify: Callable[[str], None] = lambda _text: None
+    link: Link,
+    plan: Sequence[tuple[ServoFamily, Sequence[int]]],
+    *,
+    ids: Sequence[int] | None = None,
+    notify: Notify = lambda _text: None,
 ) -> ScanReport:
-    """Every servo answering on ``link`` at ``bauds``; ``notify`` hears about slow sweeps."""
+    """Every servo answering on ``link``, for each (family, baud rates) of ``plan`` in turn.
+
+    ``ids`` bounds the one-by-one pings (a protocol without a broadcast ping; the fallback after
+    a garbled broadcast ping); default every ID the family has. ``notify`` hears about slow
+    sweeps before they start.
+    """
     entries: list[ScanEntry] = []
-    for baud in bauds:
-        entries += _scan_baud(link, baud, notify)
+    for family, bauds in plan:
+        link.speak(family)
+        wanted = tuple(range(family.max_id + 1)) if ids is None else tuple(ids)
+        for baud in bauds:
+            entries += _scan_baud(link, family, baud, wanted, notify)
     return ScanReport(tuple(entries))
 
 
-def _scan_baud(link: Link, baud: int, notify: Callable[[str], None]) -> list[ScanEntry]:
-    pinged, garbled = link.broadcast(baud)
+def _first_pass(
+    link: Link, family: ServoFamily, baud: int, ids: Sequence[int], notify: Notify
+) -> tuple[dict[int, tuple[int, int]], set[int], bool]:
+    """The IDs found at first sight ``{id: (model, firmware or 0)}``, the IDs whose reply was
+    corrupt, and whether the broadcast ping was left with garbage it could not place."""
+    if family.broadcast_ping:
+        pinged, garbled = link.broadcast(baud)
+        return pinged, set(), garbled
+    notify(
+        f"Protocol {family.protocol:.1f} has no broadcast ping: pinging IDs {_span(ids)} one by "
+        f"one at {baud} baud (about {sweep_seconds(len(ids), baud):.1f} s on a real port; "
+        "--ids bounds it)"
+    )
+    found: dict[int, tuple[int, int]] = {}
+    corrupt: set[int] = set()
+    for servo_id in ids:
+        probe = link.probe(servo_id, baud, tries=1)
+        if probe.models:
+            found[servo_id] = (probe.models[0], 0)
+        elif probe.corrupt:
+            corrupt.add(servo_id)
+    return found, corrupt, False
+
+
+def _span(ids: Sequence[int]) -> str:
+    if ids and list(ids) == list(range(ids[0], ids[-1] + 1)):
+        return f"{ids[0]}..{ids[-1]}"
+    return ", ".join(map(str, ids))
+
+
+def _scan_baud(
+    link: Link, family: ServoFamily, baud: int, ids: Sequence[int], notify: Notify
+) -> list[ScanEntry]:
+    pinged, suspects, garbled = _first_pass(link, family, baud, ids, notify)
     evidence: dict[int, Evidence] = {}
     highest = max(pinged, default=0)
-    todo = {*pinged, FACTORY_ID, *range(1, highest + LOOK_PAST + 1)}
+    todo = {*pinged, *suspects, FACTORY_ID, *range(1, highest + LOOK_PAST + 1)}
     while todo:
         servo_id = min(todo)
         todo.discard(servo_id)
@@ -106,31 +183,32 @@ def _scan_baud(link: Link, baud: int, notify: Callable[[str], None]) -> list[Sca
         evidence[servo_id] = found
         if found.answered and servo_id >= highest:
             highest = servo_id
-            todo |= {i for i in range(servo_id + 1, servo_id + LOOK_PAST + 1) if i <= MAX_ID}
+            todo |= {i for i in range(servo_id + 1, servo_id + LOOK_PAST + 1)
+                     if i <= family.max_id}
             todo -= set(evidence)
     explained = any(e.answered for i, e in evidence.items() if i not in pinged)
-    if garbled and not explained:
-        rest = [i for i in range(MAX_ID + 1) if i not in evidence]
+    if garbled and not explained and family.broadcast_ping:
+        rest = [i for i in ids if i not in evidence]
         notify(
             f"the broadcast ping at {baud} baud was left with garbled replies that no ID up to "
             f"{highest + LOOK_PAST} explains: pinging the other {len(rest)} IDs one by one "
-            f"(about {len(rest) * SWEEP_S_PER_ID:.0f} s on a real port)"
+            f"(about {sweep_seconds(len(rest), baud):.0f} s on a real port)"
         )
         for servo_id in rest:
             evidence[servo_id] = gather(link, servo_id, baud)
     return [
-        _entry(found, pinged.get(servo_id))
+        _entry(found, pinged.get(servo_id), family)
         for servo_id, found in sorted(evidence.items())
         if found.answered or servo_id in pinged
     ]
 
 
-def _entry(found: Evidence, pinged: tuple[int, int] | None) -> ScanEntry:
+def _entry(found: Evidence, pinged: tuple[int, int] | None, family: ServoFamily) -> ScanEntry:
     verdict = judge(found)
     model, firmware = pinged or (0, 0)
     if verdict.kind is Kind.ABSENT and pinged is not None:
         verdict = Verdict(
-            Kind.ONE_SERVO, f"answered the broadcast ping but none of {found.pings.silent} "
+            Kind.ONE_SERVO, f"answered the first ping but none of {found.pings.silent} "
             "pings on its own"
         )
     if verdict.kind is Kind.ONE_SERVO:
@@ -140,5 +218,5 @@ def _entry(found: Evidence, pinged: tuple[int, int] | None) -> ScanEntry:
         model = firmware = 0
     return ScanEntry(
         found.servo_id, found.baud, model, firmware, verdict, pinged is not None,
-        found.corrupt, found.replies,
+        found.corrupt, found.replies, family,
     )

@@ -59,8 +59,10 @@ class ChainSettings:
 
 
 def _derived(robot: RobotConfig, table: ServoTable, source: Path) -> dict[str, Setting]:
+    from snakebot.setup.bauds import baud_value  # setup imports settings, not the reverse
+
     try:
-        baud_index = table.baud_index(robot.bus.baud)
+        baud_index = baud_value(table, robot.bus.baud)
     except ValueError as exc:
         raise ConfigError(source, "bus.baud", str(exc)) from None
     out = {"baud_rate": Setting(table["baud_rate"], baud_index, None, "[bus] baud", table)}
@@ -97,7 +99,7 @@ def _checked(
     values: dict[int, dict[str, int]] = {}
     for servo in chain.servos:
         keys = {s.key: s.raw for s in servo.settings}
-        missing = [k for k in REQUIRED if k not in keys]
+        missing = [k for k in REQUIRED if k not in keys and k in chain.table]
         if missing:
             raise ConfigError(servo_file, "settings", f"missing {', '.join(missing)}: `snakebot "
                               "run --backend dynamixel` checks them at connect, so set them here")

@@ -1,9 +1,13 @@
 """The Backend contract on a real Dynamixel chain: SI units outside, ticks only at the bus edge.
 
-One control cycle is one Sync Write of goal positions (``send_command``) and one (Fast) Sync Read
-of load/current, velocity and position (``read_state``). Every ``slow_every`` reads one extra read
-fetches Hardware Error Status (and the tracking check runs on what the cycle read); half-way
-between, one extra read fetches input voltage and temperature, or the Bus Watchdog, in turn.
+One control cycle is one Sync Write of goal positions (``send_command``) and one group read of
+load/current, velocity and position (``read_state``) by the servo family's read method: Fast Sync
+Read (X, Protocol 2.0), Bulk Read (MX and X in Protocol 1.0) or one Read per servo (AX). What the
+backend does beyond that follows the model's capabilities (``snakebot.families``). Every
+``slow_every`` reads one extra read fetches Hardware Error Status where the model has it (else
+the faults come from the status packets' error bits: see ``_check_faults``), and the tracking
+check runs on what the cycle read; half-way between, one extra read fetches input voltage and
+temperature, or the Bus Watchdog (where there is one), in turn.
 Stopping (``close``, a failed ``connect``) is in ``stopping.py``, connect-time checks in
 ``checks.py``, the tracking check in ``supervision.py``.
 """
@@ -22,12 +26,12 @@ from snakebot.backends.base import Backend
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.checks import (
     LIMIT_KEYS,
-    SETTINGS_KEYS,
     chain_error,
     chain_report,
     check_settings,
     cycle_wire_time_s,
     latency_warning,
+    settings_keys,
     usb_latency_timer_ms,
 )
 from snakebot.backends.dynamixel.faults import (
@@ -39,6 +43,14 @@ from snakebot.backends.dynamixel.faults import (
 )
 from snakebot.backends.dynamixel.interrupts import deferred_interrupts
 from snakebot.backends.dynamixel.plans import Row
+from snakebot.backends.dynamixel.rate import (
+    CycleBudget,
+    check_rate,
+    cycle_budget,
+    fastest_baud,
+    usb_tail_s,
+    wanted_return_delay_s,
+)
 from snakebot.backends.dynamixel.sdk import PortHandlerFactory
 from snakebot.backends.dynamixel.state import StateDecoder
 from snakebot.backends.dynamixel.stopping import StopSequence
@@ -46,7 +58,7 @@ from snakebot.backends.dynamixel.supervision import CatchUp, TrackingLimits, Tra
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.backends.pacing import Pacer
 from snakebot.config.schema import PID_GAIN_KEYS, GainRegisters, RobotConfig
-from snakebot.errors import BackendError, BusError
+from snakebot.errors import BusError
 from snakebot.servo_tables import supported_models, table_for_model
 from snakebot.types import JointState, PDGains
 
@@ -57,13 +69,15 @@ GoalTerms = list[tuple[float, float, int, int]]
 
 
 class DynamixelBackend(Backend):
-    """A chain of position-controlled Dynamixel X-series servos behind the Backend contract.
+    """A chain of position-controlled Dynamixel servos (X, MX, AX; Protocol 2.0 or 1.0, as
+    the robot's ``[bus] protocol`` says) behind the Backend contract.
 
     ``port``/``baud`` override the robot's ``[bus]``; ``port_handler_factory`` builds the SDK port
     handler (tests pass the emulator's). ``read_current=False`` drops load/current from the cycle
     read (``effort_nm`` is then zeros). ``enable_torque`` turns torque on at the end of
     ``connect`` (Goal Position = Present Position first). ``watchdog_s`` is the Bus Watchdog armed
-    while torque is on. ``allow_extra_servos`` accepts servos on the bus that the robot does not
+    while torque is on (models without one: nothing is armed; docs/hardware.md says what
+    protects them). ``allow_extra_servos`` accepts servos on the bus that the robot does not
     name (otherwise connect refuses, naming them). ``tracking`` sets when joints count as no longer
     following their goals (None switches that check off). ``clock``/``sleep`` are the wall clock
     the pacing and the stop ramp use.
@@ -91,8 +105,6 @@ class DynamixelBackend(Backend):
         sleep: Callable[[float], None] = time.sleep,
     ) -> None:
         super().__init__()
-        if robot.bus.protocol != 2.0:
-            raise BackendError("the Dynamixel backend drives Protocol 2.0 (X-series) servos only")
         if not 1 <= round(watchdog_s / WATCHDOG_UNIT_S) <= 127:
             raise ValueError(f"watchdog_s must be 0.02..2.54 s, got {watchdog_s}")
         self.robot = robot
@@ -104,6 +116,8 @@ class DynamixelBackend(Backend):
             model=robot.servo.name, port_handler_factory=port_handler_factory, retries=retries,
             clock=clock,
         )
+        self.capabilities = self.bus.capabilities
+        """What the model can do on the robot's bus (``snakebot.families.Capabilities``)."""
         self.converter = TickConverter.for_robot(robot)
         self.watchdog_ticks = round(watchdog_s / WATCHDOG_UNIT_S)
         self._watchdog_margin_s = (self.watchdog_ticks - 1) * WATCHDOG_UNIT_S
@@ -111,8 +125,9 @@ class DynamixelBackend(Backend):
         self.enable_torque = enable_torque
         self.allow_extra_servos = allow_extra_servos
         self.tracking = tracking
-        self.fast_read = True
-        """Whether the cycle uses Fast Sync Read (decided by a probe at connect)."""
+        self.fast_read = self.capabilities.fast_sync_read
+        """Whether the cycle uses Fast Sync Read (where the model has it: decided by a probe at
+        connect)."""
         self.torque_enabled = False
         """Whether the backend has the chain's torque on (set by connect, set_torque, close)."""
         self.torque_may_be_on = False
@@ -139,6 +154,8 @@ class DynamixelBackend(Backend):
         self._warned_slow = False
         self._position_limits: list[tuple[int, int]] = []  # EEPROM Min/Max per servo, head first
         self._outside: list[int] = []  # joints being brought inside their limits
+        self._shutdown: dict[int, int] = {}  # Alarm Shutdown per servo (status-byte families)
+        self._fault_turn = 0  # the next servo whose status byte the slow check reads
         self._monitor = None if tracking is None else TrackingMonitor(
             tracking, self.joint_count, self.converter.rad_per_tick)
         self._decoder = StateDecoder(robot, self.bus.table, self.converter, read_current)
@@ -154,15 +171,35 @@ class DynamixelBackend(Backend):
         """The serial port (or emulator URL)."""
         return self.bus.port
 
+    def rate_budget(self) -> CycleBudget:
+        """Where one control cycle's bus time goes on this chain: its servos, baud, read method,
+        the Return Delay Time the robot's settings give them (default: the model's factory
+        value) and the port's USB latency (``rate.py``)."""
+        table = self.bus.table
+        tail, assumed = usb_tail_s(self.port)
+        return cycle_budget(
+            self.bus.family, self._state_plan.method, len(self.ids), self._state_plan.block.size,
+            table["goal_position"].size, self.bus.baud, wanted_return_delay_s(self.robot, table),
+            tail, usb_assumed=assumed, fastest_baud=fastest_baud(table),
+        )
+
+    def check_rate(self, rate_hz: float) -> None:
+        """RateTooHighError (a ConfigError naming ``rate_hz``) above :meth:`rate_budget`'s
+        ceiling, with the highest rate the bus holds and how to get more."""
+        check_rate(self.rate_budget(), rate_hz)
+
     # -- lifecycle -------------------------------------------------------------------------------
     def _connect(self) -> None:
         self.bus.open()
         try:
             self._check_chain()
             self._probe_fast_read()
-            self._check_faults()
+            if self.capabilities.hardware_error_status:
+                self.check_faults()
             self._check_settings()
-            self.write_watchdog(0)  # clears a trip left by a dead session
+            if not self.capabilities.hardware_error_status:
+                self.check_faults()  # the pings' status bytes, against each Alarm Shutdown
+            self.write_watchdog(0)  # clears a trip left by a dead session (where there is one)
             self._set_gains(self.robot.gains)
             self.interrupts.arm()  # from here the servos may be energised
             torque = self.bus.sync_read("torque_enable", self.ids)
@@ -176,7 +213,7 @@ class DynamixelBackend(Backend):
                 self._set_torque(True)
             self._read_state()
             assert self.last_rows is not None
-            self._open_bounds([row[-1] for row in self.last_rows])
+            self._open_bounds(self._positions(self.last_rows))
             self.interrupts.deliver()  # a Ctrl-C during the connect fails it, policy applied
         except BaseException:
             self.stopper.abort_connect()
@@ -190,10 +227,19 @@ class DynamixelBackend(Backend):
         self.interrupts.deliver()
 
     def _check_chain(self) -> None:
-        """One broadcast ping finds every servo; IDs it missed (garbled replies) get pinged."""
-        on_bus = {i: model for i, (model, _) in self.bus.broadcast_ping().items()}
+        """One broadcast ping finds every servo; IDs it missed (garbled replies) get pinged.
+
+        A family without broadcast ping (Protocol 1.0) pings the robot's IDs one by one, so
+        servos the robot does not name go unseen; each ping's status byte also reports the
+        servo's condition (overload, overheating, input voltage) for ``_check_faults``.
+        """
+        if self.capabilities.broadcast_ping:
+            on_bus = {i: model for i, (model, _) in self.bus.broadcast_ping().items()}
+        else:
+            on_bus = {}
         found = {i: on_bus[i] for i in self.ids if i in on_bus}
         found.update(self.bus.ping_all([i for i in self.ids if i not in on_bus]))
+        on_bus = on_bus or dict(found)
         report = chain_report(self.ids, self.robot.servo.model_number, found, on_bus)
         if report.ok and (not report.unexpected or self.allow_extra_servos):
             if report.unexpected:
@@ -206,17 +252,58 @@ class DynamixelBackend(Backend):
             names[table_for_model(name).model_number] = name
         raise chain_error(self.port, self.bus.baud, report, names)
 
-    def _check_faults(self) -> None:
-        status = self.bus.sync_read("hardware_error_status", self.ids, fast=self.fast_read)
-        faults = {i: v["hardware_error_status"] for i, v in status.items()}
+    def check_faults(self, *, every_servo: bool = False) -> None:
+        """HardwareFaultError for latched faults: Hardware Error Status where the model has it;
+        else the condition bits of the servos' last status packets (Protocol 1.0: overload,
+        overheating, input voltage) that their Alarm Shutdown turns torque off for.
+
+        Status bytes come with every Read (the AX cycle) and ping; a Bulk Read's are not handed
+        out by the SDK, so there one servo per call is read alone, in turn (all with
+        ``every_servo``).
+        """
+        if self.capabilities.hardware_error_status:
+            status = self.bus.sync_read("hardware_error_status", self.ids, fast=self.fast_read)
+            faults = {i: v["hardware_error_status"] for i, v in status.items()}
+            if any(faults.values()):
+                raise self.fault_error({i: v for i, v in faults.items() if v})
+            return
+        if every_servo or self.capabilities.read_method != "read":
+            turn = self.ids if every_servo else [self.ids[self._fault_turn % len(self.ids)]]
+            self._fault_turn += 1
+            for servo_id in turn:
+                self.bus.read(servo_id, "present_temperature")
+        conditions = self.bus.conditions
+        faults = {i: conditions[i] & self._shutdown.get(i, 0xFF)
+                  for i in self.ids if i in conditions}
         if any(faults.values()):
-            raise HardwareFaultError(self.port, {i: v for i, v in faults.items() if v})
+            raise self.fault_error({i: v for i, v in faults.items() if v})
+
+    def fault_error(self, faults: dict[int, int]) -> HardwareFaultError:
+        """The HardwareFaultError for ``{id: fault bits}`` (Hardware Error Status, or the
+        status byte's condition bits where the model has no such register), with the remedy
+        the family allows (a Reboot instruction, or a power cycle)."""
+        caps, family = self.capabilities, self.bus.family
+        if caps.reboot:
+            return HardwareFaultError(self.port, faults)
+        cause = "remove the cause (stalled or overloaded joint, supply voltage, heat)"
+        if caps.hardware_error_status:
+            return HardwareFaultError(self.port, faults, remedy=(
+                f"Its torque is off until it restarts: {cause}, then power-cycle it "
+                f"({family.name} has no Reboot)"))
+        return HardwareFaultError(self.port, faults, decode=family.status_errors, remedy=(
+            f"Its torque is off where its Alarm Shutdown names the fault: {cause}, let it "
+            f"cool, then power-cycle it ({family.name} has no Reboot) and run again"))
 
     def _check_settings(self) -> None:
-        settings = self.bus.sync_read(SETTINGS_KEYS, self.ids)
+        settings = self.bus.sync_read(settings_keys(self.bus.table), self.ids)
         for servo_id, limits in self.bus.sync_read(LIMIT_KEYS, self.ids).items():
             settings[servo_id].update(limits)
-        errors, notes = check_settings(settings, self.ids, self.converter)
+        if not self.capabilities.hardware_error_status and "shutdown" in self.bus.table:
+            for servo_id, values in self.bus.sync_read("shutdown", self.ids).items():
+                settings[servo_id].update(values)
+                self._shutdown[servo_id] = values["shutdown"]
+        errors, notes = check_settings(settings, self.ids, self.converter,
+                                       watchdog=self.capabilities.bus_watchdog)
         self._position_limits = [
             (settings[i]["min_position_limit"], settings[i]["max_position_limit"]) for i in self.ids
         ]
@@ -224,14 +311,17 @@ class DynamixelBackend(Backend):
             raise ServoSettingsError(self.port, errors)
         latency = usb_latency_timer_ms(self.port)
         if latency is not None:
-            wire = cycle_wire_time_s(len(self.ids), self._state_plan.block.size, self.bus.baud,
-                                     fast=True)
-            note = latency_warning(self.port, latency, wire)
+            wire, turnarounds = cycle_wire_time_s(
+                self.bus.family, self._state_plan.method, len(self.ids),
+                self._state_plan.block.size, self.bus.baud)
+            note = latency_warning(self.port, latency, wire, turnarounds)
             notes += [note] if note else []
         for note in notes:
             warnings.warn(note, DynamixelSettingsWarning, stacklevel=4)
 
     def _probe_fast_read(self) -> None:
+        if not self.capabilities.fast_sync_read:
+            return
         fallbacks = self.bus.group_fallbacks
         self._state_plan.read_rows(fast=True)
         if self.bus.group_fallbacks > fallbacks:
@@ -282,11 +372,11 @@ class DynamixelBackend(Backend):
         self._cycle += 1
         phase = self._cycle % self.slow_every
         if phase == 0:
-            self._check_faults()
+            self.check_faults()
             if self._monitor is not None and self.torque_enabled and self.catch_up is None:
                 self._supervise(rows)
         elif phase == self.slow_every // 2:
-            if (self._cycle // self.slow_every) % 2:
+            if (self._cycle // self.slow_every) % 2 and self.capabilities.bus_watchdog:
                 self.stopper.check_watchdog()
             else:
                 self._read_health()
@@ -296,7 +386,7 @@ class DynamixelBackend(Backend):
         assert self._monitor is not None
         if self.last_goal_ticks is None:
             return
-        stalls = self._monitor.check(self.clock(), [r[-1] for r in rows], self.last_goal_ticks)
+        stalls = self._monitor.check(self.clock(), self._positions(rows), self.last_goal_ticks)
         if stalls:
             self.stopper.diagnose(stalls)
             self._monitor.reset()
@@ -344,7 +434,8 @@ class DynamixelBackend(Backend):
         control_table_buswatchdog). The margin is one 20 ms watchdog unit short of the period.
         """
         now = self.clock()
-        if self.torque_enabled and now - self._fed_s > self._watchdog_margin_s:
+        if (self.torque_enabled and now - self._fed_s > self._watchdog_margin_s
+                and self.capabilities.bus_watchdog):
             self.write_watchdog(0)
             self.write_watchdog(self.watchdog_ticks)
             self.stats.extra["watchdog_rearms"] = self.stats.extra.get("watchdog_rearms", 0) + 1
@@ -353,7 +444,11 @@ class DynamixelBackend(Backend):
         self.last_goal_ticks = ticks
 
     def write_watchdog(self, value: int) -> None:
-        """Bus Watchdog (98) of every servo: 0 disarms (and clears a trip), 1..127 x 20 ms arms."""
+        """Bus Watchdog (98) of every servo: 0 disarms (and clears a trip), 1..127 x 20 ms arms.
+
+        Nothing on a model without one (AX, MX in Protocol 1.0)."""
+        if not self.capabilities.bus_watchdog:
+            return
         self._fed_s = self.clock()
         self.bus.sync_write("bus_watchdog", dict.fromkeys(self.ids, value))
 
@@ -362,7 +457,12 @@ class DynamixelBackend(Backend):
         silent)."""
         rows = self._state_plan.read_rows(fast=self.fast_read)
         self.last_rows = rows
-        return [row[-1] for row in rows]
+        return self._positions(rows)
+
+    def _positions(self, rows: list[Row]) -> list[int]:
+        """Present Position (ticks) of each row of the cycle read."""
+        k = self._decoder.position_index
+        return [row[k] for row in rows]
 
     def _set_gains(self, gains: PDGains) -> None:
         servo = self.robot.servo
@@ -415,7 +515,7 @@ class DynamixelBackend(Backend):
         state = self.bus.sync_read("torque_enable", self.ids)
         off = [i for i, v in state.items() if not v["torque_enable"]]
         if off:
-            self._check_faults()
+            self.check_faults(every_servo=True)
             raise BusError(self.port, off, "torque did not turn on (Torque Enable reads 0)")
 
     def _joint_angles(self, joint: int, *ticks: int) -> tuple[float, ...]:
@@ -424,7 +524,8 @@ class DynamixelBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         assert self._pacer is not None
-        if dt_s > self._watchdog_margin_s and not self._warned_slow:
+        if (dt_s > self._watchdog_margin_s and not self._warned_slow
+                and self.capabilities.bus_watchdog):
             self._warned_slow = True
             log.warning("%s: control period %.3f s exceeds the Bus Watchdog (%.2f s): the servos "
                         "stop between cycles; raise watchdog_s", self.port, dt_s,

@@ -16,17 +16,27 @@ from snakebot.servo_tables import Register, RegisterValueError, ServoTable
 
 @dataclass(frozen=True)
 class Field:
-    """One register inside a block: its key, byte offset from the block start, size and sign."""
+    """One register inside a block: its key, byte offset from the block start, size and sign
+    (``signed``: two's complement; ``sign_bit``: sign-magnitude with that bit the sign, as
+    Protocol 1.0's Present Speed/Load, bit 10)."""
 
     key: str
     offset: int
     size: int
     signed: bool
+    sign_bit: int | None = None
 
     def decode(self, data: bytes) -> int:
-        """The field's value from the block's bytes (two's complement where signed)."""
-        return int.from_bytes(data[self.offset : self.offset + self.size], "little",
-                              signed=self.signed)
+        """The field's value from the block's bytes."""
+        raw = int.from_bytes(data[self.offset : self.offset + self.size], "little",
+                             signed=self.signed)
+        return raw if self.sign_bit is None else magnitude_value(raw, self.sign_bit)
+
+
+def magnitude_value(raw: int, sign_bit: int) -> int:
+    """A sign-magnitude register's value: bit ``sign_bit`` the sign, the bits below the size."""
+    magnitude = raw & ((1 << sign_bit) - 1)
+    return -magnitude if raw >> sign_bit & 1 else magnitude
 
 
 @dataclass(frozen=True)
@@ -68,7 +78,8 @@ def resolve_block(table: ServoTable, keys: str | Sequence[str]) -> Block:
     ordered = sorted(registers.values(), key=lambda r: r.address)
     start = ordered[0].address
     end = max(r.address + r.size for r in ordered)
-    fields = tuple(Field(r.key, r.address - start, r.size, r.signed) for r in ordered)
+    fields = tuple(Field(r.key, r.address - start, r.size, r.signed, r.sign_bit)
+                   for r in ordered)
     return Block(start, end - start, fields)
 
 

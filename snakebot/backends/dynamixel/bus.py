@@ -15,10 +15,11 @@ from typing import TypeVar
 from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.blocks import Block, encode_checked, encode_rows, resolve_block
 from snakebot.backends.dynamixel.faults import ServoStatusError
-from snakebot.backends.dynamixel.plans import SyncReadPlan, SyncWritePlan
+from snakebot.backends.dynamixel.plans import ReadPlan, SyncWritePlan
 from snakebot.backends.dynamixel.transport import Transport
 from snakebot.config.ports import check_port
 from snakebot.errors import BusError
+from snakebot.families import Capabilities, ServoFamily, family_for
 from snakebot.servo_tables import ServoTable, table_for_model
 
 FACTORY_RESET_OPTIONS = {"all": 0xFF, "keep_id": 0x01, "keep_id_baud": 0x02}
@@ -28,11 +29,15 @@ T = TypeVar("T")
 
 
 class DynamixelBus:
-    """One serial port with a chain of Dynamixel servos of one model family, addressed by ID.
+    """One serial port with a chain of Dynamixel servos of one model, addressed by ID.
 
     ``model`` picks the control table that register names resolve in (X-series servos share
-    addresses). ``port_handler_factory`` builds the SDK port handler from the port name, e.g. the
-    emulator's ``EmulatedPortHandler``; default ``dynamixel_sdk.PortHandler``. ``clock`` (s) stamps
+    addresses); ``family`` the protocol spoken (``snakebot.families``; default
+    ``family_for(table, protocol)``, ConfigError if the model cannot speak ``protocol``). What the
+    bus does per cycle follows the pair's :attr:`capabilities`: group reads go out by its
+    ``read_method`` (Fast Sync / Sync / Bulk Read, or one Read per servo).
+    ``port_handler_factory`` builds the SDK port handler from the port name, e.g. the emulator's
+    ``EmulatedPortHandler``; default ``dynamixel_sdk.PortHandler``. ``clock`` (s) stamps
     ``last_instruction_s``. ``port`` must pass ``snakebot.config.ports.check_port`` (a device path
     or a ``dxlemu://`` URL), else ConfigError before anything is opened.
     """
@@ -42,21 +47,25 @@ class DynamixelBus:
         port: str,
         baud: int,
         *,
-        protocol: float = 2.0,
+        protocol: float | None = None,
         model: str | int = "XL430-W250",
+        family: ServoFamily | None = None,
         port_handler_factory: sdk.PortHandlerFactory | None = None,
         retries: int = 2,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.port = port
         self.baud = baud
-        self.protocol = protocol
         self.table: ServoTable = table_for_model(model)
+        self.family: ServoFamily = family or family_for(self.table, protocol)
+        self.protocol = self.family.protocol
+        self.capabilities: Capabilities = self.family.capabilities(self.table)
+        """What this model can do on this family's bus (read method, watchdog, ...)."""
         check_port(port)  # device paths and dxlemu:// only: no socket://, spy://?file=, ...
         factory = port_handler_factory or sdk.port_handler_for
-        self._link = sdk.SdkLink(factory(port), protocol)
+        self._link = sdk.SdkLink(factory(port), self.family)
         self.transport = Transport(port, self._link, retries, clock)
-        self._sync_plans: dict[tuple[Block, tuple[int, ...]], SyncReadPlan] = {}
+        self._read_plans: dict[tuple[Block, tuple[int, ...], str], ReadPlan] = {}
 
     @property
     def retries(self) -> int:
@@ -90,8 +99,15 @@ class DynamixelBus:
 
     @property
     def alerts(self) -> set[int]:
-        """IDs whose last status packet carried the Alert bit (a latched hardware error)."""
+        """IDs whose last status packet reported a servo condition: the Alert bit (a latched
+        hardware error, Protocol 2.0) or Protocol 1.0's overload, overheating, input voltage."""
         return self.transport.alerts
+
+    @property
+    def conditions(self) -> dict[int, int]:
+        """``{id: condition bits}`` of the servos in :attr:`alerts` (the status error byte's
+        ``family.condition_bits``; ``family.status_errors`` names them)."""
+        return self.transport.conditions
 
     @property
     def vanished(self) -> BusError | None:
@@ -207,7 +223,15 @@ class DynamixelBus:
         self.transport.alerts.discard(servo_id)
 
     def factory_reset(self, servo_id: int, *, keep: str = "keep_id_baud") -> None:
-        """Reset one servo's control table; ``keep`` is "keep_id_baud", "keep_id" or "all"."""
+        """Reset one servo's control table; ``keep`` is "keep_id_baud", "keep_id" or "all".
+
+        ValueError for a ``keep`` the model's family does not have (Protocol 1.0 always resets
+        everything, ID and baud rate included: it is never sent as a milder reset).
+        """
+        if keep not in self.capabilities.factory_reset_options:
+            have = ", ".join(self.capabilities.factory_reset_options)
+            raise ValueError(f"{self.table.model} on {self.family.name} has no factory reset "
+                             f"{keep!r} (only {have}: it resets ID and baud rate too)")
         option = FACTORY_RESET_OPTIONS[keep]
 
         def op() -> tuple[int, int, list[int]]:
@@ -227,9 +251,11 @@ class DynamixelBus:
     def sync_read(
         self, keys: Keys | Block, ids: Sequence[int], *, fast: bool = False
     ) -> dict[int, dict[str, int]]:
-        """One (Fast) Sync Read of the block covering ``keys`` from ``ids``: ``{id: {key: value}}``.
+        """One group read of the block covering ``keys`` from ``ids``: ``{id: {key: value}}``.
 
-        Raises SyncReadError naming the IDs that stay silent after the retries.
+        It goes out by the bus's read method (:meth:`sync_read_plan`); ``fast`` allows Fast
+        Sync Read where the model has it. Raises SyncReadError naming the IDs that stay silent
+        after the retries.
         """
         return self.sync_read_plan(keys, ids).read(fast=fast)
 
@@ -255,17 +281,24 @@ class DynamixelBus:
             ids, attempt, lambda i: self.read_block(i, blocks[i]), "bulk read", dict
         )
 
-    def sync_read_plan(self, keys: Keys | Block, ids: Sequence[int]) -> SyncReadPlan:
-        """A reusable (Fast) Sync Read of one block from fixed IDs (cached per block and IDs)."""
+    def sync_read_plan(
+        self, keys: Keys | Block, ids: Sequence[int], *, method: str | None = None
+    ) -> ReadPlan:
+        """A reusable group read of one block from fixed IDs (cached per block, IDs, method).
+
+        ``method`` (one of ``snakebot.families.READ_METHODS``) defaults to the capabilities'
+        ``read_method``; benchmarks and tests pick a slower one on purpose.
+        """
         block = keys if isinstance(keys, Block) else resolve_block(self.table, keys)
-        cache_key = (block, tuple(ids))
-        plan = self._sync_plans.get(cache_key)
+        chosen = method or self.capabilities.read_method
+        cache_key = (block, tuple(ids), chosen)
+        plan = self._read_plans.get(cache_key)
         if plan is None:
-            reader = sdk.SyncReader(self._link, block.address, block.size, ids)
-            single = self.read_block
-            plan = self._sync_plans[cache_key] = SyncReadPlan(self.transport, reader, block, single)
+            plan = ReadPlan(self.transport, self._link, block, ids, chosen, self.read_block)
+            self._read_plans[cache_key] = plan
         return plan
 
     def sync_write_plan(self, key: str, ids: Sequence[int]) -> SyncWritePlan:
-        """A reusable Sync Write of one register to fixed IDs with a preallocated parameter list."""
+        """A reusable Sync Write of one register to fixed IDs with a preallocated parameter list
+        (every family has Sync Write)."""
         return SyncWritePlan(self.transport, self.table[key], ids)

@@ -2,9 +2,12 @@
 
 Policy: settings that make the backend wrong or unsafe are errors (:class:`ServoSettingsError`):
 Operating Mode other than 3 (position), the Drive Mode reverse bit (direction lives in the config),
-Min/Max Position Limits that do not cover a joint's configured range. Settings that only cost loop
-rate are warnings (:class:`DynamixelSettingsWarning`): Return Delay Time above 0, a USB latency
-timer above 1 ms, and the Drive Mode profile/torque-on-goal bits.
+Min/Max Position Limits that do not cover a joint's configured range (on AX/MX: CW/CCW Angle Limit,
+both 0 = wheel mode), and, on a model without a Bus Watchdog, an Alarm Shutdown that does not turn
+torque off on overload and overheating (all that protects it when the host dies). Settings that
+only cost loop rate are warnings (:class:`DynamixelSettingsWarning`): Return Delay Time above 0, a
+USB latency timer above 1 ms, and the Drive Mode profile/torque-on-goal bits. Registers a model
+does not have (AX: no Operating or Drive Mode) are not checked.
 """
 
 from __future__ import annotations
@@ -15,10 +18,15 @@ from pathlib import Path
 
 from snakebot.backends.dynamixel.faults import ChainMismatchError
 from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.families import ServoFamily
+from snakebot.servo_tables import ServoTable
 
 SETTINGS_KEYS = ("return_delay_time", "drive_mode", "operating_mode")
+"""The settings every X-series servo is checked for (:func:`settings_keys` per model)."""
 LIMIT_KEYS = ("max_position_limit", "min_position_limit")
 POSITION_MODE = 3
+SHUTDOWN_NEEDED = 0x24
+"""Alarm Shutdown bits 2 (overheating) and 5 (overload): torque off when either happens."""
 SYSFS_USB_SERIAL = Path("/sys/bus/usb-serial/devices")
 
 _DRIVE_REVERSE = 0x01
@@ -89,24 +97,39 @@ def chain_error(
     )
 
 
+def settings_keys(table: ServoTable) -> tuple[str, ...]:
+    """The registers of :data:`SETTINGS_KEYS` that model ``table`` has."""
+    return tuple(key for key in SETTINGS_KEYS if key in table)
+
+
 def check_settings(
     settings: Mapping[int, Mapping[str, int]],
     ids: Sequence[int],
     converter: TickConverter,
+    *,
+    watchdog: bool = True,
 ) -> tuple[list[str], list[str]]:
     """(errors, warnings) for EEPROM ``settings`` ({id: {key: value}}) against the joints.
 
-    ``ids`` are head to tail, in the converter's joint order.
+    ``ids`` are head to tail, in the converter's joint order. Keys a model has no register for
+    are left out of ``settings`` and not checked; ``watchdog=False`` (no Bus Watchdog) makes an
+    Alarm Shutdown (``shutdown``) without the overload and overheating bits an error.
     """
     errors: list[str] = []
     warnings: list[str] = []
     slow = sorted(i for i in ids if settings[i]["return_delay_time"] > 0)
     for joint, servo_id in enumerate(ids):
         values = settings[servo_id]
-        mode, drive = values["operating_mode"], values["drive_mode"]
+        mode, drive = values.get("operating_mode", POSITION_MODE), values.get("drive_mode", 0)
         if mode != POSITION_MODE:
             errors.append(f"servo {servo_id}: Operating Mode is {mode}, needs {POSITION_MODE} "
                           "(position control)")
+        shutdown = values.get("shutdown")
+        if not watchdog and shutdown is not None and shutdown & SHUTDOWN_NEEDED != SHUTDOWN_NEEDED:
+            errors.append(f"servo {servo_id}: Alarm Shutdown is {shutdown}, needs bits 2 and 5 "
+                          f"(overheating, overload; {SHUTDOWN_NEEDED} or more): with no Bus "
+                          "Watchdog it is what turns torque off on a servo held against an "
+                          "obstacle after the host died")
         if drive & _DRIVE_REVERSE:
             errors.append(f"servo {servo_id}: Drive Mode has the reverse bit set; snakebot takes "
                           "the direction from the config (joints[].direction), clear the bit")
@@ -115,7 +138,11 @@ def check_settings(
                             "or torque-on-by-goal bit; snakebot expects 0")
         low, high = values["min_position_limit"], values["max_position_limit"]
         want_low, want_high = converter.lower_ticks[joint], converter.upper_ticks[joint]
-        if low > want_low or high < want_high:
+        if low == high == 0 and "operating_mode" not in values:
+            errors.append(f"servo {servo_id}: CW and CCW Angle Limit are both 0, which is wheel "
+                          f"mode; joint {joint} needs position control over "
+                          f"{want_low}..{want_high} ticks")
+        elif low > want_low or high < want_high:
             errors.append(
                 f"servo {servo_id}: Min/Max Position Limit {low}..{high} ticks do not cover "
                 f"joint {joint}'s range {converter.lower_rad[joint]:.3f}.."
@@ -124,9 +151,9 @@ def check_settings(
     if slow:
         delay_us = max(2 * settings[i]["return_delay_time"] for i in slow)
         warnings.append(
-            f"Return Delay Time up to {delay_us} µs on servo(s) {', '.join(map(str, slow))}: a "
-            f"Sync Read waits that long per servo (Fast Sync Read once); set it to 0 with "
-            "`snakebot config apply`"
+            f"Return Delay Time up to {delay_us} µs on servo(s) {', '.join(map(str, slow))}: "
+            "every reply waits that long (per servo in a Sync or Bulk Read or one Read per servo, "
+            "once in a Fast Sync Read); set it to 0 with `snakebot config apply`"
         )
     return errors, warnings
 
@@ -143,11 +170,17 @@ def usb_latency_timer_ms(port: str, sysfs_root: Path = SYSFS_USB_SERIAL) -> int 
         return None
 
 
-def latency_warning(port: str, latency_ms: int, wire_time_s: float) -> str | None:
-    """A warning with the fix when the latency timer caps the loop rate (above 1 ms)."""
+def latency_warning(
+    port: str, latency_ms: int, wire_time_s: float, turnarounds: int = 1
+) -> str | None:
+    """A warning with the fix when the latency timer caps the loop rate (above 1 ms).
+
+    ``turnarounds`` is how many replies the cycle waits for one at a time (one per servo with
+    a Read per servo): each may wait a whole latency timer.
+    """
     if latency_ms <= 1:
         return None
-    cap_hz = 1.0 / (latency_ms * 1e-3 + wire_time_s)
+    cap_hz = 1.0 / (turnarounds * latency_ms * 1e-3 + wire_time_s)
     device = Path(port).resolve().name
     return (
         f"{port}: USB latency timer is {latency_ms} ms, which caps the control loop near "
@@ -156,13 +189,13 @@ def latency_warning(port: str, latency_ms: int, wire_time_s: float) -> str | Non
     )
 
 
-def cycle_wire_time_s(servo_count: int, read_bytes: int, baud: int, *, fast: bool) -> float:
-    """Bus time of one Sync Write of goals (4 B) plus one (Fast) Sync Read, return delay 0.
-
-    Sizes from reference/dynamixel.md §1.5: Sync Write 14 + 5N, read instruction 14 + N, replies
-    N x (11 + L) or 8 + N x (L + 4) bytes, at 10 bits per byte.
-    """
-    n = servo_count
-    reply = 8 + n * (read_bytes + 4) if fast else n * (11 + read_bytes)
-    return (14 + 5 * n + 14 + n + reply) * 10.0 / baud
-
+def cycle_wire_time_s(
+    family: ServoFamily, method: str, servo_count: int, read_bytes: int, baud: int,
+    *, write_bytes: int = 4,
+) -> tuple[float, int]:
+    """(bus seconds, reply turnarounds) of one control cycle at Return Delay Time 0: one Sync
+    Write of ``write_bytes`` per servo (goal position) plus one read of ``read_bytes`` per servo
+    by ``method``, at 10 bits per byte (``family.read_cost``, ``sync_write_bytes``)."""
+    cost = family.read_cost(method, servo_count, read_bytes)
+    total = cost.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)
+    return total * 10.0 / baud, cost.return_delays

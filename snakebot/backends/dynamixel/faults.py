@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from snakebot.errors import BackendError, BusError, ServoFaultError
 
@@ -17,7 +17,7 @@ HARDWARE_ERROR_BITS: Mapping[int, str] = {
 }
 
 ALERT_BIT = 0x80
-"""Status-packet error byte bit 7: the servo has latched a hardware error (read register 70)."""
+"""Protocol 2.0 status error byte bit 7: the servo has latched a hardware error (read 70)."""
 
 
 def decode_hardware_error(value: int) -> tuple[str, ...]:
@@ -33,29 +33,35 @@ def reboot_command(port: str, servo_id: int) -> str:
 
 
 class HardwareFaultError(ServoFaultError):
-    """Latched hardware errors on one or more servos; ``faults`` maps ID to the register value.
+    """Latched hardware errors on one or more servos; ``faults`` maps ID to the fault bits.
 
-    ``servo_id``/``flags`` describe the lowest faulty ID; the message names the others and the
-    reboot command that clears the latch.
+    The bits are Hardware Error Status (X series; named by :func:`decode_hardware_error`) or,
+    for a model without that register, the status packet's condition bits (``decode``: the
+    family's ``status_errors``). ``servo_id``/``flags`` describe the lowest faulty ID; the
+    message names the others and ``remedy`` (default: the reboot command that clears the latch).
     """
 
-    def __init__(self, port: str, faults: Mapping[int, int]) -> None:
+    def __init__(
+        self, port: str, faults: Mapping[int, int], *,
+        decode: Callable[[int], tuple[str, ...]] = decode_hardware_error,
+        remedy: str | None = None,
+    ) -> None:
         self.port = port
         self.faults = dict(faults)
         servo_id = min(self.faults)
         others = [
-            f"servo {i} ({', '.join(decode_hardware_error(v))})"
+            f"servo {i} ({', '.join(decode(v))})"
             for i, v in sorted(self.faults.items())
             if i != servo_id
         ]
-        message = (
+        message = remedy or (
             "Its torque is off until it is rebooted: remove the cause (stalled or overloaded "
             f"joint, supply voltage, heat), then run `{reboot_command(port, servo_id)}` or "
             "power-cycle it"
         )
         if others:
             message += f". Also faulty: {'; '.join(others)}"
-        super().__init__(servo_id, decode_hardware_error(self.faults[servo_id]), message)
+        super().__init__(servo_id, decode(self.faults[servo_id]), message)
 
 
 class ServoStatusError(BusError):

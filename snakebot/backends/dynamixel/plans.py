@@ -1,8 +1,9 @@
 """Prepared group transactions for the control loop: built once, no SDK objects made per cycle.
 
 :class:`SyncWritePlan` packs the Sync Write parameters (``[id, data...]`` per servo) with one
-precompiled ``struct``; :class:`SyncReadPlan` keeps one ``GroupSyncRead`` and unpacks every
-servo's block with one ``struct`` too. Plain ints and tuples, not numpy, on this path: a handful of
+precompiled ``struct``; :class:`ReadPlan` keeps one group read of the family's read method
+(Fast Sync / Sync / Bulk Read, or one Read per servo) and unpacks every servo's block with one
+``struct`` too. Plain ints and tuples, not numpy, on this path: a handful of
 small numpy calls costs more than the whole decode when the caches are cold between bus waits.
 """
 
@@ -15,7 +16,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from snakebot.backends.dynamixel import sdk
-from snakebot.backends.dynamixel.blocks import Block
+from snakebot.backends.dynamixel.blocks import Block, magnitude_value
+from snakebot.families import READ_METHODS
 from snakebot.servo_tables import Register, RegisterValueError
 
 if TYPE_CHECKING:
@@ -83,39 +85,84 @@ class SyncWritePlan:
         self._transport.check_sent(result, self.ids, self._what)
 
 
-class SyncReadPlan:
-    """A (Fast) Sync Read of one block from fixed servo IDs, reusing one ``GroupSyncRead``."""
+class ReadPlan:
+    """A group read of one block from fixed servo IDs by one of the family's read methods,
+    its SDK group object built once.
+
+    ``method`` is one of ``snakebot.families.READ_METHODS``: "fast_sync_read" or "sync_read"
+    (one ``GroupSyncRead``; Fast Sync Read only when a read asks ``fast``), "bulk_read" (one
+    ``GroupBulkRead`` naming the same block for every ID: Protocol 1.0's only group read), or
+    "read" (one Read per servo, each with its own retries: an AX-12A has no group read).
+    Every method gives the same rows, retries and SyncReadError naming the silent IDs.
+    """
 
     def __init__(
-        self, transport: Transport, reader: sdk.SyncReader, block: Block,
-        single: Callable[[int, Block], dict[str, int]],
+        self, transport: Transport, link: sdk.SdkLink, block: Block, ids: Sequence[int],
+        method: str, single: Callable[[int, Block], dict[str, int]],
     ) -> None:
+        if method not in READ_METHODS:
+            known = ", ".join(READ_METHODS)
+            raise ValueError(f"read method must be one of {known}, got {method!r}")
         self.block = block
-        self.ids = reader.ids
+        self.ids = tuple(ids)
+        self.method = method
         self._transport = transport
-        self._reader = reader
+        self._link = link
+        self._sync: sdk.SyncReader | None = None
+        self._bulk: sdk.BulkReader | None = None
+        if method in ("fast_sync_read", "sync_read"):
+            self._sync = sdk.SyncReader(link, block.address, block.size, self.ids)
+        elif method == "bulk_read":
+            self._bulk = sdk.BulkReader(link, [(i, block.address, block.size) for i in self.ids])
+        elif len(set(self.ids)) != len(self.ids):
+            raise ValueError(f"servo IDs appear twice in one read: {list(self.ids)}")
         self._single_read = single
         self._unpacker = block_struct(block)
+        self._magnitude = [(k, f.sign_bit) for k, f in enumerate(block.fields)
+                           if f.sign_bit is not None]
         self._total = block.size * len(self.ids)
-        self._what = f"sync read {','.join(block.keys)}"
+        name = "sync read" if method == "fast_sync_read" else method.replace("_", " ")
+        self._what = f"{name} {','.join(block.keys)}"
 
     def _transact(self, fast: bool) -> list[Row] | None:
         """One group transaction: each ID's field values in ID order, or None to retry."""
-        reader = self._reader
-        result = reader.transact(fast)
+        block = self.block
+        available: Callable[[int], bool]
+        data: Callable[[int], list[int] | bytearray]
+        if self._sync is not None:
+            result = self._sync.transact(fast and self.method == "fast_sync_read")
+            available, data = self._sync.available, self._sync.data
+        else:
+            assert self._bulk is not None
+            bulk = self._bulk
+            result = bulk.transact()
+            available = lambda i: bulk.available(i, block.address, block.size)  # noqa: E731
+            data = bulk.data
         if result != sdk.COMM_SUCCESS:
             self._transport.retry_or_raise(result, self.ids, self._what)
             return None
         buffer = bytearray()
         for servo_id in self.ids:
             # isAvailable per ID: after a failed read the SDK hands out zeros (reference §1.7).
-            if not reader.available(servo_id):
+            if not available(servo_id):
                 return None
-            buffer.extend(reader.data(servo_id))
+            buffer.extend(data(servo_id))
         # No servo's data can be longer than the block, so the total catches any short one.
         if len(buffer) != self._total:
             return None
-        return list(self._unpacker.iter_unpack(buffer))
+        return self._values(list(self._unpacker.iter_unpack(buffer)))
+
+    def _values(self, rows: list[Row]) -> list[Row]:
+        """Rows with sign-magnitude fields turned from raw bits into values."""
+        if not self._magnitude:
+            return rows
+        out = []
+        for row in rows:
+            values = list(row)
+            for k, bit in self._magnitude:
+                values[k] = magnitude_value(values[k], bit)
+            out.append(tuple(values))
+        return out
 
     def _single(self, servo_id: int) -> dict[str, int]:
         return self._single_read(servo_id, self.block)
@@ -127,14 +174,49 @@ class SyncReadPlan:
                 for i, row in zip(self.ids, self.read_rows(fast=fast), strict=True)}
 
     def read_rows(self, *, fast: bool = False) -> list[Row]:
-        """One tuple of field values (address order) per servo, in ID order."""
+        """One tuple of field values (address order) per servo, in ID order.
+
+        ``fast`` lets a "fast_sync_read" plan use Fast Sync Read (else it sends a Sync Read);
+        the other methods ignore it.
+        """
         transport = self._transport
+        if self._sync is None and self._bulk is None:
+            return self._read_each()
         rows = transport.run(self.ids, self._what, lambda: self._transact(fast))
         if rows is not None:  # the common case: first try, no retry machinery
             return rows
         transport.group_retries += transport.retries > 0
         return transport.group_read(self.ids, lambda: self._transact(fast), self._single,
                                     self._what, self._assemble, attempts=transport.retries)
+
+    def _read_each(self) -> list[Row]:
+        """One Read per servo; unpacked straight into rows while every servo answers, else
+        each servo read alone with its retries, naming the silent ones."""
+        rows = self._transport.run(self.ids, self._what, self._read_each_once)
+        if rows is not None:
+            return self._values(rows)
+        return self._assemble(self._transport.single_reads(self.ids, self._single, self._what))
+
+    def _read_each_once(self) -> list[Row] | None:
+        """The servos' blocks in ID order, or None at the first that fails (no retry here)."""
+        link, transport = self._link, self._transport
+        packet, port, family = link.packet, link.port, link.family
+        address, size, unpack = self.block.address, self.block.size, self._unpacker.unpack
+        alerts, rows = transport.alerts, []
+        try:  # guard() spelled out: this runs every control cycle
+            for servo_id in self.ids:
+                data, result, error = packet.readTxRx(port, servo_id, address, size)
+                if result != sdk.COMM_SUCCESS or len(data) != size:
+                    return None
+                if error or servo_id in alerts:
+                    if family.instruction_error(error):
+                        return None
+                    transport.note_condition(servo_id, error)
+                rows.append(unpack(bytes(data)))
+        except BaseException:
+            link.release()
+            raise
+        return rows
 
     def _assemble(self, values: dict[int, dict[str, int]]) -> list[Row]:
         keys = self.block.keys

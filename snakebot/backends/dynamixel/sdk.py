@@ -7,6 +7,7 @@ typed, and never leave the port's busy flag stuck (see :meth:`SdkLink.guard`).
 
 from __future__ import annotations
 
+import inspect
 import os
 import select
 from collections.abc import Callable, Iterator, Sequence
@@ -17,6 +18,7 @@ import dynamixel_sdk as _sdk
 
 from snakebot.config.ports import url_scheme
 from snakebot.errors import BusError
+from snakebot.families import ServoFamily
 
 try:
     import termios
@@ -91,6 +93,11 @@ class PacketHandlerLike(Protocol):
     ) -> tuple[int, int]:
         """(result, error byte)."""
 
+    def bulkReadTx(  # noqa: N802
+        self, port: PortHandlerLike, param: list[int], param_length: int
+    ) -> int:
+        """Send a Bulk Read request (Protocol 1.0's signature; 2.0's adds ``fast_option``)."""
+
     def syncWriteTxOnly(  # noqa: N802
         self,
         port: PortHandlerLike,
@@ -131,9 +138,16 @@ class GroupSyncReadLike(Protocol):
 
 
 class GroupBulkReadLike(Protocol):
-    """``dynamixel_sdk.GroupBulkRead``."""
+    """``dynamixel_sdk.GroupBulkRead``; ``data_dict`` holds ``[data, address, length]`` per ID."""
 
-    data_dict: dict[int, list[int] | bytearray]
+    data_dict: dict[int, list[Any]]
+    param: list[int]
+
+    def makeParam(self) -> None:  # noqa: N802
+        """Build ``param`` from the added IDs and blocks."""
+
+    def rxPacket(self) -> int:  # noqa: N802
+        """Collect every status of a Bulk Read already sent; result."""
 
     def addParam(self, dxl_id: int, start_address: int, data_length: int) -> bool:  # noqa: N802
         """False if the ID is already in the group (or data too long)."""
@@ -234,12 +248,13 @@ def port_handler_for(port: str) -> PortHandlerLike:
 
 
 class SdkLink:
-    """One opened port plus its packet handler; every call returns the SDK's raw result codes."""
+    """One opened port plus the packet handler of its servo family (``family.sdk_protocol``:
+    the SDK's Protocol 2.0 or 1.0 handler); every call returns the SDK's raw result codes."""
 
-    def __init__(self, port: PortHandlerLike, protocol: float) -> None:
+    def __init__(self, port: PortHandlerLike, family: ServoFamily) -> None:
         self.port = port
-        self.packet: PacketHandlerLike = _sdk.PacketHandler(protocol)
-        self.protocol = protocol
+        self.family = family
+        self.packet: PacketHandlerLike = _sdk.PacketHandler(family.sdk_protocol)
 
     @contextmanager
     def guard(self) -> Iterator[None]:
@@ -303,9 +318,9 @@ class SdkLink:
             return self.packet.reboot(self.port, dxl_id)
 
     def factory_reset(self, dxl_id: int, option: int) -> tuple[int, int]:
-        """(result, error byte); Protocol 1.0 takes no option."""
+        """(result, error byte); a family without reset options resets everything."""
         with self.guard():
-            if self.protocol == 1.0:
+            if not self.family.factory_reset_takes_option:
                 result, error = self.packet.factoryReset(self.port, dxl_id)  # type: ignore[call-arg]
                 return int(result), int(error)
             return self.packet.factoryReset(self.port, dxl_id, option)
@@ -386,7 +401,14 @@ class SyncReader:
 
 
 class BulkReader:
-    """A ``GroupBulkRead``: one (address, size) block per ID, built once and reused."""
+    """A ``GroupBulkRead``: one (address, size) block per ID, built once and reused.
+
+    dynamixel_sdk 4.1's ``GroupBulkRead.txPacket`` passes Protocol 2.0's ``fast_option`` to
+    every packet handler's ``bulkReadTx``, which Protocol 1.0's does not take (TypeError on
+    every P1 Bulk Read). Where the handler lacks that parameter, the request goes out here
+    through the handler's own ``bulkReadTx`` with the group's parameters, and the group
+    collects the replies as usual.
+    """
 
     def __init__(self, link: SdkLink, blocks: Sequence[tuple[int, int, int]]) -> None:
         group: GroupBulkReadLike = _sdk.GroupBulkRead(link.port, link.packet)
@@ -396,16 +418,27 @@ class BulkReader:
         self._link = link
         self._group = group
         self.blocks = tuple(blocks)
+        parameters = inspect.signature(link.packet.bulkReadTx).parameters
+        self._own_request = "fast_option" not in parameters
 
     def transact(self) -> int:
         """Run one Bulk Read; the COMM_* result."""
         with self._link.guard():
-            return self._group.txRxPacket()
+            if not self._own_request:
+                return self._group.txRxPacket()
+            group = self._group
+            group.makeParam()
+            result = self._link.packet.bulkReadTx(self._link.port, group.param, len(group.param))
+            if result != COMM_SUCCESS:
+                return result
+            return group.rxPacket()
 
     def available(self, dxl_id: int, address: int, size: int) -> bool:
         """Whether the last read holds fresh data for that block."""
         return bool(self._group.isAvailable(dxl_id, address, size))
 
     def data(self, dxl_id: int) -> list[int] | bytearray:
-        """Raw block bytes of ``dxl_id`` from the last read."""
-        return self._group.data_dict[dxl_id]
+        """Raw block bytes of ``dxl_id`` from the last read (``data_dict`` holds
+        ``[data, address, length]`` per ID)."""
+        data: list[int] | bytearray = self._group.data_dict[dxl_id][0]
+        return data

@@ -28,10 +28,14 @@ class StateDecoder:
             stall = physics.stall_torque_nm * physics.supply_voltage_v / physics.nominal_voltage_v
             per_unit = table[load_key].scale / 100.0 * stall
         self.read_effort = read_effort
-        self.keys: tuple[str, ...] = (load_key,) * read_effort + (
-            "present_velocity", "present_position"
-        )
-        """The registers to read, in address order (the order of each row)."""
+        wanted = (load_key,) * read_effort + ("present_velocity", "present_position")
+        self.keys: tuple[str, ...] = tuple(sorted(wanted, key=lambda k: table[k].address))
+        """The registers to read, in address order (the order of each row): load, velocity,
+        position on the X series; position, speed, load on AX/MX."""
+        self.position_index = self.keys.index("present_position")
+        """Where Present Position sits in a row."""
+        self._velocity_index = self.keys.index("present_velocity")
+        self._effort_index = self.keys.index(load_key) if read_effort else None
         velocity = converter.direction * table["present_velocity"].scale
         effort = converter.direction * per_unit
         # Plain floats per joint: (position gain, position bias, velocity gain, effort gain).
@@ -43,15 +47,10 @@ class StateDecoder:
 
     def decode(self, rows: list[tuple[int, ...]]) -> np.ndarray:
         """(3, N): position, velocity, effort from one row per servo, head to tail."""
+        p, v, e = self.position_index, self._velocity_index, self._effort_index
         position, velocity, effort = [], [], []
-        if not self.read_effort:
-            for (vel, pos), (pg, pb, vg, _) in zip(rows, self._terms, strict=True):
-                position.append(pos * pg + pb)
-                velocity.append(vel * vg)
-            effort = [0.0] * len(rows)
-        else:
-            for (load, vel, pos), (pg, pb, vg, eg) in zip(rows, self._terms, strict=True):
-                position.append(pos * pg + pb)
-                velocity.append(vel * vg)
-                effort.append(load * eg)
+        for row, (pg, pb, vg, eg) in zip(rows, self._terms, strict=True):
+            position.append(row[p] * pg + pb)
+            velocity.append(row[v] * vg)
+            effort.append(0.0 if e is None else row[e] * eg)
         return np.array((position, velocity, effort))

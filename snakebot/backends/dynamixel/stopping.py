@@ -15,6 +15,9 @@ torque off), a failed ``connect`` applies it where the servos stand (nothing has
 - A tripped Bus Watchdog refuses goals (e-Manual control_table_buswatchdog): it is cleared before
   the ramp, and the ramp's last goal is read back; a servo that did not take it gets the ramp
   again once, then StopIncompleteError (hold) after the policy.
+- A model without a Bus Watchdog (AX, MX in Protocol 1.0) has nothing to clear or disarm: hold
+  leaves torque on at the safe pose, limp turns it off; docs/hardware.md says what protects such
+  servos when the host dies.
 """
 
 from __future__ import annotations
@@ -26,7 +29,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from snakebot.backends.dynamixel.faults import (
-    HardwareFaultError,
     StopIncompleteError,
     SyncReadError,
     TrackingError,
@@ -138,6 +140,13 @@ class StopSequence:
 
     def _vanished_error(self) -> BusError:
         b = self.b
+        if not b.capabilities.bus_watchdog:
+            return BusError(
+                b.port, b.ids, f"the port vanished, so the stop policy ({b.stop_policy}) could "
+                f"not be sent: {b.robot.servo.name} servos have no Bus Watchdog, so they hold "
+                "their last goal, torque on, until they are power-cycled or a new session "
+                "connects (their Alarm Shutdown turns torque off on overload or overheating)"
+            )
         return BusError(
             b.port, b.ids, f"the port vanished, so the stop policy ({b.stop_policy}) could not be "
             f"sent: the servos stopped when their Bus Watchdog tripped "
@@ -150,12 +159,14 @@ class StopSequence:
         those that did not take it. The error if nothing could be sent."""
         b = self.b
         try:
+            watchdog = b.capabilities.bus_watchdog
             if b.stop_policy == "limp":
                 b.bus.sync_write("torque_enable", dict.fromkeys(b.ids, 0))
                 b.torque_enabled = False
-                b.bus.sync_write("bus_watchdog", dict.fromkeys(b.ids, 0))
+                if watchdog:
+                    b.bus.sync_write("bus_watchdog", dict.fromkeys(b.ids, 0))
                 self._confirm("torque_enable", 0)
-            else:
+            elif watchdog:
                 b.bus.sync_write("bus_watchdog", dict.fromkeys(b.ids, 0))
                 self._confirm("bus_watchdog", 0)
         except BusError as exc:
@@ -273,6 +284,8 @@ class StopSequence:
 
     # -- the Bus Watchdog and tracking -----------------------------------------------------------
     def _clear_tripped(self) -> None:
+        if not self.b.capabilities.bus_watchdog:
+            return
         tripped = [i for i, v in self._read_answering("bus_watchdog").items()
                    if v["bus_watchdog"] < 0]
         if tripped:
@@ -288,6 +301,8 @@ class StopSequence:
     def check_watchdog(self) -> None:
         """Slow-rate read of the Bus Watchdog; a trip (reads -1) is cleared and recovered from."""
         b = self.b
+        if not b.capabilities.bus_watchdog:
+            return
         values = b.bus.sync_read("bus_watchdog", b.ids, fast=b.fast_read)
         tripped = [i for i, v in values.items() if v["bus_watchdog"] < 0]
         if tripped:
@@ -316,16 +331,21 @@ class StopSequence:
     def diagnose(self, stalls: Sequence[Stall]) -> None:
         """Joints stood still while their goals moved: recover a tripped watchdog, else raise."""
         b = self.b
-        watchdog = b.bus.sync_read("bus_watchdog", b.ids)
-        tripped = [i for i, v in watchdog.items() if v["bus_watchdog"] < 0]
-        if tripped:
-            self.recover_watchdog(tripped)
-            return
-        status = b.bus.sync_read(("torque_enable", "hardware_error_status"), b.ids)
-        faults = {i: v["hardware_error_status"] for i, v in status.items()
-                  if v["hardware_error_status"]}
-        if faults:
-            raise HardwareFaultError(b.port, faults)
+        if b.capabilities.bus_watchdog:
+            watchdog = b.bus.sync_read("bus_watchdog", b.ids)
+            tripped = [i for i, v in watchdog.items() if v["bus_watchdog"] < 0]
+            if tripped:
+                self.recover_watchdog(tripped)
+                return
+        if b.capabilities.hardware_error_status:
+            status = b.bus.sync_read(("torque_enable", "hardware_error_status"), b.ids)
+            faults = {i: v["hardware_error_status"] for i, v in status.items()
+                      if v["hardware_error_status"]}
+            if faults:
+                raise b.fault_error(faults)
+        else:
+            status = b.bus.sync_read("torque_enable", b.ids)
+            b.check_faults(every_servo=True)
         joints = [s.joint for s in stalls]
         ids = [b.ids[j] for j in joints]
         off = [i for i in ids if not status[i]["torque_enable"]]

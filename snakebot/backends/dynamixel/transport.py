@@ -14,12 +14,10 @@ from collections.abc import Callable, Sequence
 from typing import TypeVar
 
 from snakebot.backends.dynamixel import sdk
-from snakebot.backends.dynamixel.faults import ALERT_BIT, ServoStatusError, SyncReadError
+from snakebot.backends.dynamixel.faults import ServoStatusError, SyncReadError
 from snakebot.errors import BusError
 
 RETRYABLE = frozenset({sdk.COMM_RX_TIMEOUT, sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL})
-_STATUS_CRC_ERROR = 0x03  # the servo saw a corrupt instruction: worth sending again
-_STATUS_ACCESS_ERROR = 0x07
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -43,6 +41,10 @@ class Transport:
         self.group_retries = 0
         self.group_fallbacks = 0
         self.alerts: set[int] = set()
+        self.conditions: dict[int, int] = {}
+        """Per servo ID, the condition bits of its last status packet that had any (the family's
+        ``condition_bits``: the Alert bit, or Protocol 1.0's overload, overheating, input
+        voltage); an ID leaves when a status packet comes without them."""
         self.last_instruction_s = 0.0
         self.vanished: BusError | None = None
         """The first OS error on the port (it vanished); later transactions fail the same way."""
@@ -91,19 +93,17 @@ class Transport:
     ) -> list[int]:
         """Run ``op`` with retries; the data, or ServoStatusError / BusError naming the servo."""
         result, error = sdk.COMM_TX_FAIL, 0
+        family = self.link.family
         for n in range(self.retries + 1):
             result, error, data = self.run([servo_id], what, op)
             if result == sdk.COMM_SUCCESS:
-                if error & ALERT_BIT and not accept_alert:
-                    self.alerts.add(servo_id)
-                elif not error & ALERT_BIT:
-                    self.alerts.discard(servo_id)
-                number = error & ~ALERT_BIT
+                self.note_condition(servo_id, error, accept_alert=accept_alert)
+                number = family.instruction_error(error)
                 if number == 0:
                     return data
-                if number != _STATUS_CRC_ERROR or n == self.retries:
+                if number != family.resend_error or n == self.retries:
                     text = self.link.error_text(number)
-                    if eeprom and number == _STATUS_ACCESS_ERROR:
+                    if eeprom and number == family.access_error:
                         text += " (EEPROM registers can only be written with torque off)"
                     raise ServoStatusError(self.port, servo_id, error, f"{what}: {text}")
             elif result == sdk.COMM_PORT_BUSY:
@@ -117,6 +117,16 @@ class Transport:
             self.port, [servo_id], f"{what}: {self.link.result_text(result)} "
             f"(after {attempts} attempt{'s' if attempts > 1 else ''})",
         )
+
+    def note_condition(self, servo_id: int, error: int, *, accept_alert: bool = False) -> None:
+        """Record the condition bits of a status packet from ``servo_id`` (see ``conditions``)."""
+        bits = error & self.link.family.condition_bits
+        if bits and not accept_alert:
+            self.alerts.add(servo_id)
+            self.conditions[servo_id] = bits
+        elif not bits:
+            self.alerts.discard(servo_id)
+            self.conditions.pop(servo_id, None)
 
     def group_read(
         self,
@@ -140,6 +150,15 @@ class Transport:
                 return result
             if n < tries - 1:
                 self.group_retries += 1
+        partial = self.single_reads(ids, single, what)
+        self.group_fallbacks += 1
+        return assemble(partial)
+
+    def single_reads(
+        self, ids: Sequence[int], single: Callable[[int], dict[str, int]], what: str
+    ) -> dict[int, dict[str, int]]:
+        """``single(id)`` for every ID (each with its own retries): ``{id: values}``, or
+        SyncReadError naming the IDs that never answered (``partial`` holds the others)."""
         partial, missing = {}, []
         for servo_id in ids:
             try:
@@ -154,5 +173,4 @@ class Transport:
                 f"{', '.join(map(str, missing))} after {self.retries + 1} attempts; check their "
                 "power and cable, and that their ID and baud rate match the config", partial,
             )
-        self.group_fallbacks += 1
-        return assemble(partial)
+        return partial

@@ -63,3 +63,20 @@ def test_protocol_1_robot_and_a_protocol_2_servo_on_one_pty() -> None:
             assert patient(lambda: p1.write4ByteTxRx(port, 3, 116, 2100)) == (dxl.COMM_SUCCESS, 0)
         finally:
             port.closePort()
+
+
+@pytest.mark.pty
+@pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX")
+def test_the_ax_robot_is_served_as_its_own_servos() -> None:
+    with emulator("--robot", "snake12-ax12a") as emu:
+        assert {(s["model"], s["protocol"]) for s in emu.first["servos"]} == {("AX-12A", 1.0)}
+        assert emu.first["servo_ids"] == list(range(1, 13)) and emu.first["baud"] == 1_000_000
+        port = dxl.PortHandler(emu.port)
+        assert port.openPort() and port.setBaudRate(1_000_000)
+        try:
+            p1 = dxl.PacketHandler(1.0)
+            assert patient(lambda: p1.ping(port, 12)) == (12, dxl.COMM_SUCCESS, 0)
+            assert patient(lambda: p1.read2ByteTxRx(port, 7, 36)) == (512, dxl.COMM_SUCCESS, 0)
+            assert dxl.PacketHandler(2.0).ping(port, 12)[1] == dxl.COMM_RX_TIMEOUT
+        finally:
+            port.closePort()

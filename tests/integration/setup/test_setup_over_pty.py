@@ -49,7 +49,7 @@ def test_fresh_servos_plugged_in_one_at_a_time_keep_their_eeprom(tmp_path: Path,
         assert out.strip() == "servo ID 1 at 57600 baud is now ID 1 at 1000000 baud"
     with emulator("--robot", "snake12", "--fresh", "2", "--state-file", state) as emu:
         assert (emu.first["servo_ids"], emu.first["waiting"]) == ([1, 2], 0)
-        code, out, _ = cli("scan", "--port", emu.port, "--json")
+        code, out, _ = cli("scan", "--port", emu.port, "--protocol", "2", "--json")
         assert code == 0
         assert [(s["id"], s["baud"]) for s in json.loads(out)["servos"]] == [
             (1, 1_000_000), (2, 1_000_000)]
@@ -57,6 +57,17 @@ def test_fresh_servos_plugged_in_one_at_a_time_keep_their_eeprom(tmp_path: Path,
 
 def test_two_attached_fresh_servos_collide_in_scan(cli: Cli) -> None:
     with emulator("--robot", "snake12", "--fresh", "2", "--attached", "2") as emu:
-        code, out, err = cli("scan", "--port", emu.port, "--baud", "57600")
+        code, out, err = cli("scan", "--port", emu.port, "--baud", "57600", "--protocol", "2")
         assert code == 1
         assert "DUPLICATE ID" in out and "ID 1 at 57600 baud" in err
+
+
+def test_scan_finds_an_ax_chain_and_an_x_servo_on_one_pty(cli: Cli) -> None:
+    with emulator("--robot", "snake12-ax12a", "--also", "XL430-W250:20") as emu:
+        code, out, err = cli("scan", "--port", emu.port, "--ids", "0-21", "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    found = [(s["id"], s["protocol"], s["model"]) for s in report["servos"]]
+    assert found == [(20, 2.0, "XL430-W250"), *((i, 1.0, "AX-12A") for i in range(1, 13))]
+    assert report["mixed"] is True
+    assert "servos of two protocols share this port" in err

@@ -101,3 +101,17 @@ def test_a_key_set_twice_in_two_units_is_refused(config_dir: Path) -> None:
                       "[settings]\nreturn_delay_time = 0\nreturn_delay_time_us = 0")
     with pytest.raises(ConfigError, match="set twice"):
         load_settings(load_robot(path))
+
+
+@pytest.mark.parametrize(("line", "message"), [
+    ("lock = 1", "lock is never written: a locked EEPROM"),
+    ("protocol_type = 1", r"protocol_type is not a setting: the robot file's \[bus\] protocol"),
+])
+def test_lock_and_protocol_type_are_never_settings(
+    config_dir: Path, line: str, message: str
+) -> None:
+    robot = "snake12-ax12a" if line.startswith("lock") else "snake12"
+    path = edit_robot(config_dir, robot, "[settings]", f"[settings]\n{line}")
+    with pytest.raises(ConfigError, match=message) as info:
+        load_settings(load_robot(path))
+    assert str(path) in str(info.value)

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from snakebot.emulation.protocol import build_fast_status, build_status
+from snakebot.emulation.protocol1 import build_status as build_status1
 
 
 def status(servo_id: int, error: int = 0, params: bytes = b"") -> bytes:
@@ -89,3 +90,8 @@ class ScriptedPort:
 
     def isPacketTimeout(self) -> bool:  # noqa: N802
         return self._exhausted and not self._rx
+
+
+def status1(servo_id: int, error: int = 0, params: bytes = b"") -> bytes:
+    """One Protocol 1.0 status packet (the emulator's own codec)."""
+    return build_status1(servo_id, error, params)

@@ -11,6 +11,7 @@ from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError, SyncReadError
 from snakebot.backends.dynamixel.sdk import SdkLink, SyncWriter
 from snakebot.errors import BusError
+from snakebot.families import family_named
 from snakebot.servo_tables import RegisterValueError
 from tests.unit.backends.dynamixel.fakeport import ScriptedPort, corrupt, fast_status, status
 
@@ -112,7 +113,7 @@ def test_values_out_of_register_range_never_reach_the_bus(
 
 
 def test_short_sync_write_rows_are_refused_before_add_param(port: ScriptedPort) -> None:
-    link = SdkLink(port, 2.0)
+    link = SdkLink(port, family_named("dynamixel-p2"))
     with pytest.raises(ValueError, match="servo 2: 3 data bytes, register needs 4"):
         SyncWriter(link, 116, 4, [(1, b"\x00\x08\x00\x00"), (2, b"\x00\x08\x00")])
 

@@ -23,6 +23,7 @@ from snakebot.backends.dynamixel.shutdown import ramp_poses, safe_pose
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.errors import BusError, ServoFaultError
+from snakebot.families import family_named
 
 IDS = tuple(range(1, 9))
 
@@ -108,6 +109,23 @@ def test_settings_that_cost_rate_are_warnings(converter: TickConverter) -> None:
     assert any("Return Delay Time up to 500 µs on servo(s) 1, 4" in w for w in warnings)
 
 
+def test_without_a_watchdog_alarm_shutdown_must_cover_overload_and_heat() -> None:
+    ax = TickConverter.for_robot(load_robot("snake12-ax12a"))
+    ids = tuple(range(1, 13))
+    # AX-12A: no Operating or Drive Mode register; CW/CCW Angle Limit 0..1023, Alarm Shutdown 36
+    settings = {i: {"return_delay_time": 0, "min_position_limit": 0, "max_position_limit": 1023,
+                    "shutdown": 36} for i in ids}
+    assert check_settings(settings, ids, ax, watchdog=False) == ([], [])
+    settings[3]["shutdown"] = 4  # overheating only
+    settings[5]["min_position_limit"] = settings[5]["max_position_limit"] = 0  # wheel mode
+    errors, _ = check_settings(settings, ids, ax, watchdog=False)
+    assert len(errors) == 2
+    assert "servo 3: Alarm Shutdown is 4, needs bits 2 and 5" in errors[0]
+    assert "servo 5: CW and CCW Angle Limit are both 0, which is wheel mode" in errors[1]
+    settings[5]["max_position_limit"] = 1023
+    assert check_settings(settings, ids, ax, watchdog=True) == ([], [])  # a watchdog guards it
+
+
 def test_latency_timer_is_read_through_symlinks(tmp_path: Path) -> None:
     sysfs = tmp_path / "sys"
     (sysfs / "ttyUSB3").mkdir(parents=True)
@@ -131,9 +149,26 @@ def test_latency_warning_gives_the_cap_and_the_fix() -> None:
 
 def test_wire_time_matches_the_reference_tables() -> None:
     # reference/performance.md Table 7a/7b: N=16, 4 Mbps, RDT 0, 10-byte read
-    assert cycle_wire_time_s(16, 10, 4_000_000, fast=True) == pytest.approx(890e-6)
-    assert cycle_wire_time_s(16, 10, 4_000_000, fast=False) == pytest.approx(1150e-6)
-    assert cycle_wire_time_s(8, 10, 1_000_000, fast=True) == pytest.approx(1960e-6)
+    p2 = family_named("dynamixel-p2")
+    assert cycle_wire_time_s(p2, "fast_sync_read", 16, 10, 4_000_000) == (
+        pytest.approx(890e-6), 1)
+    assert cycle_wire_time_s(p2, "sync_read", 16, 10, 4_000_000) == (pytest.approx(1150e-6), 16)
+    assert cycle_wire_time_s(p2, "fast_sync_read", 8, 10, 1_000_000)[0] == pytest.approx(1960e-6)
+
+
+def test_wire_time_of_protocol_1_matches_servo_families_section_5() -> None:
+    # 12 servos, 1 Mbps, read L = 6, goal write L = 2: 12 Reads 2.40 ms, Bulk Read 1.87 ms,
+    # Sync Write 0.44 ms
+    p1 = family_named("dynamixel-p1")
+    assert cycle_wire_time_s(p1, "read", 12, 6, 1_000_000, write_bytes=2) == (
+        pytest.approx(2.84e-3), 12)
+    assert cycle_wire_time_s(p1, "bulk_read", 12, 6, 1_000_000, write_bytes=2) == (
+        pytest.approx(2.31e-3), 12)
+
+
+def test_latency_warning_counts_one_timer_per_reply_turnaround() -> None:
+    text = latency_warning("/dev/ttyUSB0", 16, 0.00284, turnarounds=12)
+    assert text is not None and "near 5 Hz" in text
 
 
 def test_stop_ramp_is_smooth_and_ends_on_the_safe_pose() -> None:

@@ -1,0 +1,72 @@
+"""Which baud rates to look for servos at: each model's own Baud Rate table, as the port opens them.
+
+A model's table (``snakebot.servo_tables``) lists the rates its Baud Rate register selects. Protocol
+1.0 models count them as 2 000 000 / (value + 1) bit/s, so an AX-12A at value 34 runs 57 143 bit/s,
+which a host UART opened at 57 600 hears (0.8 % apart; a UART frame tolerates a few per cent). The
+rates here are the ones ``dynamixel_sdk``'s ``PortHandler`` can open.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from snakebot.families import ServoFamily
+from snakebot.servo_tables import ServoTable, supported_models, table_for_model
+
+PORT_BAUDS = (9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000, 576000, 921600,
+              1_000_000, 1_152_000, 2_000_000, 2_500_000, 3_000_000, 3_500_000, 4_000_000)
+"""Rates dynamixel_sdk's PortHandler opens (``getCFlagBaud``; 4.5 Mbps needs a custom handler)."""
+TOLERANCE = 0.03
+"""How far a servo's rate may lie from the port's for the two to hear each other."""
+SLOW = 57600
+"""Rates below this are searched last (a snake bus never runs that slow on purpose)."""
+
+
+def port_rate(rate: int) -> int | None:
+    """The rate the port is opened at to talk to a servo running ``rate`` bit/s (None: none)."""
+    nearest = min(PORT_BAUDS, key=lambda b: abs(b - rate))
+    return nearest if abs(nearest - rate) <= TOLERANCE * rate else None
+
+
+def factory_baud(table: ServoTable) -> int:
+    """The rate a servo of this model answers at straight from the factory (or after a full
+    Factory Reset), as the port opens it."""
+    rate = table.baud_rates[table["baud_rate"].default]
+    return port_rate(rate) or rate
+
+
+def baud_value(table: ServoTable, baud: int) -> int:
+    """The Baud Rate register value that puts a servo of ``table`` at ``baud`` as the port opens
+    it (1 Mbps -> 1 on an AX, 3 on an X); RegisterValueError listing the model's rates if none."""
+    rates = sorted(table.baud_rates.items())
+    matches = [v for v, r in rates if r == baud] + [v for v, r in rates if port_rate(r) == baud]
+    return matches[0] if matches else table.baud_index(baud)  # raises, naming the model's rates
+
+
+def preferred(rates: Iterable[int], first: int | None = None) -> tuple[int, ...]:
+    """``rates`` in search order: ``first``, then 1 Mbps, then upwards, the slow ones last."""
+    pool = set(rates)
+    head = [r for r in (first, 1_000_000) if r is not None and r in pool]
+    rest = sorted(pool - set(head), key=lambda r: (r < SLOW, r))
+    return (*dict.fromkeys(head), *rest)
+
+
+def model_bauds(table: ServoTable) -> tuple[int, ...]:
+    """Every rate a servo of ``table`` can be at, its factory rate first."""
+    rates = {port_rate(r) for r in table.baud_rates.values()} - {None}
+    return preferred((r for r in rates if r is not None), factory_baud(table))
+
+
+def family_bauds(family: ServoFamily, models: Iterable[str] | None = None) -> tuple[int, ...]:
+    """Every rate any model speaking ``family`` can be at (of ``models``; default every model
+    snakebot has data for), in search order, the most common factory rate first."""
+    tables = [table_for_model(m) for m in (supported_models() if models is None else models)]
+    speaking = [t for t in tables if family.speaks(t)]
+    rates: set[int] = set()
+    factory: dict[int, int] = {}
+    for table in speaking:
+        rates.update(model_bauds(table))
+        rate = factory_baud(table)
+        factory[rate] = factory.get(rate, 0) + 1
+    first = max(factory, key=lambda r: (factory[r], r)) if factory else None
+    return preferred(rates, first)
