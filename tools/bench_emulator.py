@@ -150,6 +150,8 @@ def main() -> None:
     parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
 
+    if args.baseline is not None and not (args.baseline / "snakebot").is_dir():
+        parser.error(f"--baseline {args.baseline}: not a snakebot checkout (no snakebot/ in it)")
     if args.json:
         print(json.dumps(measure(args.sizes, args.rounds, args.cycles)))
         return

@@ -52,12 +52,12 @@ def _zeros(length: int) -> bytes:
     return bytes(length) if length <= MAX_PACKET_BYTES - 11 else b""
 
 
-def _by_id(servos: Sequence[VirtualServo]) -> dict[int, list[VirtualServo]]:
+def by_id(servos: Sequence[VirtualServo]) -> dict[int, list[VirtualServo]]:
     """The servos by ID, in bus order (a group instruction finds each entry's servos in O(1))."""
-    by_id: dict[int, list[VirtualServo]] = {}
+    found: dict[int, list[VirtualServo]] = {}
     for servo in servos:
-        by_id.setdefault(servo.servo_id, []).append(servo)
-    return by_id
+        found.setdefault(servo.servo_id, []).append(servo)
+    return found
 
 
 def _answers(servo: VirtualServo, instruction: int) -> bool:
@@ -183,11 +183,11 @@ def _reads(
         # 16-bit LEN may overflow): nobody answers, as ROBOTIS's reference slave
         # (Dynamixel2Arduino `Slave`) sends nothing when a reply would not fit its buffer.
         return []
-    by_id = _by_id(servos)
+    servos_by_id = by_id(servos)
     answers: list[list[tuple[VirtualServo, int, bytes]]] = []
     for servo_id, address, length in requests:
         row = []
-        for servo in by_id.get(servo_id, ()):
+        for servo in servos_by_id.get(servo_id, ()):
             if _answers(servo, instruction):
                 error, data = _read_reply(servo, address, length)
                 row.append((servo, error, data))
@@ -229,16 +229,16 @@ def _sync_write(packet: Packet, servos: Sequence[VirtualServo]) -> list[Slot]:
     stride = 1 + length
     if length == 0 or (len(params) - 4) % stride:
         return []
-    by_id = _by_id(servos)
+    servos_by_id = by_id(servos)
     for offset in range(4, len(params), stride):
-        for servo in by_id.get(params[offset], ()):
+        for servo in servos_by_id.get(params[offset], ()):
             servo.write(address, params[offset + 1 : offset + stride])
     return []
 
 
 def _bulk_write(packet: Packet, servos: Sequence[VirtualServo]) -> list[Slot]:
     params, offset = packet.params, 0
-    by_id = _by_id(servos)
+    servos_by_id = by_id(servos)
     while offset + 5 <= len(params):
         servo_id, address, length = (
             params[offset],
@@ -248,7 +248,7 @@ def _bulk_write(packet: Packet, servos: Sequence[VirtualServo]) -> list[Slot]:
         data = params[offset + 5 : offset + 5 + length]
         if len(data) != length:
             return []
-        for servo in by_id.get(servo_id, ()):
+        for servo in servos_by_id.get(servo_id, ()):
             servo.write(address, data)
         offset += 5 + length
     return []

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from snakebot.emulation.instructions import Slot
+from snakebot.emulation.instructions import Slot, by_id
 from snakebot.emulation.protocol import StatusError
 from snakebot.emulation.protocol1 import (
     BROADCAST_ID,
@@ -135,10 +135,10 @@ def _sync_write(packet: Packet, servos: Sequence[VirtualServo]) -> None:
     stride = 1 + length
     if length == 0 or (len(params) - 2) % stride:
         return
+    servos_by_id = by_id(servos)
     for offset in range(2, len(params), stride):
-        for servo in servos:
-            if servo.servo_id == params[offset]:
-                servo.write(address, params[offset + 1 : offset + stride])
+        for servo in servos_by_id.get(params[offset], ()):
+            servo.write(address, params[offset + 1 : offset + stride])
 
 
 def _bulk_read(packet: Packet, servos: Sequence[VirtualServo]) -> list[Slot]:
@@ -146,13 +146,12 @@ def _bulk_read(packet: Packet, servos: Sequence[VirtualServo]) -> list[Slot]:
     if len(params) < 4 or (len(params) - 1) % 3:
         return []
     slots: list[Slot] = []
+    servos_by_id = by_id(servos)
     for offset in range(1, len(params), 3):
         length, servo_id, address = params[offset : offset + 3]
         replies = []
-        for servo in servos:
-            if servo.servo_id == servo_id and servo.table.specs.bulk_read and _answers(
-                servo, Instruction.BULK_READ
-            ):
+        for servo in servos_by_id.get(servo_id, ()):
+            if servo.table.specs.bulk_read and _answers(servo, Instruction.BULK_READ):
                 error, data = _read(servo, bytes([address, length]))
                 replies.append((servo, build_status(servo_id, error, data)))
         if not replies:

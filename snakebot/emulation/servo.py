@@ -77,10 +77,11 @@ class VirtualServo:
         # ID and Baud Rate are one byte each, looked up for every packet by every servo.
         self._id_address = self.memory.by_key["id"].address
         self._baud_address = self.memory.by_key["baud_rate"].address
+        protocol_type = self.memory.by_key.get("protocol_type")  # one byte, where the model has it
+        self._protocol_address = None if protocol_type is None else protocol_type.address
         # X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX Protocol 1.0 layout.
         self.firmware: Firmware = firmware if "operating_mode" in self.table else firmware_p1
         self._alarms = 0  # latched faults, on tables without Hardware Error Status
-        self._protocol: tuple[int, float] = (-1, 2.0)  # (memory version, protocol)
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
         if processing_time_s is None:
@@ -138,16 +139,9 @@ class VirtualServo:
     def protocol(self) -> float:
         """The protocol the servo answers: Protocol Type(13) where the model has it (1 selects
         1.0, anything else 2.0), otherwise the model's only protocol (AX, MX 1.0 firmware)."""
-        memory = self.memory
-        cached = self._protocol
-        if cached[0] == memory.version:  # asked on every packet: decode once per table change
-            return cached[1]
-        if memory.has("protocol_type"):
-            version = 1.0 if memory.get("protocol_type") == 1 else 2.0
-        else:
-            version = float(self.table.protocol)
-        self._protocol = (memory.version, version)
-        return version
+        if self._protocol_address is not None:
+            return 1.0 if self.memory.data[self._protocol_address] == 1 else 2.0
+        return float(self.table.protocol)
 
     @property
     def speaks_protocol_2(self) -> bool:
