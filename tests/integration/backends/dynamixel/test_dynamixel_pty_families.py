@@ -1,8 +1,9 @@
 """`snakebot run` over `snakebot emulate --pty` for the Protocol 1.0 families, as a user runs them.
 
 Two processes and a real pseudo-terminal: the AX-12A snake (one Read per servo a cycle, no Bus
-Watchdog) and snake12 with its X-series servos switched to Protocol 1.0 (Bulk Read). The run
-exits 0, every command stays inside the joint limits, and the servos followed.
+Watchdog), snake12 with its X-series servos switched to Protocol 1.0 (Bulk Read) and the
+2XL430 snake (two axes per case, Protocol 2.0), each running the serpenoid gait the issue names.
+The run exits 0, every command stays inside the joint limits, and the servos followed.
 """
 
 from __future__ import annotations
@@ -30,11 +31,13 @@ pytestmark = [
 def robot_file(config_dir: Path, case: str) -> tuple[Path, list[str]]:
     if case == "ax12a":
         return config_dir / "robots" / "snake12-ax12a.toml", []
+    if case == "2xl430":
+        return config_dir / "robots" / "snake8-2xl430.toml", []
     path = edit_robot(config_dir, "snake12", "protocol = 2.0", "protocol = 1.0")
     return path, ["--protocol", "1"]
 
 
-@pytest.mark.parametrize("case", ["ax12a", "x-p1"])
+@pytest.mark.parametrize("case", ["ax12a", "x-p1", "2xl430"])
 def test_a_protocol_1_snake_runs_a_gait_over_the_pty_emulator(
     case: str, config_dir: Path, tmp_path: Path
 ) -> None:
@@ -42,10 +45,10 @@ def test_a_protocol_1_snake_runs_a_gait_over_the_pty_emulator(
     robot = load_robot(path)
     log = tmp_path / "run.csv"
     with emulator("--robot", str(path), *extra) as emu:
-        assert {s["protocol"] for s in emu.first["servos"]} == {1.0}
+        assert {s["protocol"] for s in emu.first["servos"]} == {robot.bus.protocol}
         run = subprocess.run(
             [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--robot",
-             str(path), "--port", emu.port, "--gait", "sidewinding", "--duration", "2",
+             str(path), "--port", emu.port, "--gait", "serpenoid", "--duration", "2",
              "--rate", "50", "--log", str(log), "--json"],
             capture_output=True, text=True, timeout=180,
         )
