@@ -33,9 +33,7 @@ from snakebot.errors import ConfigError
 from snakebot.families import family_for
 from snakebot.servo_tables import ServoTable
 
-__all__ = ["BAUD_RATES", "load_robot", "load_servo_model", "robot_names", "servo_file_name"]
-
-BAUD_RATES = (9600, 57600, 115200, 1_000_000, 2_000_000, 3_000_000, 4_000_000, 4_500_000)
+__all__ = ["load_robot", "load_servo_model", "robot_names", "servo_file_name"]
 
 
 def config_search_path() -> list[Path]:
