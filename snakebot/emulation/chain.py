@@ -25,8 +25,8 @@ from snakebot.emulation.faults import FaultBook, Faults
 from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.instructions import Slot
 from snakebot.emulation.motion import STEP_S, ChainPhysics, MotionModel
-from snakebot.emulation.protocol import ParserStats
 from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.stream import ParserStats
 from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
 from snakebot.servo import FACTORY_BAUD
 from snakebot.servo_tables import ServoTable, table_for_model
@@ -112,7 +112,7 @@ class EmulatedChain:
         return self._parser.stats
 
     @property
-    def parser1_stats(self) -> protocol1.ParserStats:
+    def parser1_stats(self) -> ParserStats:
         """The same for the Protocol 1.0 receiver (`crc_errors` counts bad checksums)."""
         return self._parser1.stats
 

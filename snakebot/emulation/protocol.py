@@ -11,6 +11,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
+from snakebot.emulation.stream import FrameStream
+
 HEADER = b"\xff\xff\xfd\x00"
 BROADCAST_ID = 0xFE
 MAX_ID = 0xFC
@@ -182,68 +184,13 @@ class Packet:
         return self.params[1:] if self.is_status else self.params
 
 
-@dataclass
-class ParserStats:
-    """Counts of what the stream parser took in and threw away, for diagnostics and tests."""
-
-    received_bytes: int = 0
-    packets: int = 0
-    dropped_bytes: int = 0
-    crc_errors: int = 0
-    bad_headers: int = 0
-    stale_resets: int = 0
-
-
-class StreamParser:
+class StreamParser(FrameStream[Packet]):
     """Find Protocol 2.0 packets in a byte stream fed in arbitrary chunks; never raises on input.
 
     Bytes before a header are dropped; a header with an invalid ID, length or CRC costs one byte and
     the search resumes after it. A partial packet older than `stale_after_s` (no byte for that long)
     is discarded, as a servo's receiver times out.
     """
-
-    def __init__(self, *, stale_after_s: float | None = 0.02) -> None:
-        self._buffer = bytearray()
-        self._last_byte_s = 0.0
-        self._stale_after_s = stale_after_s
-        self.stats = ParserStats()
-
-    def reset(self) -> None:
-        """Forget any partial packet."""
-        self.stats.dropped_bytes += len(self._buffer)
-        self._buffer.clear()
-
-    @property
-    def pending(self) -> int:
-        """Bytes held while waiting for the rest of a packet."""
-        return len(self._buffer)
-
-    def feed(
-        self, data: bytes | bytearray, now_s: float = 0.0, *, idle_s: float | None = None
-    ) -> list[Packet]:
-        """Add received bytes (at time `now_s`) and return every packet they complete.
-
-        `idle_s`: how long the line was idle before `data` (default: `now_s` minus the time of
-        the last bytes); a partial packet is discarded when it exceeds `stale_after_s`.
-        """
-        stale = self._stale_after_s
-        if idle_s is None:
-            idle_s = now_s - self._last_byte_s
-        if self._buffer and stale is not None and idle_s > stale:
-            self.stats.stale_resets += 1
-            self.reset()
-        if data:
-            self._last_byte_s = now_s
-        self._buffer += data
-        self.stats.received_bytes += len(data)
-        packets: list[Packet] = []
-        while True:
-            packet, consumed = self._next()
-            if consumed == 0:
-                return packets
-            del self._buffer[:consumed]
-            if packet is not None:
-                packets.append(packet)
 
     def _next(self) -> tuple[Packet | None, int]:
         """Return (packet or None, bytes to consume); (None, 0) means wait for more bytes."""

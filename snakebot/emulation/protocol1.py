@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 
+from snakebot.emulation.stream import FrameStream
+
 HEADER = b"\xff\xff"
 BROADCAST_ID = 0xFE
 MAX_ID = 0xFD
@@ -89,19 +91,7 @@ class Packet:
         return self.first
 
 
-@dataclass
-class ParserStats:
-    """Counts of what the stream parser took in and threw away, for diagnostics and tests."""
-
-    received_bytes: int = 0
-    packets: int = 0
-    dropped_bytes: int = 0
-    crc_errors: int = 0
-    bad_headers: int = 0
-    stale_resets: int = 0
-
-
-class StreamParser:
+class StreamParser(FrameStream[Packet]):
     """Find Protocol 1.0 packets in a byte stream fed in arbitrary chunks; never raises on input.
 
     Bytes before a header are dropped; a header with an invalid ID or length costs one byte and
@@ -111,49 +101,6 @@ class StreamParser:
     `stale_after_s` is discarded, as a servo's receiver times out. `stats.crc_errors` counts
     checksum failures (the name is shared with the Protocol 2.0 parser's stats).
     """
-
-    def __init__(self, *, stale_after_s: float | None = 0.02) -> None:
-        self._buffer = bytearray()
-        self._last_byte_s = 0.0
-        self._stale_after_s = stale_after_s
-        self.stats = ParserStats()
-
-    def reset(self) -> None:
-        """Forget any partial packet."""
-        self.stats.dropped_bytes += len(self._buffer)
-        self._buffer.clear()
-
-    @property
-    def pending(self) -> int:
-        """Bytes held while waiting for the rest of a packet."""
-        return len(self._buffer)
-
-    def feed(
-        self, data: bytes | bytearray, now_s: float = 0.0, *, idle_s: float | None = None
-    ) -> list[Packet]:
-        """Add received bytes (at time `now_s`) and return every packet they complete.
-
-        `idle_s`: how long the line was idle before `data` (default: `now_s` minus the time of
-        the last bytes); a partial packet is discarded when it exceeds `stale_after_s`.
-        """
-        stale = self._stale_after_s
-        if idle_s is None:
-            idle_s = now_s - self._last_byte_s
-        if self._buffer and stale is not None and idle_s > stale:
-            self.stats.stale_resets += 1
-            self.reset()
-        if data:
-            self._last_byte_s = now_s
-        self._buffer += data
-        self.stats.received_bytes += len(data)
-        packets: list[Packet] = []
-        while True:
-            packet, consumed = self._next()
-            if consumed == 0:
-                return packets
-            del self._buffer[:consumed]
-            if packet is not None:
-                packets.append(packet)
 
     def _next(self) -> tuple[Packet | None, int]:
         """Return (packet or None, bytes to consume); (None, 0) means wait for more bytes."""
