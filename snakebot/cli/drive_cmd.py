@@ -208,6 +208,8 @@ def run(args: argparse.Namespace) -> int:
     with flag_errors():
         snake = Snake.prepare(robot, spec, **given)
     backend = snake.backend
+    # A rate the servo bus cannot hold is refused before the port opens (--rate, exit 2).
+    backend.check_rate(args.rate)
     with contextlib.ExitStack() as stack:
         recorder = _recorder(stack, args, robot)
         controller = DriveController(live, choices, on_event=recorder)

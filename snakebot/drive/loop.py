@@ -74,6 +74,7 @@ def run_drive(
     ``gate`` bounds the keys a cycle applies (default: a KeyGate that drops a flood from a live
     source, never the controller's stop and halt keys, and nothing from a script).
     """
+    backend.check_rate(rate_hz)  # a servo bus that cannot hold the rate refuses it here
     if gate is None:
         gate = KeyGate(controller.settles, backlog=BACKLOG if source.live else None)
     schedule = CycleSchedule(rate_hz)  # open-ended; the live gait blends in and out itself

@@ -44,3 +44,17 @@ def test_a_rate_the_bus_holds_goes_ahead(
     assert run("--robot", str(robot), "--rate", "50") == 0
     assert run("--robot", "snake12", "--rate", "200") == 0  # X-series, Fast Sync Read: ~266 Hz
     capsys.readouterr()
+
+
+def test_drive_refuses_the_rate_too_before_the_port_opens(
+    config_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    robot = ax_robot(config_dir)
+    script = tmp_path / "keys.txt"
+    script.write_text("0.5 q\n")
+    code = main(["drive", "--backend", "dynamixel", "--port", "/dev/ttyUSB9", "--robot",
+                 str(robot), "--script", str(script), "--rate", "100"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "--rate: 100: the servo bus cannot hold 100 Hz: at most 67 Hz" in err
+    assert "ttyUSB9" not in err.split("at most")[0]  # refused before any port was opened
