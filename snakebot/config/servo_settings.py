@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from snakebot.config.fields import read_toml
 from snakebot.errors import ConfigError
 from snakebot.servo_tables import Register, ServoTable
 from snakebot.servo_tables.units import Unit, UnitError, display, parse_key, to_raw
@@ -104,4 +105,29 @@ def parse_settings(
         if register.key in out:
             raise ConfigError(source, path, f"{register.key} is set twice in [{where}]")
         out[register.key] = Setting(register, raw, unit, f"{source.name} {path}", table)
+    return out
+
+
+def joint_settings(
+    servo_file: Path, robot_file: Path, joint_count: int, table: ServoTable
+) -> list[dict[str, Setting]]:
+    """Each joint's settings, head to tail, as the files give them: the servo file's
+    ``[settings]``, overridden by the robot file's ``[settings]``, overridden by the joint's own
+    ``joints[i].settings`` (register key -> Setting). ConfigError naming the file and key for a
+    bad one. What the robot file implies besides ([bus] baud, [gains]) is the caller's to add.
+    """
+    base = parse_settings(servo_file, "settings",
+                          read_toml(servo_file).get("settings", {}) if servo_file.is_file()
+                          else {}, table)
+    robot_data = read_toml(robot_file)
+    overrides = parse_settings(robot_file, "settings", robot_data.get("settings", {}), table)
+    raw_joints = robot_data.get("joints", [])
+    out = []
+    for index in range(joint_count):
+        item = raw_joints[index] if index < len(raw_joints) else {}
+        item = item if isinstance(item, dict) else {}
+        own = parse_settings(
+            robot_file, f"joints[{index}].settings", item.get("settings", {}), table
+        )
+        out.append({**base, **overrides, **own})
     return out

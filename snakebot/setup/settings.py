@@ -14,9 +14,8 @@ from pathlib import Path
 
 from snakebot.backends.dynamixel.checks import LIMIT_KEYS, SETTINGS_KEYS, check_settings
 from snakebot.backends.dynamixel.ticks import TickConverter
-from snakebot.config.fields import read_toml
 from snakebot.config.schema import JointConfig, RobotConfig
-from snakebot.config.servo_settings import GAIN_KEYS, Setting, parse_settings
+from snakebot.config.servo_settings import GAIN_KEYS, Setting, joint_settings
 from snakebot.errors import ConfigError
 from snakebot.families import family_for
 from snakebot.servo_tables import ServoTable, table_for_model
@@ -76,18 +75,11 @@ def load_settings(robot: RobotConfig) -> ChainSettings:
     """The settings ``robot`` wants on each servo; ConfigError naming file and key if invalid."""
     table = table_for_model(robot.servo.name)
     servo_file = robot.servo.source
-    base = parse_settings(servo_file, "settings", read_toml(servo_file).get("settings", {}), table)
-    robot_data = read_toml(robot.source)
-    overrides = parse_settings(robot.source, "settings", robot_data.get("settings", {}), table)
-    raw_joints = robot_data.get("joints", [])
     derived = _derived(robot, table, robot.source)
+    given = joint_settings(servo_file, robot.source, robot.joint_count, table)
     servos = []
-    for index, joint in enumerate(robot.joints):
-        item = raw_joints[index] if index < len(raw_joints) else {}
-        own = parse_settings(
-            robot.source, f"joints[{index}].settings", item.get("settings", {}), table
-        )
-        merged = {**base, **overrides, **own, **derived}
+    for index, (joint, own) in enumerate(zip(robot.joints, given, strict=True)):
+        merged = {**own, **derived}
         ordered = tuple(sorted(merged.values(), key=lambda s: s.register.address))
         servos.append(ServoSettings(index, joint.servo_id, ordered))
     chain = ChainSettings(robot, table, robot.bus.baud, tuple(servos))

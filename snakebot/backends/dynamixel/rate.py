@@ -19,13 +19,11 @@ and :func:`check_rate` refuses only rates above it.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 from snakebot.backends.dynamixel.checks import usb_latency_timer_ms
 from snakebot.backends.dynamixel.sdk import is_pseudo_terminal
-from snakebot.config.fields import read_toml
 from snakebot.config.schema import RobotConfig
-from snakebot.config.servo_settings import Setting, parse_settings
+from snakebot.config.servo_settings import joint_settings
 from snakebot.errors import ConfigError
 from snakebot.families import ServoFamily
 from snakebot.servo_tables import ServoTable
@@ -166,22 +164,10 @@ def wanted_return_delay_s(robot: RobotConfig, table: ServoTable) -> float:
     file's and robot file's ``[settings]`` and the joints' own, else the model's factory value."""
     register = table["return_delay_time"]
     raws = []
-    base = _settings(robot.servo.source, "settings", table)
-    chain = _settings(robot.source, "settings", table)
-    joints = read_toml(robot.source).get("joints", [])
-    for index in range(robot.joint_count):
-        item = joints[index] if index < len(joints) and isinstance(joints[index], dict) else {}
-        own = parse_settings(robot.source, f"joints[{index}].settings",
-                             item.get("settings", {}), table)
-        merged = {**base, **chain, **own}
-        setting = merged.get(register.key)
+    for own in joint_settings(robot.servo.source, robot.source, robot.joint_count, table):
+        setting = own.get(register.key)
         raws.append(register.default if setting is None else setting.raw)
     return max(raws, default=register.default) * register.scale
-
-
-def _settings(path: Path, where: str, table: ServoTable) -> dict[str, Setting]:
-    data = read_toml(path).get("settings", {}) if path.is_file() else {}
-    return parse_settings(path, where, data, table)
 
 
 def check_rate(budget: CycleBudget, rate_hz: float) -> None:
