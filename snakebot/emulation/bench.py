@@ -149,8 +149,10 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
             if index % 4 == 2:
                 poke("operating_mode", 4)
             if index % 3 == 0:
-                poke("min_position_limit", round(1500 * count / 4096))
-                poke("max_position_limit", round(2600 * count / 4096))
+                # Limits too narrow for the joints: 37 % to 63 % of the model's travel (1500
+                # and 2600 ticks on a 4096-tick servo).
+                poke("min_position_limit", round(0.366 * count))
+                poke("max_position_limit", round(0.635 * count))
             if index % 5 == 3:
                 poke("homing_offset", rng.randint(-200, 200))
             if index == 1:

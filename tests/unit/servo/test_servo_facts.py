@@ -145,6 +145,7 @@ NOT_FACTS = {
     ("snakebot/rl/train.py", 2048),  # the same
     ("snakebot/rl/resume.py", 2048),  # the same, for a policy.json that records none
     ("snakebot/config/input_file.py", 4096),  # the longest string a config file may hold
+    ("snakebot/setup/bauds.py", 57600),  # the rate below which a baud search looks last
 }
 
 
