@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from snakebot.servo_tables import Register, RegisterValueError, ServoTable
+from snakebot.servo_tables.table import decode_magnitude
 
 
 @dataclass(frozen=True)
@@ -30,13 +31,7 @@ class Field:
         """The field's value from the block's bytes."""
         raw = int.from_bytes(data[self.offset : self.offset + self.size], "little",
                              signed=self.signed)
-        return raw if self.sign_bit is None else magnitude_value(raw, self.sign_bit)
-
-
-def magnitude_value(raw: int, sign_bit: int) -> int:
-    """A sign-magnitude register's value: bit ``sign_bit`` the sign, the bits below the size."""
-    magnitude = raw & ((1 << sign_bit) - 1)
-    return -magnitude if raw >> sign_bit & 1 else magnitude
+        return raw if self.sign_bit is None else decode_magnitude(raw, self.sign_bit)
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.blocks import Block
 from snakebot.families import READ_METHODS
 from snakebot.servo_tables import Register, RegisterValueError
+from snakebot.servo_tables.table import decode_magnitude
 
 if TYPE_CHECKING:
     from snakebot.backends.dynamixel.transport import Transport
@@ -161,9 +162,7 @@ class ReadPlan:
         for row in rows:
             values = list(row)
             for k, bit in fields:
-                raw = values[k]
-                size = raw & ((1 << bit) - 1)  # bits above the sign bit are not the value
-                values[k] = -size if raw >> bit & 1 else size
+                values[k] = decode_magnitude(values[k], bit)
             out.append(tuple(values))
         return out
 
