@@ -32,7 +32,7 @@ def _started_as_command(argv: list[str], orig_argv: list[str]) -> bool:
     if argv[:1] == ["-m"]:
         for i, word in enumerate(orig_argv[1:], 1):
             if word == "-m":
-                return orig_argv[i + 1:i + 2] == ["snakebot"]
+                return orig_argv[i + 1 : i + 2] == ["snakebot"]
             if word.startswith("-m"):
                 return word[2:] == "snakebot"
         return False

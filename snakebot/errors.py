@@ -129,9 +129,7 @@ class BackendOptionError(UsageError, TypeError):
         self.option = option
         self.accepted = tuple(accepted)
         takes = ", ".join(self.accepted) if self.accepted else "none"
-        super().__init__(
-            f"the {backend} backend takes no option {option!r} (its options: {takes})"
-        )
+        super().__init__(f"the {backend} backend takes no option {option!r} (its options: {takes})")
 
 
 class PhysicsHealthError(BackendError):

@@ -306,9 +306,7 @@ class Snake:
         )
 
     @contextlib.contextmanager
-    def _open_log(
-        self, log: str | Path | CycleLog | None
-    ) -> Iterator[CycleLog | None]:
+    def _open_log(self, log: str | Path | CycleLog | None) -> Iterator[CycleLog | None]:
         from snakebot.telemetry import CsvTelemetryWriter
 
         if log is None or not isinstance(log, str | Path):

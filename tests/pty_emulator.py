@@ -49,7 +49,10 @@ class Emulator:
 def emulator(*args: str) -> Iterator[Emulator]:
     proc = subprocess.Popen(
         [sys.executable, "-m", "snakebot", "emulate", "--pty", "--json", *args],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         yield Emulator(proc)

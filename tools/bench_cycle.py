@@ -73,11 +73,18 @@ def main() -> None:
         safety = SafetyLayer(lower, upper, robot.max_speed_rad_s, robot.safety.ramp_s)
         with backend:
             start = time.perf_counter()
-            run_gait(backend, make_gait("serpenoid", args.joints), safety,
-                     RunPlan(args.seconds, ramp_out=False), metrics)
+            run_gait(
+                backend,
+                make_gait("serpenoid", args.joints),
+                safety,
+                RunPlan(args.seconds, ramp_out=False),
+                metrics,
+            )
             per_cycle_us.append((time.perf_counter() - start) / metrics.cycles * 1e6)
-    print(f"{args.joints} joints, {args.repeats} x {args.seconds:g} s at 100 Hz: "
-          f"{statistics.median(per_cycle_us):.1f} us/cycle median (min {min(per_cycle_us):.1f})")
+    print(
+        f"{args.joints} joints, {args.repeats} x {args.seconds:g} s at 100 Hz: "
+        f"{statistics.median(per_cycle_us):.1f} us/cycle median (min {min(per_cycle_us):.1f})"
+    )
 
 
 if __name__ == "__main__":

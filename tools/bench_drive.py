@@ -36,9 +36,19 @@ def drive_cycle(
     k: int, target: np.ndarray, command: np.ndarray, state: JointState, live: LiveGait
 ) -> DriveCycle:
     return DriveCycle(
-        cycle=k, gait_time_s=k * DT, target_rad=target, command_rad=command, state=state,
-        body=None, amplitude=1.0, scored=True, period_s=DT, overrun=False,
-        achieved_rate_hz=1.0 / DT, status=live.status(), keys=(),
+        cycle=k,
+        gait_time_s=k * DT,
+        target_rad=target,
+        command_rad=command,
+        state=state,
+        body=None,
+        amplitude=1.0,
+        scored=True,
+        period_s=DT,
+        overrun=False,
+        achieved_rate_hz=1.0 / DT,
+        status=live.status(),
+        keys=(),
     )
 
 
@@ -73,9 +83,16 @@ def cases(robot: RobotConfig) -> tuple[dict[str, Callable[[int], object]], Drive
     live = live_gait(robot)
     state = JointState(0.0, np.zeros(n), np.zeros(n), np.zeros(n))
     display = DriveDisplay(
-        io.StringIO(), title="bench", gaits=[GAIT[robot.name]], gait_index=lambda: 0,
-        notice=lambda: "", rate_hz=100.0, servo_ids=robot.servo_ids, health=dict,
-        alerts=tuple, overruns=lambda: 0,
+        io.StringIO(),
+        title="bench",
+        gaits=[GAIT[robot.name]],
+        gait_index=lambda: 0,
+        notice=lambda: "",
+        rate_hz=100.0,
+        servo_ids=robot.servo_ids,
+        health=dict,
+        alerts=tuple,
+        overruns=lambda: 0,
     )
     record = drive_cycle(0, np.zeros(n), np.zeros(n), state, live)
     start = 3.0

@@ -74,14 +74,36 @@ class Kind:
 
 
 KINDS = {
-    "x": Kind("X-series (XL430-W250), Protocol 2.0", MODEL, 2.0, "fast_sync_read", "snake8", 4096,
-              2 * math.pi, RAD_S_PER_UNIT),
-    "mx": Kind("MX-28, Protocol 1.0", "MX-28", 1.0, "bulk_read", "snake12-ax12a", 4096,
-               2 * math.pi,
-               0.114 * 2 * math.pi / 60),
-    "ax": Kind("AX-12A, Protocol 1.0", "AX-12A", 1.0, "read", "snake12-ax12a", 1024,
-               math.radians(300),
-               0.111 * 2 * math.pi / 60),
+    "x": Kind(
+        "X-series (XL430-W250), Protocol 2.0",
+        MODEL,
+        2.0,
+        "fast_sync_read",
+        "snake8",
+        4096,
+        2 * math.pi,
+        RAD_S_PER_UNIT,
+    ),
+    "mx": Kind(
+        "MX-28, Protocol 1.0",
+        "MX-28",
+        1.0,
+        "bulk_read",
+        "snake12-ax12a",
+        4096,
+        2 * math.pi,
+        0.114 * 2 * math.pi / 60,
+    ),
+    "ax": Kind(
+        "AX-12A, Protocol 1.0",
+        "AX-12A",
+        1.0,
+        "read",
+        "snake12-ax12a",
+        1024,
+        math.radians(300),
+        0.111 * 2 * math.pi / 60,
+    ),
 }
 
 
@@ -130,10 +152,15 @@ class BareLoop:
     def cycle(self, goal_rad: list[float]) -> tuple[list[float], list[float], list[float]]:
         for servo_id, angle in zip(self.ids, goal_rad, strict=True):
             ticks = round(2048 + angle / RAD_PER_TICK)
-            self.writer.changeParam(servo_id, [
-                sdk.DXL_LOBYTE(sdk.DXL_LOWORD(ticks)), sdk.DXL_HIBYTE(sdk.DXL_LOWORD(ticks)),
-                sdk.DXL_LOBYTE(sdk.DXL_HIWORD(ticks)), sdk.DXL_HIBYTE(sdk.DXL_HIWORD(ticks)),
-            ])
+            self.writer.changeParam(
+                servo_id,
+                [
+                    sdk.DXL_LOBYTE(sdk.DXL_LOWORD(ticks)),
+                    sdk.DXL_HIBYTE(sdk.DXL_LOWORD(ticks)),
+                    sdk.DXL_LOBYTE(sdk.DXL_HIWORD(ticks)),
+                    sdk.DXL_HIBYTE(sdk.DXL_HIWORD(ticks)),
+                ],
+            )
         if self.writer.txPacket() != sdk.COMM_SUCCESS:
             raise RuntimeError("sync write failed")
         if self.reader.fastSyncRead() != sdk.COMM_SUCCESS:
@@ -184,16 +211,23 @@ class BareLoopP1:
             if self.bulk.rxPacket() != sdk.COMM_SUCCESS:
                 raise RuntimeError("bulk read failed")
             for servo_id in self.ids:
-                rows.append((self.bulk.getData(servo_id, 36, 2), self.bulk.getData(servo_id, 38, 2),
-                             self.bulk.getData(servo_id, 40, 2)))
+                rows.append(
+                    (
+                        self.bulk.getData(servo_id, 36, 2),
+                        self.bulk.getData(servo_id, 38, 2),
+                        self.bulk.getData(servo_id, 40, 2),
+                    )
+                )
         else:
             for servo_id in self.ids:
-                data, result, _ = self.packet.readTxRx(self.port, servo_id, P1_READ_ADDRESS,
-                                                       P1_READ_LENGTH)
+                data, result, _ = self.packet.readTxRx(
+                    self.port, servo_id, P1_READ_ADDRESS, P1_READ_LENGTH
+                )
                 if result != sdk.COMM_SUCCESS:
                     raise RuntimeError("read failed")
-                rows.append((data[0] | data[1] << 8, data[2] | data[3] << 8,
-                             data[4] | data[5] << 8))
+                rows.append(
+                    (data[0] | data[1] << 8, data[2] | data[3] << 8, data[4] | data[5] << 8)
+                )
         position, velocity, effort = [], [], []
         for pos, vel, load in rows:
             position.append((pos - self.centre) * self.rad_per_tick)
@@ -220,6 +254,7 @@ class EmulatorClock:
                 return method(*args)
             finally:
                 self.seconds += time.perf_counter() - start
+
         return timed
 
 
@@ -265,16 +300,23 @@ def make_sides(n: int, cycles: int, kind: Kind | None = None) -> dict[str, Side]
     chain = chain_for(n, kind)
     # The chain's virtual clock, as the servos see it (the Bus Watchdog check runs on it too);
     # slow_every off: only the cycle's two transactions.
-    backend = DynamixelBackend(robot_for(n, kind), port=register_chain(chain), baud=BAUD,
-                               port_handler_factory=factory, slow_every=10**9,
-                               clock=lambda: chain.now_s, sleep=chain.advance)
+    backend = DynamixelBackend(
+        robot_for(n, kind),
+        port=register_chain(chain),
+        baud=BAUD,
+        port_handler_factory=factory,
+        slow_every=10**9,
+        clock=lambda: chain.now_s,
+        sleep=chain.advance,
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         backend.connect()
     assert backend.bus.capabilities.read_method == kind.method
     url = register_chain(chain_for(n, kind))
-    bare: BareLoop | BareLoopP1 = (BareLoop(url, n) if kind.method == "fast_sync_read"
-                                   else BareLoopP1(url, n, kind))
+    bare: BareLoop | BareLoopP1 = (
+        BareLoop(url, n) if kind.method == "fast_sync_read" else BareLoopP1(url, n, kind)
+    )
     clocks = {"backend": EmulatorClock(), "bare": EmulatorClock()}
     clocks["backend"].instrument(handlers[0])
     clocks["bare"].instrument(bare.port)
@@ -291,8 +333,11 @@ def make_sides(n: int, cycles: int, kind: Kind | None = None) -> dict[str, Side]
     }
 
 
-def measure(setups: dict[Any, dict[str, Side]], rounds: int, cycles: int,
-            ) -> dict[Any, dict[str, list[float]]]:
+def measure(
+    setups: dict[Any, dict[str, Side]],
+    rounds: int,
+    cycles: int,
+) -> dict[Any, dict[str, list[float]]]:
     """Rounds of every setup in shuffled order: per setup, each side's whole and client medians
     per round and the backend/bare ratios."""
     for sides in setups.values():  # warm-up
@@ -321,44 +366,59 @@ def med(values: list[float], scale: float = 1e6) -> float:
 def sizes_table(args: argparse.Namespace) -> None:
     setups = {n: make_sides(n, args.cycles) for n in args.sizes}
     results = measure(setups, args.rounds, args.cycles)
-    print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {args.rounds} rounds x "
-          f"{args.cycles} cycles per side, {MODEL}, Sync Write + Fast Sync Read of 10 B.")
-    print("µs per cycle, medians over rounds; 'client' excludes the time spent inside the "
-          "emulated port (the emulator's own work).\n")
-    print("| N | bare SDK loop: cycle (client) | DynamixelBackend: cycle (client) "
-          "| ratio cycle | ratio client (min–max) | wire limit 1 / 3 / 4 Mbps, RDT 0 |")
+    print(
+        f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {args.rounds} rounds x "
+        f"{args.cycles} cycles per side, {MODEL}, Sync Write + Fast Sync Read of 10 B."
+    )
+    print(
+        "µs per cycle, medians over rounds; 'client' excludes the time spent inside the "
+        "emulated port (the emulator's own work).\n"
+    )
+    print(
+        "| N | bare SDK loop: cycle (client) | DynamixelBackend: cycle (client) "
+        "| ratio cycle | ratio client (min–max) | wire limit 1 / 3 / 4 Mbps, RDT 0 |"
+    )
     print("|---|---|---|---|---|---|")
     family = family_named("dynamixel-p2")
     for n in args.sizes:
         r = results[n]
-        wire = [cycle_wire_time_s(family, "fast_sync_read", n, READ_LENGTH, b)[0] * 1e6
-                for b in (1_000_000, 3_000_000, 4_000_000)]
-        print(f"| {n} | {med(r['bare_whole']):.0f} ({med(r['bare_client']):.0f}) "
-              f"| {med(r['backend_whole']):.0f} ({med(r['backend_client']):.0f}) "
-              f"| {med(r['ratio_whole'], 1):.2f} "
-              f"| {med(r['ratio_client'], 1):.2f} ({min(r['ratio_client']):.2f}–"
-              f"{max(r['ratio_client']):.2f}) "
-              f"| {wire[0]:.0f} / {wire[1]:.0f} / {wire[2]:.0f} |")
+        wire = [
+            cycle_wire_time_s(family, "fast_sync_read", n, READ_LENGTH, b)[0] * 1e6
+            for b in (1_000_000, 3_000_000, 4_000_000)
+        ]
+        print(
+            f"| {n} | {med(r['bare_whole']):.0f} ({med(r['bare_client']):.0f}) "
+            f"| {med(r['backend_whole']):.0f} ({med(r['backend_client']):.0f}) "
+            f"| {med(r['ratio_whole'], 1):.2f} "
+            f"| {med(r['ratio_client'], 1):.2f} ({min(r['ratio_client']):.2f}–"
+            f"{max(r['ratio_client']):.2f}) "
+            f"| {wire[0]:.0f} / {wire[1]:.0f} / {wire[2]:.0f} |"
+        )
 
 
 def families_table(args: argparse.Namespace) -> None:
     n = 12
     setups = {key: make_sides(n, args.cycles, kind) for key, kind in KINDS.items()}
     results = measure(setups, args.rounds, args.cycles)
-    print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {args.rounds} rounds x "
-          f"{args.cycles} cycles per side, {n} servos at {BAUD} bit/s.")
-    print("Host CPU in µs per cycle ('client': the cycle minus the time inside the emulated "
-          "port), medians over rounds; rates: wire + Return Delay per reply turnaround + 1 ms USB "
-          "latency per reply wait + the backend's host CPU.\n")
-    print("| family | read | bare SDK loop, client µs | DynamixelBackend, client µs "
-          "| ratio client (min–max) | wire µs, RDT 0 | rate at RDT 0 | rate at RDT 250 (500 µs) |")
+    print(
+        f"Python {platform.python_version()}, {os.cpu_count()} CPUs, {args.rounds} rounds x "
+        f"{args.cycles} cycles per side, {n} servos at {BAUD} bit/s."
+    )
+    print(
+        "Host CPU in µs per cycle ('client': the cycle minus the time inside the emulated "
+        "port), medians over rounds; rates: wire + Return Delay per reply turnaround + 1 ms USB "
+        "latency per reply wait + the backend's host CPU.\n"
+    )
+    print(
+        "| family | read | bare SDK loop, client µs | DynamixelBackend, client µs "
+        "| ratio client (min–max) | wire µs, RDT 0 | rate at RDT 0 | rate at RDT 250 (500 µs) |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for key, kind in KINDS.items():
         r = results[key]
         table = table_for_model(kind.model)
         family = family_for(table, kind.protocol)
-        read = resolve_block(table, ("present_position", "present_velocity",
-                                     "present_load")).size
+        read = resolve_block(table, ("present_position", "present_velocity", "present_load")).size
         write = table["goal_position"].size
         host_s = med(r["backend_client"], 1)
         rates = []
@@ -366,11 +426,13 @@ def families_table(args: argparse.Namespace) -> None:
             budget = cycle_budget(family, kind.method, n, read, write, BAUD, delay_s)
             rates.append(1.0 / (budget.cycle_s + host_s))
         wire = cycle_budget(family, kind.method, n, read, write, BAUD, 0.0).wire_s
-        print(f"| {kind.name} | {METHOD_NAMES[kind.method]} "
-              f"| {med(r['bare_client']):.0f} | {med(r['backend_client']):.0f} "
-              f"| {med(r['ratio_client'], 1):.2f} ({min(r['ratio_client']):.2f}–"
-              f"{max(r['ratio_client']):.2f}) | {wire * 1e6:.0f} "
-              f"| {rates[0]:.0f} Hz | {rates[1]:.0f} Hz |")
+        print(
+            f"| {kind.name} | {METHOD_NAMES[kind.method]} "
+            f"| {med(r['bare_client']):.0f} | {med(r['backend_client']):.0f} "
+            f"| {med(r['ratio_client'], 1):.2f} ({min(r['ratio_client']):.2f}–"
+            f"{max(r['ratio_client']):.2f}) | {wire * 1e6:.0f} "
+            f"| {rates[0]:.0f} Hz | {rates[1]:.0f} Hz |"
+        )
 
 
 def main() -> None:
@@ -378,8 +440,11 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=9)
     parser.add_argument("--cycles", type=int, default=300)
     parser.add_argument("--sizes", type=int, nargs="+", default=[8, 16, 32])
-    parser.add_argument("--families", action="store_true",
-                        help="12 servos of each family (X, MX, AX) instead of X at --sizes")
+    parser.add_argument(
+        "--families",
+        action="store_true",
+        help="12 servos of each family (X, MX, AX) instead of X at --sizes",
+    )
     args = parser.parse_args()
     if args.families:
         families_table(args)

@@ -87,6 +87,7 @@ class Rig:
                 return method(*args)
             finally:
                 self.inside_s += time.thread_time() - start
+
         return timed
 
     def cycle(self) -> tuple[float, float]:
@@ -132,8 +133,17 @@ def measure(sizes: list[int], rounds: int, cycles: int) -> dict[int, tuple[list[
 def baseline_round(checkout: Path, sizes: list[int], cycles: int) -> dict[int, tuple[float, float]]:
     """One round of the same measurement on another checkout's emulator (a subprocess with that
     checkout first on the path): per size (median seconds per cycle, steps per servo)."""
-    command = [sys.executable, __file__, "--json", "--rounds", "1", "--cycles", str(cycles),
-               "--sizes", *map(str, sizes)]
+    command = [
+        sys.executable,
+        __file__,
+        "--json",
+        "--rounds",
+        "1",
+        "--cycles",
+        str(cycles),
+        "--sizes",
+        *map(str, sizes),
+    ]
     env = {**os.environ, "PYTHONPATH": str(checkout)}
     out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout
     return {int(n): (v[0][0], v[1]) for n, v in json.loads(out).items()}
@@ -144,9 +154,13 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=7)
     parser.add_argument("--cycles", type=int, default=200)
     parser.add_argument("--sizes", type=int, nargs="+", default=[8, 16, 32])
-    parser.add_argument("--baseline", type=Path, metavar="CHECKOUT",
-                        help="also measure the emulator of another checkout (e.g. a worktree of "
-                        "the commit before), round by round in alternation, side by side")
+    parser.add_argument(
+        "--baseline",
+        type=Path,
+        metavar="CHECKOUT",
+        help="also measure the emulator of another checkout (e.g. a worktree of "
+        "the commit before), round by round in alternation, side by side",
+    )
     parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
 
@@ -160,7 +174,7 @@ def main() -> None:
     steps: dict[int, tuple[float, float]] = {}
     for k in range(args.rounds):
         # Which side goes first alternates, so both see the same machine load.
-        for side in (("here", "there") if k % 2 else ("there", "here")):
+        for side in ("here", "there") if k % 2 else ("there", "here"):
             if side == "here":
                 for n, (got, count) in measure(args.sizes, 1, args.cycles).items():
                     here[n] += got
@@ -172,23 +186,29 @@ def main() -> None:
                     there[n].append(seconds)
                     steps[n] = (steps.get(n, (0.0, 0.0))[0], count)
 
-    print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, load "
-          f"{os.getloadavg()[0]:.1f}, {args.rounds} rounds x {args.cycles} cycles, {MODEL} at "
-          f"{BAUD // 1_000_000} Mbps, Sync Write + Fast Sync Read of {READ_LENGTH} B.\n")
+    print(
+        f"Python {platform.python_version()}, {os.cpu_count()} CPUs, load "
+        f"{os.getloadavg()[0]:.1f}, {args.rounds} rounds x {args.cycles} cycles, {MODEL} at "
+        f"{BAUD // 1_000_000} Mbps, Sync Write + Fast Sync Read of {READ_LENGTH} B.\n"
+    )
 
     def cell(values: list[float]) -> str:
         mid = statistics.median(values) * 1e6
         return f"{mid:.0f} ({min(values) * 1e6:.0f}–{max(values) * 1e6:.0f})"
 
     if args.baseline is None:
-        print("| N | emulator CPU per cycle, µs (min–max over rounds) "
-              "| motion steps per servo per cycle | wire time, µs | emulator / wire |")
+        print(
+            "| N | emulator CPU per cycle, µs (min–max over rounds) "
+            "| motion steps per servo per cycle | wire time, µs | emulator / wire |"
+        )
         print("|---|---|---|---|---|")
     else:
         print(f"baseline: {args.baseline}\n")
-        print("| N | baseline: emulator CPU per cycle, µs | steps per servo per cycle "
-              "| this checkout: emulator CPU per cycle, µs | steps per servo per cycle "
-              "| wire time, µs | this checkout / wire |")
+        print(
+            "| N | baseline: emulator CPU per cycle, µs | steps per servo per cycle "
+            "| this checkout: emulator CPU per cycle, µs | steps per servo per cycle "
+            "| wire time, µs | this checkout / wire |"
+        )
         print("|---|---|---|---|---|---|---|")
     for n in args.sizes:
         wire = wire_time_s(n) * 1e6
@@ -196,8 +216,10 @@ def main() -> None:
         if args.baseline is None:
             print(f"| {n} | {cell(here[n])} | {steps[n][0]:.0f} | {wire:.0f} | {ratio:.2f} |")
         else:
-            print(f"| {n} | {cell(there[n])} | {steps[n][1]:.0f} | {cell(here[n])} "
-                  f"| {steps[n][0]:.0f} | {wire:.0f} | {ratio:.2f} |")
+            print(
+                f"| {n} | {cell(there[n])} | {steps[n][1]:.0f} | {cell(here[n])} "
+                f"| {steps[n][0]:.0f} | {wire:.0f} | {ratio:.2f} |"
+            )
 
 
 if __name__ == "__main__":

@@ -74,8 +74,9 @@ class RunResult:
 def snakebot(*argv: str, **kwargs: Any) -> subprocess.Popen[str]:
     """``python -m snakebot ARGV`` from a neutral folder: the snakebot it runs is the one
     PYTHONPATH (or the installed package) names, never whichever the current folder holds."""
-    return subprocess.Popen([sys.executable, "-m", "snakebot", *argv], text=True,
-                            cwd=tempfile.gettempdir(), **kwargs)
+    return subprocess.Popen(
+        [sys.executable, "-m", "snakebot", *argv], text=True, cwd=tempfile.gettempdir(), **kwargs
+    )
 
 
 @contextlib.contextmanager
@@ -138,10 +139,25 @@ def one_run(arm: str, port: str, args: argparse.Namespace, folder: Path, index: 
     log = folder / f"run{index:02d}-{arm}.csv"
     load_before = os.getloadavg()[0]
     proc = snakebot(
-        "run", "--backend", "dynamixel", "--port", port, "--robot", args.robot, "--gait",
-        args.gait, "--duration", str(args.duration), "--rate", "100", "--foxglove=0",
-        "--log", str(log), "--json",
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        "run",
+        "--backend",
+        "dynamixel",
+        "--port",
+        port,
+        "--robot",
+        args.robot,
+        "--gait",
+        args.gait,
+        "--duration",
+        str(args.duration),
+        "--rate",
+        "100",
+        "--foxglove=0",
+        "--log",
+        str(log),
+        "--json",
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
     )
     swarm: list[subprocess.Popen[Any]] = []
     cpu = CpuWatch(proc.pid)
@@ -152,16 +168,28 @@ def one_run(arm: str, port: str, args: argparse.Namespace, folder: Path, index: 
         if match is None:
             raise SystemExit(f"bench_foxglove_clients: no server URL from the run: {line!r}")
         if arm == "with":
-            swarm.append(subprocess.Popen(
-                [sys.executable, os.path.abspath(__file__), "--swarm", match.group(0), "--clients",
-                 str(args.clients), "--retry-s", str(args.retry_s)],
-            ))
+            swarm.append(
+                subprocess.Popen(
+                    [
+                        sys.executable,
+                        os.path.abspath(__file__),
+                        "--swarm",
+                        match.group(0),
+                        "--clients",
+                        str(args.clients),
+                        "--retry-s",
+                        str(args.retry_s),
+                    ],
+                )
+            )
         with running(swarm):
             stdout, stderr = proc.communicate(timeout=args.duration + 180)
     summary = json.loads(stdout) if proc.returncode in (0, 130) and stdout.strip() else {}
     if proc.returncode != 0:
-        print(f"  run {index} ({arm}) exit {proc.returncode}: {stderr.strip()[-400:]}",
-              file=sys.stderr)
+        print(
+            f"  run {index} ({arm}) exit {proc.returncode}: {stderr.strip()[-400:]}",
+            file=sys.stderr,
+        )
     times = read_log(log).column("time_s") if log.exists() else np.zeros(0)
     gaps = np.diff(times)
     rate = (len(times) - 1) / float(times[-1] - times[0]) if len(times) > 1 else 0.0
@@ -171,22 +199,36 @@ def one_run(arm: str, port: str, args: argparse.Namespace, folder: Path, index: 
         counts = np.histogram(times, edges)[0]
         quarters = [round(float(c) / float(edges[1] - edges[0]), 1) for c in counts]
     return RunResult(
-        arm, round(rate, 2), int(np.sum(gaps > GAP_S)),
-        round(float(gaps.max()), 4) if len(gaps) else 0.0, quarters, cpu.result(),
+        arm,
+        round(rate, 2),
+        int(np.sum(gaps > GAP_S)),
+        round(float(gaps.max()), 4) if len(gaps) else 0.0,
+        quarters,
+        cpu.result(),
         round(load_before, 2),
-        proc.returncode, summary.get("foxglove_clients", {}),
+        proc.returncode,
+        summary.get("foxglove_clients", {}),
     )
 
 
 def bench(args: argparse.Namespace) -> list[RunResult]:
     """The alternating series, beside ``args.hogs`` hogs and one emulator, all stopped after."""
-    hogs = [subprocess.Popen([sys.executable, "-c", _SPIN], stderr=subprocess.DEVNULL)
-            for _ in range(args.hogs)]  # an interrupted hog has nothing to say
+    hogs = [
+        subprocess.Popen([sys.executable, "-c", _SPIN], stderr=subprocess.DEVNULL)
+        for _ in range(args.hogs)
+    ]  # an interrupted hog has nothing to say
     results: list[RunResult] = []
     with running(hogs), tempfile.TemporaryDirectory() as tmp:
-        emulator = snakebot("emulate", "--pty", "--json", "--robot", args.robot,
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL)
+        emulator = snakebot(
+            "emulate",
+            "--pty",
+            "--json",
+            "--robot",
+            args.robot,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+        )
         with running([emulator]):
             port = emulator_port(emulator)
             for pair in range(args.pairs):
@@ -194,12 +236,15 @@ def bench(args: argparse.Namespace) -> list[RunResult]:
                 for arm in order:
                     result = one_run(arm, port, args, Path(tmp), len(results) + 1)
                     results.append(result)
-                    print(f"run {len(results)} {arm:7s} {result.rate_hz:6.2f} Hz, "
-                          f"{result.gaps_over_50ms} gaps > 50 ms, longest "
-                          f"{result.max_gap_s * 1e3:.0f} ms, by quarter "
-                          f"{result.rate_by_quarter_hz} Hz, {result.cpu_s:.1f} CPU s, "
-                          f"load {result.load_before:.1f}, "
-                          f"exit {result.returncode}, clients {result.clients}", flush=True)
+                    print(
+                        f"run {len(results)} {arm:7s} {result.rate_hz:6.2f} Hz, "
+                        f"{result.gaps_over_50ms} gaps > 50 ms, longest "
+                        f"{result.max_gap_s * 1e3:.0f} ms, by quarter "
+                        f"{result.rate_by_quarter_hz} Hz, {result.cpu_s:.1f} CPU s, "
+                        f"load {result.load_before:.1f}, "
+                        f"exit {result.returncode}, clients {result.clients}",
+                        flush=True,
+                    )
     return results
 
 
@@ -213,15 +258,25 @@ def write_cost(args: argparse.Namespace) -> list[dict[str, Any]]:
     rng = np.random.default_rng(0)
     for pair in range(args.pairs):
         for arm in ("without", "with") if pair % 2 == 0 else ("with", "without"):
-            sink = FoxgloveTelemetry(TelemetryOptions(port=0), servo_ids=range(1, 13),
-                                     rate_hz=100.0)
+            sink = FoxgloveTelemetry(
+                TelemetryOptions(port=0), servo_ids=range(1, 13), rate_hz=100.0
+            )
             swarm: list[subprocess.Popen[Any]] = []
             if arm == "with":
-                swarm.append(subprocess.Popen(
-                    [sys.executable, os.path.abspath(__file__), "--swarm",
-                     f"ws://127.0.0.1:{sink.port}", "--clients", str(args.clients),
-                     "--retry-s", str(args.retry_s)],
-                ))
+                swarm.append(
+                    subprocess.Popen(
+                        [
+                            sys.executable,
+                            os.path.abspath(__file__),
+                            "--swarm",
+                            f"ws://127.0.0.1:{sink.port}",
+                            "--clients",
+                            str(args.clients),
+                            "--retry-s",
+                            str(args.retry_s),
+                        ],
+                    )
+                )
             with running(swarm), contextlib.closing(sink):
                 time.sleep(3.0)  # the swarm connects and subscribes
                 took = []
@@ -230,26 +285,35 @@ def write_cost(args: argparse.Namespace) -> list[dict[str, Any]]:
                 for cycle in range(cycles):
                     values = rng.normal(size=(4, 12))
                     began = time.perf_counter()
-                    sink.write(cycle / 100, cycle, values[0], values[1], values[2], values[3],
-                               None)
+                    sink.write(cycle / 100, cycle, values[0], values[1], values[2], values[3], None)
                     took.append(time.perf_counter() - began)
                     time.sleep(max(0.0, start + (cycle + 1) / 100 - time.monotonic()))
                 cpu = time.process_time() - cpu0
                 clients = sink.client_counts() if hasattr(sink, "client_counts") else {}
-            row = {"arm": arm, "write_median_ms": round(float(np.median(took)) * 1e3, 3),
-                   "write_p99_ms": round(float(np.percentile(took, 99)) * 1e3, 3),
-                   "write_max_ms": round(max(took) * 1e3, 1), "cpu_s": round(cpu, 2),
-                   "load": round(os.getloadavg()[0], 1), "clients": clients}
+            row = {
+                "arm": arm,
+                "write_median_ms": round(float(np.median(took)) * 1e3, 3),
+                "write_p99_ms": round(float(np.percentile(took, 99)) * 1e3, 3),
+                "write_max_ms": round(max(took) * 1e3, 1),
+                "cpu_s": round(cpu, 2),
+                "load": round(os.getloadavg()[0], 1),
+                "clients": clients,
+            }
             rows.append(row)
-            print(f"{arm:7s} write median {row['write_median_ms']:.3f} ms, p99 "
-                  f"{row['write_p99_ms']:.3f} ms, max {row['write_max_ms']:.1f} ms; process "
-                  f"CPU {row['cpu_s']:.2f} s over {args.duration:g} s; load {row['load']}; "
-                  f"{clients}", flush=True)
+            print(
+                f"{arm:7s} write median {row['write_median_ms']:.3f} ms, p99 "
+                f"{row['write_p99_ms']:.3f} ms, max {row['write_max_ms']:.1f} ms; process "
+                f"CPU {row['cpu_s']:.2f} s over {args.duration:g} s; load {row['load']}; "
+                f"{clients}",
+                flush=True,
+            )
     for arm in ("without", "with"):
         mine = [r for r in rows if r["arm"] == arm]
-        print(f"median {arm:7s} write {statistics.median(r['write_median_ms'] for r in mine):.3f}"
-              f" ms (p99 {statistics.median(r['write_p99_ms'] for r in mine):.3f} ms), process "
-              f"CPU {statistics.median(r['cpu_s'] for r in mine):.2f} s")
+        print(
+            f"median {arm:7s} write {statistics.median(r['write_median_ms'] for r in mine):.3f}"
+            f" ms (p99 {statistics.median(r['write_p99_ms'] for r in mine):.3f} ms), process "
+            f"CPU {statistics.median(r['cpu_s'] for r in mine):.2f} s"
+        )
     return rows
 
 
@@ -282,13 +346,14 @@ async def _hostile(host: str, port: int, path: str, retry_s: float) -> None:
                 message = json.loads(await _frame(reader))
                 if message.get("op") == "advertise":
                     channels = [channel["id"] for channel in message["channels"]]
-            subscribe = {"op": "subscribe", "subscriptions": [
-                {"id": n, "channelId": c} for n, c in enumerate(channels, 1)]}
+            subscribe = {
+                "op": "subscribe",
+                "subscriptions": [{"id": n, "channelId": c} for n, c in enumerate(channels, 1)],
+            }
             writer.write(_masked(json.dumps(subscribe).encode()))
             await writer.drain()
             await asyncio.sleep(1e9)  # and never read again
-        except (ConnectionError, OSError, TimeoutError, asyncio.IncompleteReadError,
-                ValueError):
+        except (ConnectionError, OSError, TimeoutError, asyncio.IncompleteReadError, ValueError):
             writer.close()
             if not retry_s:
                 await asyncio.sleep(1e9)  # stay, as a refused client that does nothing
@@ -335,11 +400,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hogs", type=int, default=2, help="CPU-bound processes (default 2)")
     parser.add_argument("--robot", default="snake12", help="robot (default snake12)")
     parser.add_argument("--gait", default="sidewinding", help="gait (default sidewinding)")
-    parser.add_argument("--retry-s", type=float, default=0.0, metavar="S",
-                        help="a refused client tries again S seconds later (default 0: never)")
+    parser.add_argument(
+        "--retry-s",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="a refused client tries again S seconds later (default 0: never)",
+    )
     parser.add_argument("--json", action="store_true", help="print the runs as JSON at the end")
-    parser.add_argument("--write-cost", action="store_true",
-                        help="measure one write's cost and the process CPU, in this process")
+    parser.add_argument(
+        "--write-cost",
+        action="store_true",
+        help="measure one write's cost and the process CPU, in this process",
+    )
     parser.add_argument("--swarm", metavar="URL", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.swarm:
@@ -355,23 +428,33 @@ def main(argv: list[str] | None = None) -> int:
     results = bench(args)
     arms = {arm: [r for r in results if r.arm == arm] for arm in ("without", "with")}
     medians = {
-        arm: {"rate_hz": statistics.median(r.rate_hz for r in runs),
-              "gaps_over_50ms": statistics.median(r.gaps_over_50ms for r in runs),
-              "max_gap_s": statistics.median(r.max_gap_s for r in runs),
-              "cpu_s": statistics.median(r.cpu_s for r in runs)}
+        arm: {
+            "rate_hz": statistics.median(r.rate_hz for r in runs),
+            "gaps_over_50ms": statistics.median(r.gaps_over_50ms for r in runs),
+            "max_gap_s": statistics.median(r.max_gap_s for r in runs),
+            "cpu_s": statistics.median(r.cpu_s for r in runs),
+        }
         for arm, runs in arms.items()
     }
     kept = medians["with"]["rate_hz"] / medians["without"]["rate_hz"]
     ok = kept >= 0.95 and medians["with"]["gaps_over_50ms"] <= medians["without"]["gaps_over_50ms"]
     for arm, median in medians.items():
-        print(f"median {arm:7s} {median['rate_hz']:.2f} Hz, {median['gaps_over_50ms']:g} gaps "
-              f"> 50 ms, longest {median['max_gap_s'] * 1e3:.0f} ms, {median['cpu_s']:.1f} CPU s")
-    print(f"with {args.clients} clients and {args.hogs} hogs: {kept:.1%} of the rate "
-          f"({'ok' if ok else 'NOT ok'}); load average now {os.getloadavg()[0]:.1f}, "
-          f"{os.cpu_count()} CPUs")
+        print(
+            f"median {arm:7s} {median['rate_hz']:.2f} Hz, {median['gaps_over_50ms']:g} gaps "
+            f"> 50 ms, longest {median['max_gap_s'] * 1e3:.0f} ms, {median['cpu_s']:.1f} CPU s"
+        )
+    print(
+        f"with {args.clients} clients and {args.hogs} hogs: {kept:.1%} of the rate "
+        f"({'ok' if ok else 'NOT ok'}); load average now {os.getloadavg()[0]:.1f}, "
+        f"{os.cpu_count()} CPUs"
+    )
     if args.json:
-        print(json.dumps({"runs": [asdict(r) for r in results], "medians": medians,
-                          "kept": kept, "ok": ok}, indent=2))
+        print(
+            json.dumps(
+                {"runs": [asdict(r) for r in results], "medians": medians, "kept": kept, "ok": ok},
+                indent=2,
+            )
+        )
     return 0 if ok else 1
 
 

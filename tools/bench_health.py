@@ -65,8 +65,10 @@ def main() -> None:
             on.append(got["on"])
             off.append(got["off"])
             ratio.append(got["on"] / got["off"])
-        print(f"| {n} | {statistics.median(on):,.0f} | {statistics.median(off):,.0f} | "
-              f"{statistics.median(ratio):.2f} ({min(ratio):.2f}-{max(ratio):.2f}) |")
+        print(
+            f"| {n} | {statistics.median(on):,.0f} | {statistics.median(off):,.0f} | "
+            f"{statistics.median(ratio):.2f} ({min(ratio):.2f}-{max(ratio):.2f}) |"
+        )
 
 
 if __name__ == "__main__":

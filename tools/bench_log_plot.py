@@ -28,22 +28,45 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         log = Path(folder) / "run20.csv"
         subprocess.run(
-            [sys.executable, "-m", "snakebot", "run", "--robot", "snake12", "--gait",
-             "sidewinding", "--duration", "20", "--log", str(log), "--json"],
-            check=True, capture_output=True,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "run",
+                "--robot",
+                "snake12",
+                "--gait",
+                "sidewinding",
+                "--duration",
+                "20",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            check=True,
+            capture_output=True,
         )
         command, command_cpu = [], []
         for repeat in range(args.repeats):
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             start = time.perf_counter()
             subprocess.run(
-                [sys.executable, "-m", "snakebot", "log", "plot", str(log), "--out",
-                 f"{folder}/cli{repeat}"], check=True, capture_output=True,
+                [
+                    sys.executable,
+                    "-m",
+                    "snakebot",
+                    "log",
+                    "plot",
+                    str(log),
+                    "--out",
+                    f"{folder}/cli{repeat}",
+                ],
+                check=True,
+                capture_output=True,
             )
             command.append(time.perf_counter() - start)
             after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            command_cpu.append(after.ru_utime + after.ru_stime - before.ru_utime
-                               - before.ru_stime)
+            command_cpu.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
 
         from snakebot.telemetry import read_log
         from snakebot.telemetry.plots import plot_log, pyplot
@@ -63,10 +86,14 @@ def main() -> None:
     rows = len(table.values)
     print(f"log: {rows} rows x {table.joints('command_rad').shape[1]} joints")
     print(f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} CPUs")
-    for name, wall, cpu in (("snakebot log plot (process)", command, command_cpu),
-                            ("plot_log (in process)", plotting, plotting_cpu)):
-        print(f"{name:<28} wall median {statistics.median(wall):.2f} s (min {min(wall):.2f}), "
-              f"CPU median {statistics.median(cpu):.2f} s (min {min(cpu):.2f})")
+    for name, wall, cpu in (
+        ("snakebot log plot (process)", command, command_cpu),
+        ("plot_log (in process)", plotting, plotting_cpu),
+    ):
+        print(
+            f"{name:<28} wall median {statistics.median(wall):.2f} s (min {min(wall):.2f}), "
+            f"CPU median {statistics.median(cpu):.2f} s (min {min(cpu):.2f})"
+        )
 
 
 if __name__ == "__main__":

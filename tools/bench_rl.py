@@ -47,8 +47,9 @@ def env_block(env: Any, steps: int, rng: np.random.Generator) -> tuple[float, fl
     return time.perf_counter() - wall, time.process_time() - cpu
 
 
-def bare_block(model: Any, cycles_per_step: int, nstep: int, steps: int,
-               joints: int) -> tuple[float, float]:
+def bare_block(
+    model: Any, cycles_per_step: int, nstep: int, steps: int, joints: int
+) -> tuple[float, float]:
     data = mujoco.MjData(model)
     lags = 0.7 * np.arange(joints)
     dt = nstep * model.opt.timestep
@@ -102,13 +103,16 @@ def bench_ppo(ppo_steps: int) -> dict[str, Any]:
 
     out: dict[str, Any] = {}
     for n_envs, vec in ((1, "dummy"), (2, "dummy"), (2, "subproc")):
-        settings = TrainSettings(snakebot.rl.GOAL_ENV_ID, {"encoding": "dft_shift"}, ppo_steps,
-                                 n_envs, vec)
+        settings = TrainSettings(
+            snakebot.rl.GOAL_ENV_ID, {"encoding": "dft_shift"}, ppo_steps, n_envs, vec
+        )
         with tempfile.TemporaryDirectory() as folder:
             result = train(settings, Path(folder), progress=None, plot=False)
-        out[f"{vec}x{n_envs}"] = {"steps_per_s": round(result.steps_per_s, 1),
-                                  "cpu_s": round(result.cpu_s, 1),
-                                  "wall_s": round(result.wall_s, 1)}
+        out[f"{vec}x{n_envs}"] = {
+            "steps_per_s": round(result.steps_per_s, 1),
+            "cpu_s": round(result.cpu_s, 1),
+            "wall_s": round(result.wall_s, 1),
+        }
     return out
 
 
@@ -130,14 +134,20 @@ def main() -> None:
     if args.json:
         print(json.dumps(result, indent=2))
         return
-    print(f"{'encoding':10s} {'env/s':>8s} {'bare/s':>8s} {'ratio wall':>11s} {'ratio cpu':>10s} "
-          f"{'CPU ms/step':>12s}")
+    print(
+        f"{'encoding':10s} {'env/s':>8s} {'bare/s':>8s} {'ratio wall':>11s} {'ratio cpu':>10s} "
+        f"{'CPU ms/step':>12s}"
+    )
     for encoding, row in result["env_vs_bare"].items():
-        print(f"{encoding:10s} {row['env']:8.0f} {row['bare']:8.0f} {row['ratio_wall']:11.2f} "
-              f"{row['ratio_cpu']:10.2f} {row['env_cpu_ms']:12.2f}")
+        print(
+            f"{encoding:10s} {row['env']:8.0f} {row['bare']:8.0f} {row['ratio_wall']:11.2f} "
+            f"{row['ratio_cpu']:10.2f} {row['env_cpu_ms']:12.2f}"
+        )
     for name, row in result.get("ppo", {}).items():
-        print(f"PPO {name:10s} {row['steps_per_s']:7.1f} steps/s ({row['cpu_s']} CPU s, "
-              f"{row['wall_s']} s wall)")
+        print(
+            f"PPO {name:10s} {row['steps_per_s']:7.1f} steps/s ({row['cpu_s']} CPU s, "
+            f"{row['wall_s']} s wall)"
+        )
 
 
 if __name__ == "__main__":

@@ -49,13 +49,30 @@ class Recorder:
         self.cycle_s: list[float] = []
         self._last = time.perf_counter()
 
-    def write(self, time_s: float, cycle: int, command: np.ndarray, position: np.ndarray,
-              velocity: np.ndarray, effort: np.ndarray, com: np.ndarray | None) -> None:
+    def write(
+        self,
+        time_s: float,
+        cycle: int,
+        command: np.ndarray,
+        position: np.ndarray,
+        velocity: np.ndarray,
+        effort: np.ndarray,
+        com: np.ndarray | None,
+    ) -> None:
         now = time.perf_counter()
         self.cycle_s.append(now - self._last)
         self._last = now
-        self.rows.append((time_s, cycle, command.copy(), position.copy(), velocity.copy(),
-                          effort.copy(), None if com is None else com.copy()))
+        self.rows.append(
+            (
+                time_s,
+                cycle,
+                command.copy(),
+                position.copy(),
+                velocity.copy(),
+                effort.copy(),
+                None if com is None else com.copy(),
+            )
+        )
 
     def close(self) -> None:
         pass
@@ -64,12 +81,19 @@ class Recorder:
 def record(cycles: int) -> Recorder:
     robot = load_robot("snake12")
     recorder = Recorder()
-    gait = make_gait("sidewinding", robot.joint_count, lower_rad=robot.lower_rad,
-                     upper_rad=robot.upper_rad)
+    gait = make_gait(
+        "sidewinding", robot.joint_count, lower_rad=robot.lower_rad, upper_rad=robot.upper_rad
+    )
     with TwinBackend(robot) as twin:
         metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
-        run_gait(twin, gait, SafetyLayer.for_robot(robot), RunPlan(cycles / 100.0, 100.0, False),
-                 metrics, log=recorder)
+        run_gait(
+            twin,
+            gait,
+            SafetyLayer.for_robot(robot),
+            RunPlan(cycles / 100.0, 100.0, False),
+            metrics,
+            log=recorder,
+        )
     return recorder
 
 
@@ -89,8 +113,16 @@ def client(port: int) -> Iterator[list[int]]:
                 message = json.loads(ws.recv())
                 if message["op"] == "advertise":
                     channels.update({c["topic"]: c["id"] for c in message["channels"]})
-            ws.send(json.dumps({"op": "subscribe", "subscriptions": [
-                {"id": i, "channelId": c} for i, c in enumerate(channels.values(), 1)]}))
+            ws.send(
+                json.dumps(
+                    {
+                        "op": "subscribe",
+                        "subscriptions": [
+                            {"id": i, "channelId": c} for i, c in enumerate(channels.values(), 1)
+                        ],
+                    }
+                )
+            )
             ready.set()
             while not stop.is_set():
                 with contextlib.suppress(TimeoutError):
@@ -112,9 +144,12 @@ def foxglove(folder: Path, *, port: bool, mcap: bool) -> FoxgloveTelemetry:
     poses = KinematicLinkPoses(robot)
     return FoxgloveTelemetry(
         TelemetryOptions(port=0 if port else None, mcap_path=folder / "b.mcap" if mcap else None),
-        servo_ids=robot.servo_ids, rate_hz=100.0, drive=True,
-        geometry=Geometry(robot.link_count, robot.link.length_m, robot.link.radius_m,
-                          lambda: poses),
+        servo_ids=robot.servo_ids,
+        rate_hz=100.0,
+        drive=True,
+        geometry=Geometry(
+            robot.link_count, robot.link.length_m, robot.link.radius_m, lambda: poses
+        ),
     )
 
 
@@ -161,31 +196,43 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--cycles", type=int, default=1000)
     parser.add_argument("--rounds", type=int, default=2)
-    parser.add_argument("--period-ms", type=float, default=10.0,
-                        help="replay period (default 10: 100 Hz); 0: back to back")
+    parser.add_argument(
+        "--period-ms",
+        type=float,
+        default=10.0,
+        help="replay period (default 10: 100 Hz); 0: back to back",
+    )
     args = parser.parse_args()
     recorder = record(args.cycles)
-    names = ["CSV log", "Foxglove server, no client", "Foxglove server + client", "MCAP file",
-             "CSV + server + client + MCAP"]
+    names = [
+        "CSV log",
+        "Foxglove server, no client",
+        "Foxglove server + client",
+        "MCAP file",
+        "CSV + server + client + MCAP",
+    ]
     results: dict[str, list[float]] = {name: [] for name in names}
     with tempfile.TemporaryDirectory() as folder:
         for _ in range(args.rounds):
             for name in names:
-                results[name] += measure(name, Path(folder), recorder.rows,
-                                         args.period_ms / 1e3)
+                results[name] += measure(name, Path(folder), recorder.rows, args.period_ms / 1e3)
     twin = np.array(recorder.cycle_s[1:]) * 1e3
-    print(f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} "
-          f"CPUs; {args.cycles} cycles x {args.rounds} rounds; snake12, writes every "
-          f"{args.period_ms:g} ms (a 100 Hz cycle is 10 ms)")
-    print(f"{'twin step + gait + safety (context)':<36} median {np.median(twin):7.3f} ms  "
-          f"p99 {np.percentile(twin, 99):7.3f} ms")
+    print(
+        f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} "
+        f"CPUs; {args.cycles} cycles x {args.rounds} rounds; snake12, writes every "
+        f"{args.period_ms:g} ms (a 100 Hz cycle is 10 ms)"
+    )
+    print(
+        f"{'twin step + gait + safety (context)':<36} median {np.median(twin):7.3f} ms  "
+        f"p99 {np.percentile(twin, 99):7.3f} ms"
+    )
     for name, costs in results.items():
         ms = np.array(costs) * 1e3
-        print(f"{name:<36} median {np.median(ms):7.3f} ms  p99 {np.percentile(ms, 99):7.3f} ms"
-              f"  mean {ms.mean():6.3f} ms = {ms.mean() / 10 * 100:4.1f} % of the cycle"
-              f"  > 1 ms: {np.mean(ms > 1) * 100:4.1f} %")
-
-
+        print(
+            f"{name:<36} median {np.median(ms):7.3f} ms  p99 {np.percentile(ms, 99):7.3f} ms"
+            f"  mean {ms.mean():6.3f} ms = {ms.mean() / 10 * 100:4.1f} % of the cycle"
+            f"  > 1 ms: {np.mean(ms > 1) * 100:4.1f} %"
+        )
 
 
 if __name__ == "__main__":

@@ -95,19 +95,23 @@ class Fault:
         return f"{self.mode}({self.level})" if self.level else self.mode
 
 
-def at_cycle(action: Callable[[EmulatedChain, HostClock], None], cycle: int = FAULT_CYCLE
-             ) -> Callable[[EmulatedChain, HostClock, int], None]:
+def at_cycle(
+    action: Callable[[EmulatedChain, HostClock], None], cycle: int = FAULT_CYCLE
+) -> Callable[[EmulatedChain, HostClock, int], None]:
     def inject(chain: EmulatedChain, clock: HostClock, k: int) -> None:
         if k == cycle:
             action(chain, clock)
+
     return inject
 
 
-def every(action: Callable[[EmulatedChain, HostClock], None], period: int
-          ) -> Callable[[EmulatedChain, HostClock, int], None]:
+def every(
+    action: Callable[[EmulatedChain, HostClock], None], period: int
+) -> Callable[[EmulatedChain, HostClock, int], None]:
     def inject(chain: EmulatedChain, clock: HostClock, k: int) -> None:
         if k >= FAULT_CYCLE and (k - FAULT_CYCLE) % period == 0:
             action(chain, clock)
+
     return inject
 
 
@@ -142,34 +146,74 @@ def faults(quick: bool = False) -> list[Fault]:
     """Every fault mode at its rates; ``quick`` keeps one rate per mode."""
     drop_rates = (0.02,) if quick else (0.001, 0.01, 0.05, 0.2)
     corrupt_rates = (0.02,) if quick else (0.001, 0.01, 0.05, 0.2)
-    out = [Fault("none", "", lambda c, h, k: None),
-           Fault("silence_at_torque_on", "connect", lambda c, h, k: None, unreachable=(TARGET,))]
+    out = [
+        Fault("none", "", lambda c, h, k: None),
+        Fault("silence_at_torque_on", "connect", lambda c, h, k: None, unreachable=(TARGET,)),
+    ]
     for p in drop_rates:
-        out.append(Fault("drop", f"p={p}", at_cycle(
-            lambda c, h, p=p: [c.drop_replies(s.servo_id, probability=p) for s in c.servos])))
+        out.append(
+            Fault(
+                "drop",
+                f"p={p}",
+                at_cycle(
+                    lambda c, h, p=p: [c.drop_replies(s.servo_id, probability=p) for s in c.servos]
+                ),
+            )
+        )
     for p in corrupt_rates:
-        out.append(Fault("corrupt", f"p={p}", at_cycle(
-            lambda c, h, p=p: [c.corrupt_replies(s.servo_id, probability=p) for s in c.servos])))
-    for delay in ((0.05,) if quick else (0.002, 0.02, 0.05)):
+        out.append(
+            Fault(
+                "corrupt",
+                f"p={p}",
+                at_cycle(
+                    lambda c, h, p=p: [
+                        c.corrupt_replies(s.servo_id, probability=p) for s in c.servos
+                    ]
+                ),
+            )
+        )
+    for delay in (0.05,) if quick else (0.002, 0.02, 0.05):
         # 50 ms is past the SDK's ~34 ms timeout: the servo looks silent.
-        out.append(Fault("delay", f"{delay * 1000:g}ms", at_cycle(
-            lambda c, h, d=delay: c.delay_replies(TARGET, d))))
-    out.append(Fault("silence", "", at_cycle(lambda c, h: c.silence(TARGET)),
-                     unreachable=(TARGET,)))
+        out.append(
+            Fault(
+                "delay",
+                f"{delay * 1000:g}ms",
+                at_cycle(lambda c, h, d=delay: c.delay_replies(TARGET, d)),
+            )
+        )
+    out.append(
+        Fault("silence", "", at_cycle(lambda c, h: c.silence(TARGET)), unreachable=(TARGET,))
+    )
     out.append(Fault("wrong_baud", "", at_cycle(_wrong_baud), unreachable=(TARGET,)))
-    for bits, level in ((HardwareError.OVERLOAD, "overload"),
-                        (HardwareError.OVERHEATING, "overheating")):
+    for bits, level in (
+        (HardwareError.OVERLOAD, "overload"),
+        (HardwareError.OVERHEATING, "overheating"),
+    ):
         if quick and level != "overload":
             continue
-        out.append(Fault("hardware_error", level, at_cycle(
-            lambda c, h, b=bits: c.latch_hardware_error(TARGET, b)), torque_cut=(TARGET,)))
-    for period in ((25,) if quick else (1000, 60, 25)):  # once, now and then, again and again
-        out.append(Fault("watchdog_trip", f"every {period} cycles", every(
-            lambda c, h: h.stall_unseen(0.15), period)))
+        out.append(
+            Fault(
+                "hardware_error",
+                level,
+                at_cycle(lambda c, h, b=bits: c.latch_hardware_error(TARGET, b)),
+                torque_cut=(TARGET,),
+            )
+        )
+    for period in (25,) if quick else (1000, 60, 25):  # once, now and then, again and again
+        out.append(
+            Fault(
+                "watchdog_trip",
+                f"every {period} cycles",
+                every(lambda c, h: h.stall_unseen(0.15), period),
+            )
+        )
     out.append(Fault("jam", "", at_cycle(_jam)))
     if not quick:
-        out.append(Fault("reboot", "", at_cycle(lambda c, h: c.servo(TARGET).reboot()),
-                         torque_cut=(TARGET,)))
+        out.append(
+            Fault(
+                "reboot", "", at_cycle(lambda c, h: c.servo(TARGET).reboot()), torque_cut=(TARGET,)
+            )
+        )
         out.append(Fault("duplicate_id", "", at_cycle(_twin), unreachable=(TARGET,)))
     return out
 
@@ -180,8 +224,12 @@ class GoalAudit:
 
     def __init__(self, robot: RobotConfig, table: ServoTable) -> None:
         converter = TickConverter.for_robot(robot)
-        self.limits = {servo_id: (int(lo), int(hi)) for servo_id, lo, hi in zip(
-            robot.servo_ids, converter.lower_ticks, converter.upper_ticks, strict=True)}
+        self.limits = {
+            servo_id: (int(lo), int(hi))
+            for servo_id, lo, hi in zip(
+                robot.servo_ids, converter.lower_ticks, converter.upper_ticks, strict=True
+            )
+        }
         self.p1 = family_for(table, robot.bus.protocol).protocol == 1.0
         self.parser: Any = (protocol1 if self.p1 else protocol2).StreamParser(stale_after_s=None)
         goal = table["goal_position"]
@@ -205,9 +253,11 @@ class GoalAudit:
                 if address == self.goal and size == self.size:
                     for at in range(head, len(params) - size, size + 1):
                         self._check(params[at], self._value(params[at + 1 : at + 1 + size]))
-            elif (packet.instruction == self.write
-                  and len(params) == self.address_bytes + self.size
-                  and int.from_bytes(params[: self.address_bytes], "little") == self.goal):
+            elif (
+                packet.instruction == self.write
+                and len(params) == self.address_bytes + self.size
+                and int.from_bytes(params[: self.address_bytes], "little") == self.goal
+            ):
                 self._check(packet.servo_id, self._value(params[self.address_bytes :]))
 
     def _check(self, servo_id: int, ticks: int) -> None:
@@ -222,6 +272,7 @@ def audited_port(audit: GoalAudit) -> Callable[[str], EmulatedPortHandler]:
         def writePort(self, packet: Any) -> int:  # noqa: N802 - the SDK's name
             audit.feed(bytes(packet))
             return int(super().writePort(packet))
+
     return AuditedPortHandler
 
 
@@ -249,12 +300,14 @@ class CaseResult:
 
 def with_policy(name: str, policy: str, ramp_s: float) -> RobotConfig:
     base = load_robot(name)
-    return dataclasses.replace(base, safety=dataclasses.replace(
-        base.safety, stop_policy=policy, ramp_s=ramp_s))
+    return dataclasses.replace(
+        base, safety=dataclasses.replace(base.safety, stop_policy=policy, ramp_s=ramp_s)
+    )
 
 
-def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0,
-             robot_name: str = "snake12") -> CaseResult:
+def run_case(
+    fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0, robot_name: str = "snake12"
+) -> CaseResult:
     """One run of the robot with ``fault``; see the module docstring for what is checked."""
     robot = with_policy(robot_name, policy, ramp_s=0.3)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud, seed=seed)
@@ -271,16 +324,26 @@ def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0,
     outcome, message = "completed", ""
     trips = 0
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=audited_port(audit),
-                                   clock=clock, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=audited_port(audit),
+            clock=clock,
+            sleep=chain.advance,
+        )
         metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 with backend:
-                    run_gait(backend, make_gait("sidewinding", robot.joint_count),
-                             SafetyLayer.for_robot(robot), RunPlan(duration_s=duration_s),
-                             metrics, on_cycle=lambda k, t: fault.inject(chain, clock, k))
+                    run_gait(
+                        backend,
+                        make_gait("sidewinding", robot.joint_count),
+                        SafetyLayer.for_robot(robot),
+                        RunPlan(duration_s=duration_s),
+                        metrics,
+                        on_cycle=lambda k, t: fault.inject(chain, clock, k),
+                    )
         except SnakebotError as exc:
             outcome, message = type(exc).__name__, str(exc)
         except Exception as exc:
@@ -289,18 +352,46 @@ def run_case(fault: Fault, policy: str, duration_s: float = 2.0, seed: int = 0,
     chain.physics = None
     chain.clear_faults()
     chain.advance(1.0)  # nobody on the bus: an armed watchdog would trip now
-    safe = dict(zip(robot.servo_ids, (int(t) for t in TickConverter.for_robot(robot).to_ticks(
-        SafetyLayer.for_robot(robot).rest_rad)), strict=True))
-    mismatches = final_mismatches(chain, policy, fault, started=audit.goals > robot.joint_count,
-                                  safe_ticks=safe, watchdog=family_for(
-                                      table, robot.bus.protocol).capabilities(table).bus_watchdog)
-    return CaseResult(fault.name, policy, outcome, message, audit.goals, len(audit.out_of_limits),
-                      mismatches, trips)
+    safe = dict(
+        zip(
+            robot.servo_ids,
+            (
+                int(t)
+                for t in TickConverter.for_robot(robot).to_ticks(
+                    SafetyLayer.for_robot(robot).rest_rad
+                )
+            ),
+            strict=True,
+        )
+    )
+    mismatches = final_mismatches(
+        chain,
+        policy,
+        fault,
+        started=audit.goals > robot.joint_count,
+        safe_ticks=safe,
+        watchdog=family_for(table, robot.bus.protocol).capabilities(table).bus_watchdog,
+    )
+    return CaseResult(
+        fault.name,
+        policy,
+        outcome,
+        message,
+        audit.goals,
+        len(audit.out_of_limits),
+        mismatches,
+        trips,
+    )
 
 
-def final_mismatches(chain: EmulatedChain, policy: str, fault: Fault, started: bool = True,
-                     safe_ticks: dict[int, int] | None = None, watchdog: bool = True
-                     ) -> list[str]:
+def final_mismatches(
+    chain: EmulatedChain,
+    policy: str,
+    fault: Fault,
+    started: bool = True,
+    safe_ticks: dict[int, int] | None = None,
+    watchdog: bool = True,
+) -> list[str]:
     """Servos whose final state is not what the stop policy (or their firmware) says; with hold,
     after a run that got going (``started``), that includes the safe pose (Goal Position at
     ``safe_ticks``, by servo ID). ``watchdog``: whether the servos have a Bus Watchdog."""
@@ -324,16 +415,20 @@ def final_mismatches(chain: EmulatedChain, policy: str, fault: Fault, started: b
         elif torque and watchdog and servo.peek("bus_watchdog") != 0:
             out.append(f"servo {servo_id}: Bus Watchdog left armed")
         elif torque and started and abs(servo.peek("goal_position") - safe) > 2:
-            out.append(f"servo {servo_id}: holds goal {servo.peek('goal_position')}, not the "
-                       "safe pose")
+            out.append(
+                f"servo {servo_id}: holds goal {servo.peek('goal_position')}, not the safe pose"
+            )
     return out
 
 
-def run_matrix(fault_list: Sequence[Fault], policies: Sequence[str] = ("hold", "limp"),
-               duration_s: float = 2.0, robot_name: str = "snake12") -> list[CaseResult]:
+def run_matrix(
+    fault_list: Sequence[Fault],
+    policies: Sequence[str] = ("hold", "limp"),
+    duration_s: float = 2.0,
+    robot_name: str = "snake12",
+) -> list[CaseResult]:
     """Every fault under every policy."""
-    return [run_case(f, p, duration_s, robot_name=robot_name)
-            for f in fault_list for p in policies]
+    return [run_case(f, p, duration_s, robot_name=robot_name) for f in fault_list for p in policies]
 
 
 def totals(results: Sequence[CaseResult]) -> dict[str, int]:
@@ -351,8 +446,11 @@ def totals(results: Sequence[CaseResult]) -> dict[str, int]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robot", default="snake12",
-                        help="robot name or file (default snake12; snake12-ax12a: Protocol 1.0)")
+    parser.add_argument(
+        "--robot",
+        default="snake12",
+        help="robot name or file (default snake12; snake12-ax12a: Protocol 1.0)",
+    )
     parser.add_argument("--quick", action="store_true", help="one rate per fault mode")
     parser.add_argument("--duration", type=float, default=2.0, help="gait seconds per case")
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
@@ -373,8 +471,10 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|")
     for r in results:
         state = "; ".join(r.final_mismatches) or "as the policy says"
-        print(f"| {r.fault} | {r.policy} | {r.outcome} | {r.goals} | {r.out_of_limits} | "
-              f"{state} | {r.watchdog_trips} |")
+        print(
+            f"| {r.fault} | {r.policy} | {r.outcome} | {r.goals} | {r.out_of_limits} | "
+            f"{state} | {r.watchdog_trips} |"
+        )
     print()
     print(", ".join(f"{k} {v}" for k, v in summary.items()))
     for r in results:

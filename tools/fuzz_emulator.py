@@ -67,9 +67,18 @@ from snakebot.emulation.protocol import MAX_PACKET_BYTES
 
 FILLER = bytes(MAX_PACKET_BYTES)
 VOLATILE = (
-    "realtime_tick", "moving", "moving_status", "present_pwm", "present_load", "present_current",
-    "present_velocity", "present_position", "velocity_trajectory", "position_trajectory",
-    "present_input_voltage", "present_temperature",
+    "realtime_tick",
+    "moving",
+    "moving_status",
+    "present_pwm",
+    "present_load",
+    "present_current",
+    "present_velocity",
+    "present_position",
+    "velocity_trajectory",
+    "position_trajectory",
+    "present_input_voltage",
+    "present_temperature",
 )
 IDENTITY = (7, 8, 12, 13, 68)  # ID, baud, secondary ID, protocol, status return level
 IDENTITY_P1 = (3, 4, 16, *IDENTITY)  # AX-12A ID, baud, status return level; and the X table's
@@ -112,14 +121,32 @@ class Dialect:
 def dialect(protocol: int) -> Dialect:
     """The packets of Protocol `protocol` (2 or 1)."""
     if protocol == 1:
-        return Dialect(1, fuzz_packets1.Inputs1(IDS), fuzz_packets1.candidates,
-                       fuzz_packets1.may_leave_partial, bytes(256), fuzz_packets1.READ_ONLY,
-                       IDENTITY_P1, 1, fuzz_packets1.MAX_PACKET)
-    return Dialect(2, Inputs(IDS), candidates, may_leave_partial, FILLER, READ_ONLY, IDENTITY,
-                   2, 1024)
+        return Dialect(
+            1,
+            fuzz_packets1.Inputs1(IDS),
+            fuzz_packets1.candidates,
+            fuzz_packets1.may_leave_partial,
+            bytes(256),
+            fuzz_packets1.READ_ONLY,
+            IDENTITY_P1,
+            1,
+            fuzz_packets1.MAX_PACKET,
+        )
+    return Dialect(
+        2, Inputs(IDS), candidates, may_leave_partial, FILLER, READ_ONLY, IDENTITY, 2, 1024
+    )
+
+
 MODE_RESETS = (
-    "velocity_i_gain", "velocity_p_gain", "position_d_gain", "position_i_gain", "position_p_gain",
-    "profile_acceleration", "profile_velocity", "goal_pwm", "goal_current",
+    "velocity_i_gain",
+    "velocity_p_gain",
+    "position_d_gain",
+    "position_i_gain",
+    "position_p_gain",
+    "profile_acceleration",
+    "profile_velocity",
+    "goal_pwm",
+    "goal_current",
 )
 
 
@@ -175,18 +202,33 @@ class Report:
         setattr(self, what, getattr(self, what) + 1)
         self.kinds[kind] += 1
         if len(self.examples) < 20:
-            self.examples.append({"index": index, "family": family, "kind": kind,
-                                  "input": data.hex(" "), "detail": detail[-2000:]})
+            self.examples.append(
+                {
+                    "index": index,
+                    "family": family,
+                    "kind": kind,
+                    "input": data.hex(" "),
+                    "detail": detail[-2000:],
+                }
+            )
 
     def as_dict(self) -> dict[str, Any]:
         rate = self.packets / self.seconds if self.seconds else 0.0
-        return {"transport": self.transport, "seed": self.seed, "protocol": self.protocol,
-                "packets": self.packets,
-                "seconds": round(self.seconds, 2), "packets_per_s": round(rate),
-                "crashes": self.crashes, "hangs": self.hangs, "corruptions": self.corruptions,
-                "slowest_input_s": round(self.slowest_s, 3),
-                "kinds": dict(self.kinds), "families": dict(self.families),
-                "examples": self.examples}
+        return {
+            "transport": self.transport,
+            "seed": self.seed,
+            "protocol": self.protocol,
+            "packets": self.packets,
+            "seconds": round(self.seconds, 2),
+            "packets_per_s": round(rate),
+            "crashes": self.crashes,
+            "hangs": self.hangs,
+            "corruptions": self.corruptions,
+            "slowest_input_s": round(self.slowest_s, 3),
+            "kinds": dict(self.kinds),
+            "families": dict(self.families),
+            "examples": self.examples,
+        }
 
 
 class Campaign:
@@ -225,9 +267,10 @@ class Campaign:
         self.report.slowest_s = max(self.report.slowest_s, time.perf_counter() - began)
         for kind, detail in self.judge(sent, before, after, replies):
             self.report.note("corruptions", kind, index, family, data, detail)
-        if any(layout.changed(b, a) for layout, b, a in zip(self.layouts, self.baseline,
-                                                             after.memory, strict=False)) \
-                or len(after.memory) != len(self.baseline):
+        if any(
+            layout.changed(b, a)
+            for layout, b, a in zip(self.layouts, self.baseline, after.memory, strict=False)
+        ) or len(after.memory) != len(self.baseline):
             self.target.restore()
         try:
             self.target.probe(IDS[index % len(IDS)])
@@ -237,21 +280,24 @@ class Campaign:
             self.report.note("corruptions", "probe", index, family, data, str(exc))
             self.target.restore()
 
-    def _fail(self, what: str, kind: str, index: int, family: str, data: bytes,
-              detail: str) -> None:
+    def _fail(
+        self, what: str, kind: str, index: int, family: str, data: bytes, detail: str
+    ) -> None:
         self.report.note(what, kind, index, family, data, detail)
         self.target.restart()
 
-    def judge(self, sent: bytes, before: Tables, after: Tables,
-              replies: list[bytes] | None) -> list[tuple[str, str]]:
+    def judge(
+        self, sent: bytes, before: Tables, after: Tables, replies: list[bytes] | None
+    ) -> list[tuple[str, str]]:
         """Corruption findings for one input (see the module docstring)."""
         found = self.dialect.candidates(sent)
         problems: list[tuple[str, str]] = []
         if replies is not None:
             if not found and replies and not self._checksum_replies(sent, replies):
                 problems.append(("reply to garbage", b"".join(replies).hex(" ")))
-            if _long_header(b"".join(replies)) or any(len(r) > self.dialect.max_reply
-                                                      for r in replies):
+            if _long_header(b"".join(replies)) or any(
+                len(r) > self.dialect.max_reply for r in replies
+            ):
                 problems.append(("oversized reply", f"a packet over {self.dialect.max_reply}"))
         writers = [c for c in found if c.instruction not in self.dialect.read_only]
         identities = list(before.identities)
@@ -259,11 +305,16 @@ class Campaign:
         for number, (old, new) in enumerate(zip(before.memory, after.memory, strict=False)):
             changed = self.layouts[number].changed(old, new)
             if changed and number not in addressed:
-                problems.append(("unexplained change",
-                                 f"servo #{number} (ID {identities[number][0]}) bytes {changed}"))
+                problems.append(
+                    (
+                        "unexplained change",
+                        f"servo #{number} (ID {identities[number][0]}) bytes {changed}",
+                    )
+                )
         if replies is not None and len(writers) == 1 and writers[0].instruction == WRITE:
-            problems += self._check_write(writers[0], found, identities, before.memory,
-                                          after.memory, replies)
+            problems += self._check_write(
+                writers[0], found, identities, before.memory, after.memory, replies
+            )
         return problems
 
     def _checksum_replies(self, sent: bytes, replies: list[bytes]) -> bool:
@@ -273,52 +324,79 @@ class Campaign:
             return False
         statuses = fuzz_packets1.candidates(b"".join(replies))
         framed = fuzz_packets1.framed_ids(sent)
-        return bool(statuses) and len(statuses) == len(replies) and all(
-            s.instruction & fuzz_packets1.CHECKSUM_BIT and s.servo_id in framed for s in statuses)
+        return (
+            bool(statuses)
+            and len(statuses) == len(replies)
+            and all(
+                s.instruction & fuzz_packets1.CHECKSUM_BIT and s.servo_id in framed
+                for s in statuses
+            )
+        )
 
-    def _check_write(self, write: Candidate, found: list[Candidate],
-                     identities: list[tuple[int, int | None]], before: tuple[bytes, ...],
-                     after: tuple[bytes, ...], replies: list[bytes]) -> list[tuple[str, str]]:
+    def _check_write(
+        self,
+        write: Candidate,
+        found: list[Candidate],
+        identities: list[tuple[int, int | None]],
+        before: tuple[bytes, ...],
+        after: tuple[bytes, ...],
+        replies: list[bytes],
+    ) -> list[tuple[str, str]]:
         """The lone write of an input: rejected, nothing changed; accepted, its bytes stored."""
         owners = [n for n, (servo_id, _) in enumerate(identities) if servo_id == write.servo_id]
-        others = [c for c in found if c is not write
-                  and c.servo_id in (write.servo_id, BROADCAST)]
-        statuses = [s for s in self.dialect.candidates(b"".join(replies))
-                    if s.servo_id == write.servo_id and not self.dialect.answers_damage(s)]
-        if len(owners) != 1 or others or len(statuses) != 1 \
-                or len(write.params) < self.dialect.address_bytes + 1:
+        others = [c for c in found if c is not write and c.servo_id in (write.servo_id, BROADCAST)]
+        statuses = [
+            s
+            for s in self.dialect.candidates(b"".join(replies))
+            if s.servo_id == write.servo_id and not self.dialect.answers_damage(s)
+        ]
+        if (
+            len(owners) != 1
+            or others
+            or len(statuses) != 1
+            or len(write.params) < self.dialect.address_bytes + 1
+        ):
             return []
         number = owners[0]
         layout = self.layouts[number]
         error = self.dialect.rejected(statuses[0])
         if error:
             changed = layout.changed(before[number], after[number])
-            return [("rejected write changed state", f"error {error}, bytes {changed}")] \
-                if changed else []
+            return (
+                [("rejected write changed state", f"error {error}, bytes {changed}")]
+                if changed
+                else []
+            )
         address, data = self.dialect.write_target(write.params)
-        keys = {layout.owner[a] for a in range(address, address + len(data))
-                if a < layout.size}
+        keys = {layout.owner[a] for a in range(address, address + len(data)) if a < layout.size}
         skip = {"torque_enable"} if keys & set(GOAL_ITEMS) else set()
         skip |= set(MODE_RESETS) if "operating_mode" in keys else set()
         wrong = [
-            a for a, byte in zip(range(address, address + len(data)), data, strict=False)
-            if a < layout.size and (key := layout.owner[a]) is not None
-            and not key.startswith("indirect_data") and key not in skip
+            a
+            for a, byte in zip(range(address, address + len(data)), data, strict=False)
+            if a < layout.size
+            and (key := layout.owner[a]) is not None
+            and not key.startswith("indirect_data")
+            and key not in skip
             and after[number][a] != byte
         ]
         return [("accepted write not stored", f"addresses {wrong}")] if wrong else []
 
 
-def _addressed(writers: list[Candidate], identities: list[tuple[int, int | None]],
-               dialect: Dialect) -> set[int]:
+def _addressed(
+    writers: list[Candidate], identities: list[tuple[int, int | None]], dialect: Dialect
+) -> set[int]:
     """Servos (by position) that the write-like packets may have changed."""
     everyone = set(range(len(identities)))
-    if any(c.servo_id == BROADCAST or c.instruction == RESET or _touches_identity(c, dialect)
-           for c in writers):
+    if any(
+        c.servo_id == BROADCAST or c.instruction == RESET or _touches_identity(c, dialect)
+        for c in writers
+    ):
         return everyone
     ids = {c.servo_id for c in writers}
-    return {n for n, (servo_id, shadow) in enumerate(identities)
-            if servo_id in ids or shadow in ids}
+    return {
+        n for n, (servo_id, shadow) in enumerate(identities) if servo_id in ids or shadow in ids
+    }
 
 
 def _touches_identity(candidate: Candidate, dialect: Dialect) -> bool:
@@ -338,8 +416,9 @@ def _long_header(data: bytes) -> bool:
     return False
 
 
-def run_campaign(transport: str, seed: int, count: int, first: int = 0,
-                 protocol: int = 2) -> Report:
+def run_campaign(
+    transport: str, seed: int, count: int, first: int = 0, protocol: int = 2
+) -> Report:
     """Fuzz `count` inputs of campaign `seed` over `transport` ("inproc" or "pty") in
     Protocol `protocol` (2 or 1)."""
     target: Target = InProcess(protocol) if transport == "inproc" else OverPty(protocol)
@@ -357,8 +436,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pty-packets", type=int, help="inputs over the pty (default --packets)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--transport", choices=("inproc", "pty", "both"), default="both")
-    parser.add_argument("--protocol", type=int, choices=(2, 1), default=2,
-                        help="the protocol of the inputs and the servos (default 2)")
+    parser.add_argument(
+        "--protocol",
+        type=int,
+        choices=(2, 1),
+        default=2,
+        help="the protocol of the inputs and the servos (default 2)",
+    )
     parser.add_argument("--replay", type=int, metavar="INDEX", help="run only input INDEX")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
@@ -372,21 +456,27 @@ def main(argv: list[str] | None = None) -> int:
         reports.append(run_campaign(transport, args.seed, count, first, args.protocol))
     summary = {
         "command": "python tools/fuzz_emulator.py " + " ".join(argv or sys.argv[1:]),
-        "python": platform.python_version(), "machine": platform.machine(),
-        "cpus": os.cpu_count(), "reports": [r.as_dict() for r in reports],
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "cpus": os.cpu_count(),
+        "reports": [r.as_dict() for r in reports],
     }
     if args.json:
         print(json.dumps(summary))
     else:
         for r in reports:
             d = r.as_dict()
-            print(f"{d['transport']:>6}: {d['packets']} Protocol {d['protocol']} inputs "
-                  f"(seed {d['seed']}) in "
-                  f"{d['seconds']} s, {d['packets_per_s']}/s: {d['crashes']} crashes, "
-                  f"{d['hangs']} hangs, {d['corruptions']} corruptions {d['kinds'] or ''}")
+            print(
+                f"{d['transport']:>6}: {d['packets']} Protocol {d['protocol']} inputs "
+                f"(seed {d['seed']}) in "
+                f"{d['seconds']} s, {d['packets_per_s']}/s: {d['crashes']} crashes, "
+                f"{d['hangs']} hangs, {d['corruptions']} corruptions {d['kinds'] or ''}"
+            )
             for example in d["examples"][:5]:
-                print(f"  #{example['index']} {example['family']}: {example['kind']}: "
-                      f"{example['detail'][:300]}\n    input: {example['input'][:200]}")
+                print(
+                    f"  #{example['index']} {example['family']}: {example['kind']}: "
+                    f"{example['detail'][:300]}\n    input: {example['input'][:200]}"
+                )
     bad = sum(r.crashes + r.hangs + r.corruptions for r in reports)
     return 1 if bad else 0
 

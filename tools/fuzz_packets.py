@@ -26,8 +26,21 @@ STATUS = 0x55
 SYNC_READ, SYNC_WRITE, FAST_SYNC_READ = 0x82, 0x83, 0x8A
 BULK_READ, BULK_WRITE, FAST_BULK_READ = 0x92, 0x93, 0x9A
 INSTRUCTIONS = (
-    PING, READ, WRITE, REG_WRITE, ACTION, RESET, REBOOT, CLEAR, STATUS, SYNC_READ, SYNC_WRITE,
-    FAST_SYNC_READ, BULK_READ, BULK_WRITE, FAST_BULK_READ,
+    PING,
+    READ,
+    WRITE,
+    REG_WRITE,
+    ACTION,
+    RESET,
+    REBOOT,
+    CLEAR,
+    STATUS,
+    SYNC_READ,
+    SYNC_WRITE,
+    FAST_SYNC_READ,
+    BULK_READ,
+    BULK_WRITE,
+    FAST_BULK_READ,
 )
 _INSTRUCTION_WEIGHTS = [5 if i == WRITE else 2 if i == READ else 1 for i in INSTRUCTIONS]
 READ_ONLY = frozenset({PING, READ, STATUS, SYNC_READ, FAST_SYNC_READ, BULK_READ, FAST_BULK_READ})
@@ -35,11 +48,51 @@ READ_ONLY = frozenset({PING, READ, STATUS, SYNC_READ, FAST_SYNC_READ, BULK_READ,
 
 # (address, size) of X-series items, from reference/dynamixel.md §2.2; fields pick from these.
 ITEMS = (
-    (0, 2), (6, 1), (7, 1), (8, 1), (9, 1), (10, 1), (11, 1), (12, 1), (13, 1), (20, 4), (24, 4),
-    (31, 1), (32, 2), (34, 2), (36, 2), (44, 4), (48, 4), (52, 4), (60, 1), (63, 1), (64, 1),
-    (65, 1), (68, 1), (69, 1), (70, 1), (76, 2), (80, 2), (84, 2), (98, 1), (100, 2), (104, 4),
-    (108, 4), (112, 4), (116, 4), (120, 2), (126, 2), (128, 4), (132, 4), (144, 2), (146, 1),
-    (168, 2), (224, 1), (578, 2), (634, 1), (661, 1),
+    (0, 2),
+    (6, 1),
+    (7, 1),
+    (8, 1),
+    (9, 1),
+    (10, 1),
+    (11, 1),
+    (12, 1),
+    (13, 1),
+    (20, 4),
+    (24, 4),
+    (31, 1),
+    (32, 2),
+    (34, 2),
+    (36, 2),
+    (44, 4),
+    (48, 4),
+    (52, 4),
+    (60, 1),
+    (63, 1),
+    (64, 1),
+    (65, 1),
+    (68, 1),
+    (69, 1),
+    (70, 1),
+    (76, 2),
+    (80, 2),
+    (84, 2),
+    (98, 1),
+    (100, 2),
+    (104, 4),
+    (108, 4),
+    (112, 4),
+    (116, 4),
+    (120, 2),
+    (126, 2),
+    (128, 4),
+    (132, 4),
+    (144, 2),
+    (146, 1),
+    (168, 2),
+    (224, 1),
+    (578, 2),
+    (634, 1),
+    (661, 1),
 )
 _sdk = Protocol2PacketHandler()
 
@@ -97,8 +150,11 @@ def candidates(data: bytes) -> list[Candidate]:
             servo_id = data[start + 4]
             length = data[start + 5] | data[start + 6] << 8
             end = start + 7 + length
-            if (servo_id <= 252 or servo_id == BROADCAST) and 3 <= length <= MAX_LEN \
-                    and end <= len(data):
+            if (
+                (servo_id <= 252 or servo_id == BROADCAST)
+                and 3 <= length <= MAX_LEN
+                and end <= len(data)
+            ):
                 crc = data[end - 2] | data[end - 1] << 8
                 if crc16(data[start : end - 2]) == crc:
                     body = unstuff(data[start + 7 : end - 2])
@@ -175,8 +231,11 @@ class Inputs:
         if instruction in (READ,):
             return self._u16(self._address(rng)) + self._u16(self._length(rng))
         if instruction in (WRITE, REG_WRITE):
-            address, size = rng.choice(ITEMS) if rng.random() < 0.8 else (
-                self._address(rng), rng.randrange(0, 12))
+            address, size = (
+                rng.choice(ITEMS)
+                if rng.random() < 0.8
+                else (self._address(rng), rng.randrange(0, 12))
+            )
             return self._u16(address) + self._value(rng, size)
         if instruction == RESET:
             return bytes([rng.choice((0x01, 0x02, 0xFF, rng.randrange(256)))])
@@ -191,12 +250,17 @@ class Inputs:
             return self._u16(self._address(rng)) + self._u16(length) + ids
         if instruction == SYNC_WRITE:
             address, size = rng.choice(ITEMS)
-            rows = b"".join(bytes([self._id(rng)]) + self._value(rng, size)
-                            for _ in range(rng.randrange(0, 6)))
+            rows = b"".join(
+                bytes([self._id(rng)]) + self._value(rng, size) for _ in range(rng.randrange(0, 6))
+            )
             return self._u16(address) + self._u16(size) + rows
         if instruction in (BULK_READ, FAST_BULK_READ):
-            return b"".join(bytes([self._id(rng)]) + self._u16(self._address(rng))
-                            + self._u16(self._length(rng)) for _ in range(rng.randrange(0, 6)))
+            return b"".join(
+                bytes([self._id(rng)])
+                + self._u16(self._address(rng))
+                + self._u16(self._length(rng))
+                for _ in range(rng.randrange(0, 6))
+            )
         if instruction == BULK_WRITE:
             rows = b""
             for _ in range(rng.randrange(0, 5)):
@@ -260,8 +324,16 @@ class Inputs:
     def stuffing_edge(self, rng: random.Random) -> bytes:
         instruction = rng.choice((WRITE, REG_WRITE, SYNC_WRITE, BULK_WRITE, READ, PING))
         params = bytearray(self.params(rng, instruction))
-        pattern = rng.choice((b"\xff\xff\xfd", b"\xff\xff\xfd\xfd", b"\xff\xff", b"\xff",
-                              b"\xff\xff\xfd\x00", b"\xfd\xfd\xfd"))
+        pattern = rng.choice(
+            (
+                b"\xff\xff\xfd",
+                b"\xff\xff\xfd\xfd",
+                b"\xff\xff",
+                b"\xff",
+                b"\xff\xff\xfd\x00",
+                b"\xfd\xfd\xfd",
+            )
+        )
         spot = rng.randrange(len(params) + 1)
         params[spot:spot] = pattern
         return packet(self._id(rng), instruction, bytes(params), stuffed=rng.random() < 0.6)
@@ -275,7 +347,7 @@ class Inputs:
         first, second = self.valid(rng), self.valid(rng)
         pick = rng.random()
         if pick < 0.4:
-            return first[: rng.randrange(len(first))] + second[rng.randrange(len(second)):]
+            return first[: rng.randrange(len(first))] + second[rng.randrange(len(second)) :]
         if pick < 0.7:
             spot = rng.randrange(len(first))
             return first[:spot] + second + first[spot:]

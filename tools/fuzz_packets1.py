@@ -24,19 +24,65 @@ MAX_LEN = MAX_PACKET - 4
 PING, READ, WRITE, REG_WRITE, ACTION, RESET, SYNC_WRITE, BULK_READ = 1, 2, 3, 4, 5, 6, 0x83, 0x92
 ABSENT = (0x08, 0x10, 0x55, 0x82, 0x8A, 0x93, 0x9A)  # Protocol 2.0 only: Instruction error
 INSTRUCTIONS = (PING, READ, WRITE, REG_WRITE, ACTION, RESET, SYNC_WRITE, BULK_READ, *ABSENT)
-_WEIGHTS = [6 if i == WRITE else 3 if i in (READ, BULK_READ, SYNC_WRITE) else 1
-            for i in INSTRUCTIONS]
+_WEIGHTS = [
+    6 if i == WRITE else 3 if i in (READ, BULK_READ, SYNC_WRITE) else 1 for i in INSTRUCTIONS
+]
 READ_ONLY = frozenset({PING, READ, BULK_READ, *ABSENT})
 """Instructions that change no control-table byte (present values aside)."""
 CHECKSUM_BIT = 0x10
 
 # (address, size) of AX-12A items (e-Manual ax-12a.md) and X-series items below 256.
 ITEMS = (
-    (0, 2), (2, 1), (3, 1), (4, 1), (5, 1), (6, 2), (8, 2), (11, 1), (12, 1), (13, 1), (14, 2),
-    (16, 1), (17, 1), (18, 1), (24, 1), (25, 1), (26, 1), (27, 1), (28, 1), (29, 1), (30, 2),
-    (32, 2), (34, 2), (36, 2), (38, 2), (40, 2), (42, 1), (43, 1), (44, 1), (46, 1), (47, 1),
-    (48, 2), (7, 1), (9, 1), (10, 1), (20, 4), (31, 1), (44, 4), (48, 4), (64, 1), (65, 1),
-    (68, 1), (70, 1), (84, 2), (98, 1), (104, 4), (112, 4), (116, 4), (132, 4), (168, 2),
+    (0, 2),
+    (2, 1),
+    (3, 1),
+    (4, 1),
+    (5, 1),
+    (6, 2),
+    (8, 2),
+    (11, 1),
+    (12, 1),
+    (13, 1),
+    (14, 2),
+    (16, 1),
+    (17, 1),
+    (18, 1),
+    (24, 1),
+    (25, 1),
+    (26, 1),
+    (27, 1),
+    (28, 1),
+    (29, 1),
+    (30, 2),
+    (32, 2),
+    (34, 2),
+    (36, 2),
+    (38, 2),
+    (40, 2),
+    (42, 1),
+    (43, 1),
+    (44, 1),
+    (46, 1),
+    (47, 1),
+    (48, 2),
+    (7, 1),
+    (9, 1),
+    (10, 1),
+    (20, 4),
+    (31, 1),
+    (44, 4),
+    (48, 4),
+    (64, 1),
+    (65, 1),
+    (68, 1),
+    (70, 1),
+    (84, 2),
+    (98, 1),
+    (104, 4),
+    (112, 4),
+    (116, 4),
+    (132, 4),
+    (168, 2),
     (224, 1),
 )
 
@@ -62,10 +108,15 @@ def candidates(data: bytes) -> list[Candidate]:
         if start + 4 <= len(data):
             servo_id, length = data[start + 2], data[start + 3]
             end = start + 4 + length
-            if servo_id != 0xFF and 2 <= length <= MAX_LEN and end <= len(data) \
-                    and checksum(data[start + 2 : end - 1]) == data[end - 1]:
-                found.append(Candidate(start, servo_id, data[start + 4],
-                                       bytes(data[start + 5 : end - 1])))
+            if (
+                servo_id != 0xFF
+                and 2 <= length <= MAX_LEN
+                and end <= len(data)
+                and checksum(data[start + 2 : end - 1]) == data[end - 1]
+            ):
+                found.append(
+                    Candidate(start, servo_id, data[start + 4], bytes(data[start + 5 : end - 1]))
+                )
         start = data.find(HEADER, start + 1)
     return found
 
@@ -78,8 +129,11 @@ def framed_ids(data: bytes) -> set[int]:
     while start >= 0:
         if start + 4 <= len(data):
             length = data[start + 3]
-            if data[start + 2] != 0xFF and 2 <= length <= MAX_LEN \
-                    and start + 4 + length <= len(data):
+            if (
+                data[start + 2] != 0xFF
+                and 2 <= length <= MAX_LEN
+                and start + 4 + length <= len(data)
+            ):
                 ids.add(data[start + 2])
         start = data.find(HEADER, start + 1)
     return ids
@@ -143,27 +197,34 @@ class Inputs1:
         if instruction == READ:
             return bytes([self._address(rng), self._length(rng)])
         if instruction in (WRITE, REG_WRITE):
-            address, size = rng.choice(ITEMS) if rng.random() < 0.8 else (
-                self._address(rng), rng.randrange(0, 8))
+            address, size = (
+                rng.choice(ITEMS)
+                if rng.random() < 0.8
+                else (self._address(rng), rng.randrange(0, 8))
+            )
             if rng.random() < 0.1 and size > 1:
                 size -= 1  # a partial multi-byte register
             return bytes([address]) + self._value(rng, size)
         if instruction == SYNC_WRITE:
             address, size = rng.choice(ITEMS)
-            rows = b"".join(bytes([self._id(rng)]) + self._value(rng, size)
-                            for _ in range(rng.randrange(0, 6)))
+            rows = b"".join(
+                bytes([self._id(rng)]) + self._value(rng, size) for _ in range(rng.randrange(0, 6))
+            )
             return bytes([address, size]) + rows
         if instruction == BULK_READ:
-            rows = b"".join(bytes([self._length(rng), self._id(rng), self._address(rng)])
-                            for _ in range(rng.randrange(0, 6)))
+            rows = b"".join(
+                bytes([self._length(rng), self._id(rng), self._address(rng)])
+                for _ in range(rng.randrange(0, 6))
+            )
             return (b"\x00" if rng.random() < 0.9 else bytes([rng.randrange(256)])) + rows
         return b"" if rng.random() < 0.9 else self._value(rng, rng.randrange(1, 6))
 
     def valid(self, rng: random.Random) -> bytes:
         """One well-formed packet with field-aware parameters."""
-        instruction = rng.randrange(256) if rng.random() < 0.05 else \
-            rng.choices(INSTRUCTIONS, _WEIGHTS)[0]
-        return packet(self._id(rng), instruction, self.params(rng, instruction)[:MAX_LEN - 2])
+        instruction = (
+            rng.randrange(256) if rng.random() < 0.05 else rng.choices(INSTRUCTIONS, _WEIGHTS)[0]
+        )
+        return packet(self._id(rng), instruction, self.params(rng, instruction)[: MAX_LEN - 2])
 
     def random_bytes(self, rng: random.Random) -> bytes:
         size = rng.randrange(0, 64) if rng.random() < 0.9 else rng.randrange(64, 600)
@@ -185,8 +246,9 @@ class Inputs1:
 
     def wrong_length(self, rng: random.Random) -> bytes:
         data = bytearray(self.valid(rng))
-        length = rng.choice((0, 1, 247, 255, rng.randrange(256), max(0, data[3] - 1),
-                             data[3] + 1, data[3] + 3))
+        length = rng.choice(
+            (0, 1, 247, 255, rng.randrange(256), max(0, data[3] - 1), data[3] + 1, data[3] + 3)
+        )
         data[3] = length & 0xFF
         if rng.random() < 0.6:  # a consistent checksum for the new LEN
             body = bytes(data[2 : 2 + max(0, data[3] + 1)])
@@ -203,7 +265,7 @@ class Inputs1:
         first, second = self.valid(rng), self.valid(rng)
         pick = rng.random()
         if pick < 0.4:
-            return first[: rng.randrange(len(first))] + second[rng.randrange(len(second)):]
+            return first[: rng.randrange(len(first))] + second[rng.randrange(len(second)) :]
         if pick < 0.7:
             spot = rng.randrange(len(first))
             return first[:spot] + second + first[spot:]

@@ -140,10 +140,14 @@ class InProcess:
                 continue
             firmware = servo.peek("firmware_version")
             self._probes[servo_id] = [
-                (packet(servo_id, 0x01, b""), packet(servo_id, 0x55, b"\x00" + model +
-                                                      bytes([firmware]))),
-                (packet(servo_id, 0x02, b"\x00\x00\x02\x00"), packet(servo_id, 0x55,
-                                                                     b"\x00" + model)),
+                (
+                    packet(servo_id, 0x01, b""),
+                    packet(servo_id, 0x55, b"\x00" + model + bytes([firmware])),
+                ),
+                (
+                    packet(servo_id, 0x02, b"\x00\x00\x02\x00"),
+                    packet(servo_id, 0x55, b"\x00" + model),
+                ),
             ]
 
     def tables(self) -> Tables:
@@ -282,8 +286,9 @@ class OverPty:
                         raise AssertionError(f"ID {servo_id}: a status too short to read") from exc
                     model, result, error = 0, dxl.COMM_RX_CORRUPT, 0
                 expected = model_number(servo_id, self.protocol)
-                if result == dxl.COMM_SUCCESS and ((model, error) == (expected, 0)
-                                                   or not timed_out):
+                if result == dxl.COMM_SUCCESS and (
+                    (model, error) == (expected, 0) or not timed_out
+                ):
                     assert (model, error) == (expected, 0), f"ID {servo_id}: {model}, {error}"
                     break
                 timed_out = timed_out or result != dxl.COMM_SUCCESS

@@ -60,18 +60,37 @@ def run_series(runs: int, hogs: int, marker: str, logs: Path, extra: list[str]) 
             start = time.monotonic()
             with log.open("w", encoding="utf-8") as out:
                 code = subprocess.call(
-                    [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                     "-m", marker, *extra],
-                    stdout=out, stderr=subprocess.STDOUT,
+                    [
+                        sys.executable,
+                        "-m",
+                        "pytest",
+                        "-q",
+                        "-p",
+                        "no:cacheprovider",
+                        "-m",
+                        marker,
+                        *extra,
+                    ],
+                    stdout=out,
+                    stderr=subprocess.STDOUT,
                 )
             wall = time.monotonic() - start
             text = log.read_text(encoding="utf-8", errors="replace")
-            outcome = RunOutcome(index, code == 0, _summary_line(text), round(wall, 1),
-                                 load_before, os.getloadavg()[0], str(log))
+            outcome = RunOutcome(
+                index,
+                code == 0,
+                _summary_line(text),
+                round(wall, 1),
+                load_before,
+                os.getloadavg()[0],
+                str(log),
+            )
             outcomes.append(outcome)
-            print(f"run {index}: {'ok' if outcome.passed else 'FAILED'} {outcome.summary} "
-                  f"({outcome.wall_s:.0f} s, load {load_before:.1f} -> {outcome.load_after:.1f})",
-                  flush=True)
+            print(
+                f"run {index}: {'ok' if outcome.passed else 'FAILED'} {outcome.summary} "
+                f"({outcome.wall_s:.0f} s, load {load_before:.1f} -> {outcome.load_after:.1f})",
+                flush=True,
+            )
     finally:
         for spinner in spinners:
             spinner.kill()
@@ -85,8 +104,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=10, help="pytest runs in a row (default 10)")
     parser.add_argument("--hogs", type=int, default=2, help="CPU-bound processes (default 2)")
     parser.add_argument("--marker", default="pty", help='pytest -m expression (default "pty")')
-    parser.add_argument("--logs", type=Path, default=Path("pty-under-load"),
-                        help="directory for each run's pytest output")
+    parser.add_argument(
+        "--logs",
+        type=Path,
+        default=Path("pty-under-load"),
+        help="directory for each run's pytest output",
+    )
     parser.add_argument("--json", action="store_true", help="print the outcomes as JSON at the end")
     parser.add_argument("pytest_args", nargs="*", help="more arguments for pytest (after --)")
     args = parser.parse_args(argv)

@@ -41,20 +41,29 @@ def main() -> None:
     settings = split_kwargs(kwargs, task)
     env: EnvSettings = settings[0]
     robot = load_robot(env.robot)
-    encoding = make_encoding(env.encoding, robot.joint_count, robot.lower_rad, robot.upper_rad,
-                             phase_hz=env.phase_hz, dft_bins=env.dft_bins)
+    encoding = make_encoding(
+        env.encoding,
+        robot.joint_count,
+        robot.lower_rad,
+        robot.upper_rad,
+        phase_hz=env.phase_hz,
+        dft_bins=env.dft_bins,
+    )
     action = np.array([float(v) for v in args.action.split(",")])
     if action.shape != (encoding.action_dim,):
         parser.error(f"--action: {env.encoding} takes {encoding.action_dim} numbers")
     phases = 2 * encoding.observed_phases
     n = robot.joint_count
     obs_dim = 2 * n + phases + 2 if "Goal" in args.env else 3 * n + phases + 2
-    actor = NumpyActor((np.zeros((1, obs_dim)), np.zeros((action.size, 1))),
-                       (np.zeros(1), action))
+    actor = NumpyActor((np.zeros((1, obs_dim)), np.zeros((action.size, 1))), (np.zeros(1), action))
     args.out.mkdir(parents=True, exist_ok=True)
     save_actor(actor, args.out / "actor.npz")
-    write_settings(args.out, args.env, settings_dict(*settings),
-                   {"algo": "open loop", "action": action.tolist()})
+    write_settings(
+        args.out,
+        args.env,
+        settings_dict(*settings),
+        {"algo": "open loop", "action": action.tolist()},
+    )
     print(args.out)
 
 

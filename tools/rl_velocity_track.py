@@ -50,7 +50,7 @@ def path_speed_mps(log: Path, rate_hz: float) -> float:
         x, y = header.index("com_x_m"), header.index("com_y_m")
         rows = [line.split(",") for line in handle if line.strip()]
     step = max(1, round(rate_hz))
-    points = np.array([[float(r[x]), float(r[y])] for r in rows[round(SETTLE_S * rate_hz)::step]])
+    points = np.array([[float(r[x]), float(r[y])] for r in rows[round(SETTLE_S * rate_hz) :: step]])
     seconds = (len(points) - 1) * step / rate_hz
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum() / seconds)
 
@@ -59,26 +59,61 @@ def on_twin(policy: Path, robot: str, speed: float, duration_s: float) -> dict[s
     """The twin run's speed_mps, path speed and turn for ``speed`` m/s commanded."""
     with tempfile.TemporaryDirectory() as folder:
         log = Path(folder) / "run.csv"
-        summary = _run(["run", "--robot", robot, "--policy", str(policy), "--command",
-                        f"{speed:g},0", "--duration", f"{duration_s:g}", "--log", str(log),
-                        "--json"], timeout_s=20 * duration_s + 120)
+        summary = _run(
+            [
+                "run",
+                "--robot",
+                robot,
+                "--policy",
+                str(policy),
+                "--command",
+                f"{speed:g},0",
+                "--duration",
+                f"{duration_s:g}",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            timeout_s=20 * duration_s + 120,
+        )
         path = path_speed_mps(log, float(summary["rate_hz"]))
-    return {"speed_mps": float(summary["speed_mps"]), "path_speed_mps": path,
-            "turn_deg": float(summary["turn_deg"])}
+    return {
+        "speed_mps": float(summary["speed_mps"]),
+        "path_speed_mps": path,
+        "turn_deg": float(summary["turn_deg"]),
+    }
 
 
 def over_bus(policy: Path, robot: str, speed: float, duration_s: float) -> dict[str, float]:
     """The speed_mps of the twin behind an emulated bus the policy drives servo by servo."""
     emulator = subprocess.Popen(
         [*SNAKEBOT, "emulate", "--robot", robot, "--pty", "--physics", "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         assert emulator.stdout is not None
         port = json.loads(emulator.stdout.readline())["port"]
-        _run(["run", "--backend", "dynamixel", "--port", port, "--robot", robot, "--policy",
-              str(policy), "--command", f"{speed:g},0", "--duration", f"{duration_s:g}",
-              "--json"], timeout_s=20 * duration_s + 120)
+        _run(
+            [
+                "run",
+                "--backend",
+                "dynamixel",
+                "--port",
+                port,
+                "--robot",
+                robot,
+                "--policy",
+                str(policy),
+                "--command",
+                f"{speed:g},0",
+                "--duration",
+                f"{duration_s:g}",
+                "--json",
+            ],
+            timeout_s=20 * duration_s + 120,
+        )
     finally:
         if emulator.poll() is None:
             emulator.send_signal(signal.SIGINT)
@@ -93,8 +128,11 @@ def fit(commanded: list[float], measured: list[float]) -> dict[str, float]:
     """Least-squares slope and intercept of measured on commanded speed, and their correlation."""
     x, y = np.asarray(commanded), np.asarray(measured)
     slope, intercept = np.polyfit(x, y, 1)
-    return {"slope": float(slope), "intercept_mps": float(intercept),
-            "correlation": float(np.corrcoef(x, y)[0, 1])}
+    return {
+        "slope": float(slope),
+        "intercept_mps": float(intercept),
+        "correlation": float(np.corrcoef(x, y)[0, 1]),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -128,9 +166,12 @@ def main(argv: list[str] | None = None) -> int:
         for key in ("speed_mps", "path_speed_mps"):
             if f"fit_{key}" in r:
                 f = r[f"fit_{key}"]
-                print(f"{'':6}{key}: slope {f['slope']:.2f}, intercept {f['intercept_mps']:.3f} "
-                      f"m/s, correlation {f['correlation']:.3f}")
+                print(
+                    f"{'':6}{key}: slope {f['slope']:.2f}, intercept {f['intercept_mps']:.3f} "
+                    f"m/s, correlation {f['correlation']:.3f}"
+                )
     return 0
+
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -112,8 +112,20 @@ def soak(args: argparse.Namespace) -> dict[str, Any]:
     workdir = Path(tempfile.mkdtemp(prefix="snakebot-soak-"))
     log = workdir / "run.csv"
     emulator = subprocess.Popen(
-        [PYTHON, "-m", "snakebot", "emulate", "--robot", args.robot, "--pty", "--physics",
-         "--json"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        [
+            PYTHON,
+            "-m",
+            "snakebot",
+            "emulate",
+            "--robot",
+            args.robot,
+            "--pty",
+            "--physics",
+            "--json",
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
         text=True,
     )
     burners: list[subprocess.Popen[bytes]] = []
@@ -123,11 +135,30 @@ def soak(args: argparse.Namespace) -> dict[str, Any]:
         sampler = Sampler(emulator.pid)
         sampler.start()
         began = time.monotonic()
-        command = [PYTHON, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
-                   "--robot", args.robot, "--gait", args.gait, "--rate", str(args.rate),
-                   "--duration", str(args.duration), "--log", str(log), "--json"]
-        with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True) as process:
+        command = [
+            PYTHON,
+            "-m",
+            "snakebot",
+            "run",
+            "--backend",
+            "dynamixel",
+            "--port",
+            port,
+            "--robot",
+            args.robot,
+            "--gait",
+            args.gait,
+            "--rate",
+            str(args.rate),
+            "--duration",
+            str(args.duration),
+            "--log",
+            str(log),
+            "--json",
+        ]
+        with subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        ) as process:
             sampler.pids.append(process.pid)
             stdout, stderr = process.communicate(timeout=args.duration * 4 + 120)
         run = subprocess.CompletedProcess(command, process.returncode, stdout, stderr)
@@ -147,8 +178,13 @@ def soak(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def judge(
-    args: argparse.Namespace, run: subprocess.CompletedProcess[str], wall_s: float, log: Path,
-    emulator_code: int, emulator_err: str, emulated: list[dict[str, Any]],
+    args: argparse.Namespace,
+    run: subprocess.CompletedProcess[str],
+    wall_s: float,
+    log: Path,
+    emulator_code: int,
+    emulator_err: str,
+    emulated: list[dict[str, Any]],
     samples: list[tuple[float, float]],
 ) -> dict[str, Any]:
     failures: list[str] = []
@@ -178,15 +214,23 @@ def judge(
     if growth > args.max_growth_mib:
         failures.append(f"emulator memory grew {growth:.1f} MiB after the first fifth")
     return {
-        "ok": not failures, "failures": failures,
-        "duration_s": args.duration, "rate_hz": args.rate, "load_processes": args.load,
-        "wall_s": round(wall_s, 1), "achieved_rate_hz": round(achieved, 2),
-        "overruns": summary.get("overruns"), "control_cycles": summary.get("control_cycles"),
-        "log_rows": len(rows), "emulator_bus": bus,
-        "emulator_rss_mib": {"first": round(settled[0], 1) if settled else None,
-                             "last": round(settled[-1], 1) if settled else None,
-                             "max": round(max(settled), 1) if settled else None,
-                             "growth": round(growth, 2)},
+        "ok": not failures,
+        "failures": failures,
+        "duration_s": args.duration,
+        "rate_hz": args.rate,
+        "load_processes": args.load,
+        "wall_s": round(wall_s, 1),
+        "achieved_rate_hz": round(achieved, 2),
+        "overruns": summary.get("overruns"),
+        "control_cycles": summary.get("control_cycles"),
+        "log_rows": len(rows),
+        "emulator_bus": bus,
+        "emulator_rss_mib": {
+            "first": round(settled[0], 1) if settled else None,
+            "last": round(settled[-1], 1) if settled else None,
+            "max": round(max(settled), 1) if settled else None,
+            "growth": round(growth, 2),
+        },
     }
 
 

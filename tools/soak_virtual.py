@@ -74,11 +74,16 @@ class SoakResult:
     def report(self) -> dict[str, object]:
         """The figures as one JSON-ready dict."""
         return {
-            "cycles_planned": self.cycles_planned, "cycles_run": self.cycles_run,
-            "lost_cycles": self.lost_cycles, "rate_hz": self.rate_hz,
-            "virtual_s": round(self.virtual_s, 3), "wall_s": round(self.wall_s, 1),
-            "overruns": self.overruns, "retries": self.retries,
-            "group_retries": self.group_retries, "watchdog_trips": self.watchdog_trips,
+            "cycles_planned": self.cycles_planned,
+            "cycles_run": self.cycles_run,
+            "lost_cycles": self.lost_cycles,
+            "rate_hz": self.rate_hz,
+            "virtual_s": round(self.virtual_s, 3),
+            "wall_s": round(self.wall_s, 1),
+            "overruns": self.overruns,
+            "retries": self.retries,
+            "group_retries": self.group_retries,
+            "watchdog_trips": self.watchdog_trips,
             "rss_start_mib": round(self.rss_samples[1][1] / 2**20, 2) if self.rss_samples else None,
             "rss_growth_kib": round(self.growth(self.rss_samples) / 1024, 1),
             "heap_growth_kib": round(self.growth(self.heap_samples) / 1024, 1),
@@ -86,8 +91,9 @@ class SoakResult:
         }
 
 
-def soak(cycles: int, rate_hz: float = 200.0, *, samples: int = 20, trace: bool = False
-         ) -> SoakResult:
+def soak(
+    cycles: int, rate_hz: float = 200.0, *, samples: int = 20, trace: bool = False
+) -> SoakResult:
     """Run ``cycles`` control cycles at ``rate_hz`` in virtual time and measure them."""
     base = load_robot("snake12")
     robot = dataclasses.replace(base, safety=dataclasses.replace(base.safety, ramp_s=0.5))
@@ -112,19 +118,26 @@ def soak(cycles: int, rate_hz: float = 200.0, *, samples: int = 20, trace: bool 
 
     started = time.perf_counter()
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             with backend:
                 start_s = chain.now_s
-                run_gait(backend, make_gait("sidewinding", robot.joint_count),
-                         SafetyLayer.for_robot(robot),
-                         # Half a period past the last deadline: exactly `cycles` if none is lost.
-                         RunPlan(duration_s=(cycles + 0.5) / rate_hz, rate_hz=rate_hz,
-                                 ramp_out=False),
-                         RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
-                         on_cycle=sample)
+                run_gait(
+                    backend,
+                    make_gait("sidewinding", robot.joint_count),
+                    SafetyLayer.for_robot(robot),
+                    # Half a period past the last deadline: exactly `cycles` if none is lost.
+                    RunPlan(duration_s=(cycles + 0.5) / rate_hz, rate_hz=rate_hz, ramp_out=False),
+                    RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
+                    on_cycle=sample,
+                )
                 result.virtual_s = chain.now_s - start_s
         result.overruns = backend.stats.overruns
         result.retries = sum(backend.bus.retry_counts.values())
@@ -144,8 +157,9 @@ def main() -> None:
     group.add_argument("--hours", type=float, help="virtual hours of control (default 1)")
     group.add_argument("--cycles", type=int, help="control cycles (overrides --hours)")
     parser.add_argument("--rate", type=float, default=200.0, help="control rate in Hz")
-    parser.add_argument("--tracemalloc", action="store_true",
-                        help="also trace the Python heap (slower)")
+    parser.add_argument(
+        "--tracemalloc", action="store_true", help="also trace the Python heap (slower)"
+    )
     args = parser.parse_args()
     cycles = args.cycles or math.ceil((args.hours or 1.0) * 3600 * args.rate)
     logging.getLogger("snakebot").setLevel(logging.ERROR)

@@ -28,18 +28,27 @@ from snakebot.setup.calibrate import MAX_OFFSET_DEG, measure, refusals, write_of
 def add_parser(subparsers: Any) -> None:
     """Register the ``calibrate`` command."""
     parser = subparsers.add_parser(
-        "calibrate", help="measure zero offsets with the snake laid straight",
+        "calibrate",
+        help="measure zero offsets with the snake laid straight",
         description="Lay the snake straight (torque off), then run this: it reads every servo's "
         "position, shows the zero offsets and, once you confirm, writes them into the robot file "
         "(joints[].zero_offset_rad; comments and layout kept). Homing Offset stays 0.",
     )
     add_robot_option(parser, hardware="always")
     add_bus_options(parser, baud=False)  # the rate comes from the robot's settings
-    parser.add_argument("--max-offset-deg", type=positive_float, default=MAX_OFFSET_DEG,
-                        help=f"refuse offsets beyond this (default {MAX_OFFSET_DEG:g})")
+    parser.add_argument(
+        "--max-offset-deg",
+        type=positive_float,
+        default=MAX_OFFSET_DEG,
+        help=f"refuse offsets beyond this (default {MAX_OFFSET_DEG:g})",
+    )
     parser.add_argument("--dry-run", action="store_true", help="show the offsets, write nothing")
-    parser.add_argument("--out", type=Path, metavar="FILE",
-                        help="write a copy of the robot file with the new offsets here")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        metavar="FILE",
+        help="write a copy of the robot file with the new offsets here",
+    )
     add_force_option(parser)
     parser.add_argument("--yes", action="store_true", help="write without asking")
     parser.add_argument("--json", action="store_true", help="print the offsets as JSON")
@@ -59,21 +68,35 @@ def run(args: argparse.Namespace) -> int:
     check_robot_copy(args, robot.source)
     chain = load_settings(robot)
     port = args.port or robot.bus.port
-    with Link(port, chain.baud, model=robot.servo.name,
-              protocol=robot.bus.protocol) as link:
+    with Link(port, chain.baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
         zeros = measure(link, chain)
     problems = refusals(chain, zeros, args.max_offset_deg)
     if args.json:
-        print_json({"robot": robot.name, "file": str(robot.source), "joints": [
-            {"joint": z.joint, "id": z.servo_id, "present_ticks": z.present_ticks,
-             "old_offset_rad": z.old_offset_rad, "new_offset_rad": round(z.new_offset_rad, 4)}
-            for z in zeros], "problems": problems})
+        print_json(
+            {
+                "robot": robot.name,
+                "file": str(robot.source),
+                "joints": [
+                    {
+                        "joint": z.joint,
+                        "id": z.servo_id,
+                        "present_ticks": z.present_ticks,
+                        "old_offset_rad": z.old_offset_rad,
+                        "new_offset_rad": round(z.new_offset_rad, 4),
+                    }
+                    for z in zeros
+                ],
+                "problems": problems,
+            }
+        )
     else:
         print(f"{'joint':>5}  {'ID':>3}  {'ticks':>6}  {'old offset':>12}  {'new offset':>22}")
         for z in zeros:
-            print(f"{z.joint:>5}  {z.servo_id:>3}  {z.present_ticks:>6}  "
-                  f"{math.degrees(z.old_offset_rad):>8.2f} deg  {z.new_offset_rad:>9.4f} rad "
-                  f"({math.degrees(z.new_offset_rad):+6.2f} deg)")
+            print(
+                f"{z.joint:>5}  {z.servo_id:>3}  {z.present_ticks:>6}  "
+                f"{math.degrees(z.old_offset_rad):>8.2f} deg  {z.new_offset_rad:>9.4f} rad "
+                f"({math.degrees(z.new_offset_rad):+6.2f} deg)"
+            )
     if problems:
         raise SetupError("calibration refused, nothing written:\n  - " + "\n  - ".join(problems))
     if args.dry_run:

@@ -145,8 +145,11 @@ def check_writable(path: Path, what: str, *, force: bool) -> None:
             raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         missing = _missing_folder(path.parent)
         if missing is not None:
-            raise OutputError(path, f"cannot write the {what}: folder {missing} does not exist "
-                              "(create it first, or name another)")
+            raise OutputError(
+                path,
+                f"cannot write the {what}: folder {missing} does not exist "
+                "(create it first, or name another)",
+            )
         existed = path.exists()
         with path.open("ab"):
             pass
@@ -320,8 +323,10 @@ def not_written_note(args: argparse.Namespace, what: str) -> str:
     """Why a command left every robot file as it was."""
     if getattr(args, "dry_run", False):
         return f"dry run: {what} not written"
-    return (f"{what} not written: --robot named a robot, not a file; pass --robot FILE.toml to "
-            "update that file, or --out FILE for a copy with the new values")
+    return (
+        f"{what} not written: --robot named a robot, not a file; pass --robot FILE.toml to "
+        "update that file, or --out FILE for a copy with the new values"
+    )
 
 
 def add_write_back_options(parser: argparse.ArgumentParser, what: str) -> None:
@@ -387,12 +392,14 @@ def add_bus_options(parser: Any, *, backend: str = "", baud: bool = True) -> Non
     apply (``--backend dynamixel``), for the help text."""
     when = f"with {backend}; " if backend else ""
     parser.add_argument(
-        "--port", type=port_arg,
+        "--port",
+        type=port_arg,
         help=f"serial port {when}(default: the robot's bus.port)",
     )
     if baud:
         parser.add_argument(
-            "--baud", type=baud_arg,
+            "--baud",
+            type=baud_arg,
             help=f"baud rate {when}(default: the robot's bus.baud)",
         )
 
@@ -401,7 +408,8 @@ def add_dry_run(parser: Any, what: str) -> None:
     """``--dry-run``: check every option and input, say what would happen, write nothing
     (``what``: what the command would otherwise write)."""
     parser.add_argument(
-        "--dry-run", action="store_true",
+        "--dry-run",
+        action="store_true",
         help=f"check everything and show the plan; write nothing ({what})",
     )
 

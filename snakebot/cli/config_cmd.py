@@ -25,7 +25,8 @@ from snakebot.setup.scan import sweep_seconds
 def add_parser(subparsers: Any) -> None:
     """Register ``config`` and its actions."""
     parser = subparsers.add_parser(
-        "config", help="compare and write servo settings (diff, apply, assign-id)",
+        "config",
+        help="compare and write servo settings (diff, apply, assign-id)",
         description="Servo settings as data: servos/<model>.toml [settings] plus the robot "
         "file's overrides. Servos are found at any baud rate.",
     )
@@ -36,7 +37,8 @@ def add_parser(subparsers: Any) -> None:
     diff.set_defaults(handler=run_diff, writes=False)
 
     write = actions.add_parser(
-        "apply", help="write the differences (torque off for EEPROM, baud changes last)",
+        "apply",
+        help="write the differences (torque off for EEPROM, baud changes last)",
     )
     _robot_and_port(write)
     write.add_argument("--dry-run", action="store_true", help="print the plan, write nothing")
@@ -45,7 +47,8 @@ def add_parser(subparsers: Any) -> None:
     write.set_defaults(handler=run_apply, writes=True)
 
     assign = actions.add_parser(
-        "assign-id", help="give one (factory-fresh) servo its ID and baud rate",
+        "assign-id",
+        help="give one (factory-fresh) servo its ID and baud rate",
         description="Finds the one servo on the bus at any baud rate (a new one is ID 1 at "
         "57600, an AX at 1000000) and sets its ID and baud rate. Refuses if several servos "
         "answer or the ID is taken. Growing a chain: plug in one new servo at a time and pass "
@@ -53,10 +56,15 @@ def add_parser(subparsers: Any) -> None:
     )
     _robot_and_port(assign)
     assign.add_argument("--to", type=servo_id_arg, required=True, help="new ID (0..252)")
-    assign.add_argument("--from", dest="from_id", type=servo_id_arg,
-                        help="only the servo answering as this ID (default: the only servo)")
-    assign.add_argument("--new-baud", type=baud_arg,
-                        help="baud rate to set (default: the robot's bus.baud)")
+    assign.add_argument(
+        "--from",
+        dest="from_id",
+        type=servo_id_arg,
+        help="only the servo answering as this ID (default: the only servo)",
+    )
+    assign.add_argument(
+        "--new-baud", type=baud_arg, help="baud rate to set (default: the robot's bus.baud)"
+    )
     add_dry_run(assign, "the servo keeps its ID and rate")
     assign.add_argument("--json", action="store_true", help="print one JSON object")
     assign.set_defaults(handler=run_assign, writes=True)
@@ -79,11 +87,23 @@ def _table(diff: ChainDiff) -> list[str]:
     rows = [("ID", "setting", "servo", "wanted", "unit")]
     for d in diff.differences:
         row = d.row()
-        rows.append((str(d.servo_id), d.key, str(row["servo_value"]), str(row["wanted_value"]),
-                     str(row["unit"])))
+        rows.append(
+            (
+                str(d.servo_id),
+                d.key,
+                str(row["servo_value"]),
+                str(row["wanted_value"]),
+                str(row["unit"]),
+            )
+        )
     widths = [max(len(r[i]) for r in rows) for i in range(5)]
-    return ["  ".join(c.rjust(w) if i == 0 else c.ljust(w) for i, (c, w) in
-                      enumerate(zip(r, widths, strict=True))).rstrip() for r in rows]
+    return [
+        "  ".join(
+            c.rjust(w) if i == 0 else c.ljust(w)
+            for i, (c, w) in enumerate(zip(r, widths, strict=True))
+        ).rstrip()
+        for r in rows
+    ]
 
 
 def run_diff(args: argparse.Namespace) -> int:
@@ -91,16 +111,27 @@ def run_diff(args: argparse.Namespace) -> int:
     robot = load_robot(robot_name(args, hardware=True, what="config diff"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
-    with Link(port, chain.baud, model=robot.servo.name,
-              protocol=robot.bus.protocol) as link:
+    with Link(port, chain.baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
         diff = survey(link, chain)
     if args.json:
-        print_json({
-            "robot": robot.name, "port": port, "identical": diff.identical,
-            "servos": [{"id": s.servo_id, "baud": s.baud, "torque_on": s.torque_on,
-                        "hardware_error": s.hardware_error} for s in diff.servos.values()],
-            "differences": [d.row() for d in diff.differences], "notes": list(diff.notes),
-        })
+        print_json(
+            {
+                "robot": robot.name,
+                "port": port,
+                "identical": diff.identical,
+                "servos": [
+                    {
+                        "id": s.servo_id,
+                        "baud": s.baud,
+                        "torque_on": s.torque_on,
+                        "hardware_error": s.hardware_error,
+                    }
+                    for s in diff.servos.values()
+                ],
+                "differences": [d.row() for d in diff.differences],
+                "notes": list(diff.notes),
+            }
+        )
     else:
         count = len(robot.servo_ids)
         if diff.identical:
@@ -108,8 +139,10 @@ def run_diff(args: argparse.Namespace) -> int:
         else:
             print("\n".join(_table(diff)))
             servos = len({d.servo_id for d in diff.differences})
-            print(f"{len(diff.differences)} difference(s) on {servos} of {count} servos; "
-                  f"`snakebot config apply --robot {args.robot} --port {port}` writes them")
+            print(
+                f"{len(diff.differences)} difference(s) on {servos} of {count} servos; "
+                f"`snakebot config apply --robot {args.robot} --port {port}` writes them"
+            )
         for note in diff.notes:
             print(f"note: {note}", file=sys.stderr)
     return 0 if diff.identical else 1
@@ -120,15 +153,21 @@ def run_apply(args: argparse.Namespace) -> int:
     robot = load_robot(robot_name(args, hardware=True, what="config apply"))
     chain = load_settings(robot)
     port = args.port or robot.bus.port
-    with Link(port, chain.baud, model=robot.servo.name,
-              protocol=robot.bus.protocol) as link:
+    with Link(port, chain.baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
         diff = survey(link, chain)
         plan = plan_apply(chain, diff)
         steps = [step.describe() for step in plan.steps]
         if plan.empty or args.dry_run:
             if args.json:
-                print_json({"robot": robot.name, "port": port, "steps": steps,
-                            "written": False, "dry_run": args.dry_run})
+                print_json(
+                    {
+                        "robot": robot.name,
+                        "port": port,
+                        "steps": steps,
+                        "written": False,
+                        "dry_run": args.dry_run,
+                    }
+                )
             elif plan.empty:
                 print(f"{robot.name} on {port}: nothing to write, all servos hold the settings")
             else:
@@ -142,8 +181,11 @@ def run_apply(args: argparse.Namespace) -> int:
             print(f"  {step}", file=out)
         if plan.limp:
             ids = ", ".join(map(str, plan.limp))
-            print(f"WARNING: torque goes off on servo(s) {ids} to write EEPROM settings: those "
-                  "joints go limp. Lay the snake down or support it.", file=sys.stderr)
+            print(
+                f"WARNING: torque goes off on servo(s) {ids} to write EEPROM settings: those "
+                "joints go limp. Lay the snake down or support it.",
+                file=sys.stderr,
+            )
         confirm("Write these settings?", assume_yes=args.yes, what="config apply")
         total = len(plan.steps)
         done = iter(range(1, total + 1))
@@ -153,11 +195,14 @@ def run_apply(args: argparse.Namespace) -> int:
 
         apply(link, chain, plan, diff, on_step=report)
     if args.json:
-        print_json({"robot": robot.name, "port": port, "steps": steps, "written": True,
-                    "dry_run": False})
+        print_json(
+            {"robot": robot.name, "port": port, "steps": steps, "written": True, "dry_run": False}
+        )
         return 0
-    print("done: every write read back, the final diff is empty; torque is left off "
-          "(`snakebot run` turns it on)")
+    print(
+        "done: every write read back, the final diff is empty; torque is left off "
+        "(`snakebot run` turns it on)"
+    )
     return 0
 
 
@@ -169,28 +214,48 @@ def run_assign(args: argparse.Namespace) -> int:
     where = f"ID {args.from_id}" if args.from_id is not None else "the servo"
     with Link(port, baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
         bauds = search_bauds(link)
-        print(f"searching for {where} at {', '.join(map(str, bauds))} baud ...",
-              file=sys.stderr, flush=True)
+        print(
+            f"searching for {where} at {', '.join(map(str, bauds))} baud ...",
+            file=sys.stderr,
+            flush=True,
+        )
         family = link.family
         if args.from_id is None and not family.broadcast_ping:
             ids = family.max_id + 1
-            print(f"Protocol {family.protocol:.1f} has no broadcast ping: every ID is pinged on "
-                  f"its own, {ids} IDs at each rate (about "
-                  f"{sum(sweep_seconds(ids, b) for b in bauds):.0f} s on a real port; --from 1 "
-                  "finds a new servo at once)", file=sys.stderr, flush=True)
-        result = assign_id(link, to_id=args.to, baud=baud, from_id=args.from_id,
-                           bauds=bauds, dry_run=args.dry_run)
+            print(
+                f"Protocol {family.protocol:.1f} has no broadcast ping: every ID is pinged on "
+                f"its own, {ids} IDs at each rate (about "
+                f"{sum(sweep_seconds(ids, b) for b in bauds):.0f} s on a real port; --from 1 "
+                "finds a new servo at once)",
+                file=sys.stderr,
+                flush=True,
+            )
+        result = assign_id(
+            link, to_id=args.to, baud=baud, from_id=args.from_id, bauds=bauds, dry_run=args.dry_run
+        )
     found = result.found
     if args.json:
-        print_json({"port": port, "found_id": found.servo_id, "found_baud": found.baud,
-                    "id": result.servo_id, "baud": result.baud,
-                    "written": result.changed and not args.dry_run, "dry_run": args.dry_run})
+        print_json(
+            {
+                "port": port,
+                "found_id": found.servo_id,
+                "found_baud": found.baud,
+                "id": result.servo_id,
+                "baud": result.baud,
+                "written": result.changed and not args.dry_run,
+                "dry_run": args.dry_run,
+            }
+        )
     elif args.dry_run:
-        print(f"dry run: servo ID {found.servo_id} at {found.baud} baud would become ID "
-              f"{result.servo_id} at {result.baud} baud; nothing was written")
+        print(
+            f"dry run: servo ID {found.servo_id} at {found.baud} baud would become ID "
+            f"{result.servo_id} at {result.baud} baud; nothing was written"
+        )
     elif not result.changed:
         print(f"servo is already ID {found.servo_id} at {found.baud} baud; nothing written")
     else:
-        print(f"servo ID {found.servo_id} at {found.baud} baud is now ID {result.servo_id} at "
-              f"{result.baud} baud")
+        print(
+            f"servo ID {found.servo_id} at {found.baud} baud is now ID {result.servo_id} at "
+            f"{result.baud} baud"
+        )
     return 0

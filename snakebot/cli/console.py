@@ -15,8 +15,9 @@ def confirm(question: str, *, assume_yes: bool, what: str) -> None:
     if assume_yes:
         return
     if not sys.stdin.isatty():
-        raise SetupError(f"{what} needs your confirmation and stdin is not a terminal: "
-                         "pass --yes to go ahead")
+        raise SetupError(
+            f"{what} needs your confirmation and stdin is not a terminal: pass --yes to go ahead"
+        )
     answer = input(f"{question} [y/N] ")
     if answer.strip().lower() not in ("y", "yes"):
         raise SetupError(f"{what}: cancelled, nothing was written")

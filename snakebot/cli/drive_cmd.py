@@ -125,8 +125,7 @@ def add_parser(subparsers: Any) -> None:
         parser,
         ("friction", "realtime"),
         helps={
-            "friction": "twin ground friction along and across each module (overrides the "
-            "robot's)",
+            "friction": "twin ground friction along and across each module (overrides the robot's)",
             "realtime": "pace the twin to the wall clock (always on without --script)",
         },
     )
@@ -201,10 +200,16 @@ def run(args: argparse.Namespace) -> int:
         given = watched(spec, given)
     check_outputs(args, (args.record, "recording"))  # before anything is written or moves
     if args.dry_run:
-        return report_dry_run(args, {
-            "robot": robot.name, "gaits": ",".join(c.name for c in choices),
-            "backend": spec.name, "log": args.log, "record": args.record,
-        })
+        return report_dry_run(
+            args,
+            {
+                "robot": robot.name,
+                "gaits": ",".join(c.name for c in choices),
+                "backend": spec.name,
+                "log": args.log,
+                "record": args.record,
+            },
+        )
     with flag_errors():
         snake = Snake.prepare(robot, spec, **given)
     backend = snake.backend
@@ -215,7 +220,12 @@ def run(args: argparse.Namespace) -> int:
         controller = DriveController(live, choices, on_event=recorder)
         observers: list[DriveObserver] = []
         telemetry = open_telemetry(
-            stack, args, command="drive", robot=robot, backend=backend, rate_hz=args.rate,
+            stack,
+            args,
+            command="drive",
+            robot=robot,
+            backend=backend,
+            rate_hz=args.rate,
             gait={"gaits": [gait_facts(c.name, None, c.params) for c in choices]},
         )
         observers += [o for o in (drive_observer(telemetry),) if o is not None]

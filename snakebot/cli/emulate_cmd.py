@@ -54,13 +54,22 @@ def add_parser(subparsers: Any) -> None:
     )
     add_robot_option(parser)
     parser.add_argument("--baud", type=baud_arg, help="line rate (default: the robot's bus.baud)")
-    parser.add_argument("--protocol", type=protocol_arg, metavar="{1,2}",
-                        help="the protocol the robot's servos speak (default: its bus.protocol); "
-                        "1 on an X-series robot sets Protocol Type 1")
-    parser.add_argument("--also", type=also_arg, action="append", default=[],
-                        metavar="MODEL:IDS[:PROTOCOL]",
-                        help="add servos of MODEL with IDS (e.g. 7-9,12) on the same wire, in "
-                        "PROTOCOL (default: the model's own); repeatable")
+    parser.add_argument(
+        "--protocol",
+        type=protocol_arg,
+        metavar="{1,2}",
+        help="the protocol the robot's servos speak (default: its bus.protocol); "
+        "1 on an X-series robot sets Protocol Type 1",
+    )
+    parser.add_argument(
+        "--also",
+        type=also_arg,
+        action="append",
+        default=[],
+        metavar="MODEL:IDS[:PROTOCOL]",
+        help="add servos of MODEL with IDS (e.g. 7-9,12) on the same wire, in "
+        "PROTOCOL (default: the model's own); repeatable",
+    )
     parser.add_argument(
         "--physics",
         action="store_true",
@@ -69,16 +78,30 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--pty", action="store_true", required=True, help="serve on a pty")
     parser.add_argument("--json", action="store_true", help='print {"port": ...} and JSON summary')
-    parser.add_argument("--fresh", type=int, default=0, metavar="N",
-                        help="start with no servo connected; N factory-fresh ones (ID 1, "
-                        "factory baud) wait to be plugged in")
-    parser.add_argument("--attached", type=int, default=0, metavar="K",
-                        help="with --fresh: plug in K at start (K >= 2 share ID 1 and collide)")
-    parser.add_argument("--state-file", type=Path,
-                        help="keep every servo's EEPROM in this JSON file across runs")
-    parser.add_argument("--scramble", type=int, metavar="SEED",
-                        help="start the robot's servos with wrong settings (ignored when the "
-                        "state file exists)")
+    parser.add_argument(
+        "--fresh",
+        type=int,
+        default=0,
+        metavar="N",
+        help="start with no servo connected; N factory-fresh ones (ID 1, "
+        "factory baud) wait to be plugged in",
+    )
+    parser.add_argument(
+        "--attached",
+        type=int,
+        default=0,
+        metavar="K",
+        help="with --fresh: plug in K at start (K >= 2 share ID 1 and collide)",
+    )
+    parser.add_argument(
+        "--state-file", type=Path, help="keep every servo's EEPROM in this JSON file across runs"
+    )
+    parser.add_argument(
+        "--scramble",
+        type=int,
+        metavar="SEED",
+        help="start the robot's servos with wrong settings (ignored when the state file exists)",
+    )
     # writes=False: the state file is the emulated servos' own EEPROM, not an output
     parser.set_defaults(handler=run, writes=False)
 
@@ -131,8 +154,14 @@ def also_arg(text: str) -> AlsoServos:
     return AlsoServos(parts[0], ids, protocol)
 
 
-def _speak(servos: Sequence[VirtualServo], table: ServoTable, protocol: float | None,
-           source: str, *, key: str | None = None) -> None:
+def _speak(
+    servos: Sequence[VirtualServo],
+    table: ServoTable,
+    protocol: float | None,
+    source: str,
+    *,
+    key: str | None = None,
+) -> None:
     """Set the servos' protocol (ConfigError naming `source` and `key` if the model cannot
     speak it)."""
     from snakebot.families import family_for
@@ -141,9 +170,11 @@ def _speak(servos: Sequence[VirtualServo], table: ServoTable, protocol: float | 
         family = family_for(table, protocol)
     except ConfigError as exc:
         has = " and ".join(f"{p:.1f}" for p in table.protocols)
-        raise ConfigError(source, exc.key if key is None else key,
-                          f"{table.model} servos speak Protocol {has} only, not {exc.key}; "
-                          "expected one of those") from exc
+        raise ConfigError(
+            source,
+            exc.key if key is None else key,
+            f"{table.model} servos speak Protocol {has} only, not {exc.key}; expected one of those",
+        ) from exc
     if "protocol_type" in table:
         for servo in servos:
             servo.poke("protocol_type", int(family.protocol))
@@ -183,8 +214,9 @@ def _bench(
     if not 0 <= args.attached <= args.fresh:
         raise ConfigError("--attached", "", f"expected 0..{args.fresh} (the --fresh count)")
     if args.fresh and (args.physics or args.scramble is not None):
-        raise ConfigError("--fresh", "", "--fresh starts with no robot chain: drop --physics "
-                          "and --scramble")
+        raise ConfigError(
+            "--fresh", "", "--fresh starts with no robot chain: drop --physics and --scramble"
+        )
     motion = None
     if args.fresh:
         chain = EmulatedChain(baud=FACTORY_BAUD)
@@ -281,12 +313,16 @@ def run(args: argparse.Namespace) -> int:
     previous = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
     server = PtyServer(bench.chain)
     orphaned = Orphaned()
-    threading.Thread(target=_read_commands, args=(commands, orphaned.piped_input_ended),
-                     daemon=True).start()
+    threading.Thread(
+        target=_read_commands, args=(commands, orphaned.piped_input_ended), daemon=True
+    ).start()
+
     def tick() -> None:
         if orphaned():
-            _say(f"emulate: stdin closed and the process that started it (PID "
-                 f"{orphaned.parent_pid}) exited: stopping")
+            _say(
+                f"emulate: stdin closed and the process that started it (PID "
+                f"{orphaned.parent_pid}) exited: stopping"
+            )
             stop.set()
         while plugs:
             _command(args, bench, plugs.pop())
@@ -325,25 +361,46 @@ def serve_until(stop: threading.Event, server: PtyServer, tick: Callable[[], Non
     server.check()
 
 
-def _announce(args: argparse.Namespace, robot: RobotConfig, port: str, baud: int,
-              bench: ServoBench, motion: TwinMotion | None) -> None:
+def _announce(
+    args: argparse.Namespace,
+    robot: RobotConfig,
+    port: str,
+    baud: int,
+    bench: ServoBench,
+    motion: TwinMotion | None,
+) -> None:
     servos = bench.chain.servos
     ids = sorted({s.servo_id for s in servos})
     if args.json:
-        listed = [{"id": s.servo_id, "model": s.table.model, "protocol": s.protocol}
-                  for s in servos]
-        print_json({"port": port, "baud": baud, "servo_ids": ids, "waiting": bench.waiting,
-                    "servos": listed})
+        listed = [
+            {"id": s.servo_id, "model": s.table.model, "protocol": s.protocol} for s in servos
+        ]
+        print_json(
+            {
+                "port": port,
+                "baud": baud,
+                "servo_ids": ids,
+                "waiting": bench.waiting,
+                "servos": listed,
+            }
+        )
         return
     print(port, flush=True)
     groups: dict[tuple[str, float], list[int]] = {}
     for servo in servos:
         groups.setdefault((servo.table.model, servo.protocol), []).append(servo.servo_id)
-    chain = ", ".join(f"{len(g)} x {model} (IDs {min(g)}..{max(g)}, Protocol {protocol:.1f})"
-                      for (model, protocol), g in groups.items())
-    what = (f"{len(servos)} x {robot.servo.name} connected, {bench.waiting} fresh waiting "
-            "('plug' on stdin or SIGUSR1 connects one)") if args.fresh else (
-        f"{robot.name}: {chain} at {baud} baud" + (", twin physics" if motion else ""))
+    chain = ", ".join(
+        f"{len(g)} x {model} (IDs {min(g)}..{max(g)}, Protocol {protocol:.1f})"
+        for (model, protocol), g in groups.items()
+    )
+    what = (
+        (
+            f"{len(servos)} x {robot.servo.name} connected, {bench.waiting} fresh waiting "
+            "('plug' on stdin or SIGUSR1 connects one)"
+        )
+        if args.fresh
+        else (f"{robot.name}: {chain} at {baud} baud" + (", twin physics" if motion else ""))
+    )
     print(f"{what}; Ctrl-C to stop", file=sys.stderr, flush=True)
 
 
@@ -356,10 +413,17 @@ def _command(args: argparse.Namespace, bench: ServoBench, command: str) -> None:
         except EmulationError as exc:
             print(f"emulate: {exc}", file=sys.stderr, flush=True)
             return
-        event = {"event": "plugged", "serial": servo.serial_number, "id": servo.servo_id,
-                 "baud": servo.baud, "waiting": bench.waiting}
-        text = (f"plugged in servo #{servo.serial_number} (ID {servo.servo_id} at {servo.baud} "
-                f"baud); {bench.waiting} waiting")
+        event = {
+            "event": "plugged",
+            "serial": servo.serial_number,
+            "id": servo.servo_id,
+            "baud": servo.baud,
+            "waiting": bench.waiting,
+        }
+        text = (
+            f"plugged in servo #{servo.serial_number} (ID {servo.servo_id} at {servo.baud} "
+            f"baud); {bench.waiting} waiting"
+        )
     elif command == "power":
         bench.power_cycle()
         event, text = {"event": "power_cycled"}, "power-cycled every servo"
@@ -379,8 +443,12 @@ def _summary(
     # failure counts as a CRC error.
     both, servos = (bench.chain.parser_stats, bench.chain.parser1_stats), bench.chain.servos
     fields = ("received_bytes", "packets", "dropped_bytes", "crc_errors", "stale_resets")
-    bus = {name: max(getattr(s, name) for s in both) if name == "received_bytes"
-           else sum(getattr(s, name) for s in both) for name in fields}
+    bus = {
+        name: max(getattr(s, name) for s in both)
+        if name == "received_bytes"
+        else sum(getattr(s, name) for s in both)
+        for name in fields
+    }
     bus["watchdog_trips"] = sum(s.watchdog_trips for s in servos)
     summary = {"robot": robot.name, "backend": "emulate --physics", **motion.summary(), "bus": bus}
     if args.json:

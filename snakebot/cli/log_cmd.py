@@ -31,11 +31,15 @@ def add_parser(subparsers: Any) -> None:
     )
     actions = parser.add_subparsers(dest="log_command", metavar="ACTION", required=True)
 
-    plot = actions.add_parser("plot", help="PNGs: command vs measured, tracking, efforts, "
-                              "centre-of-mass path, rate and late cycles")
+    plot = actions.add_parser(
+        "plot",
+        help="PNGs: command vs measured, tracking, efforts, "
+        "centre-of-mass path, rate and late cycles",
+    )
     plot.add_argument("log", type=Path, help="telemetry CSV")
-    plot.add_argument("--out", type=Path, help="folder for the PNGs (default: LOG without "
-                      ".csv, plus _plots)")
+    plot.add_argument(
+        "--out", type=Path, help="folder for the PNGs (default: LOG without .csv, plus _plots)"
+    )
     plot.add_argument("--json", action="store_true", help="list the PNGs as JSON")
     add_force_option(plot)
     add_dry_run(plot, "no PNGs")
@@ -49,8 +53,12 @@ def add_parser(subparsers: Any) -> None:
     export = actions.add_parser("export", help="write the log as MCAP (Foxglove) or Parquet")
     export.add_argument("log", type=Path, help="telemetry CSV")
     export.add_argument("--format", choices=("mcap", "parquet"), required=True)
-    export.add_argument("--out", type=Path, help="output file (default: LOG's name with "
-                        ".export.mcap or .export.parquet: drive.csv -> drive.export.mcap)")
+    export.add_argument(
+        "--out",
+        type=Path,
+        help="output file (default: LOG's name with "
+        ".export.mcap or .export.parquet: drive.csv -> drive.export.mcap)",
+    )
     add_force_option(export)
     export.add_argument("--json", action="store_true", help="print what was written as JSON")
     add_dry_run(export, "no output file")
@@ -82,8 +90,10 @@ def run_plot(args: argparse.Namespace) -> int:
     if args.json:
         print_json({"log": str(args.log), "rows": len(log.values), "plots": list(map(str, paths))})
         return 0
-    print(f"{len(paths)} plots of {len(log.values)} rows in {folder} "
-          f"({time.perf_counter() - start:.1f} s):")
+    print(
+        f"{len(paths)} plots of {len(log.values)} rows in {folder} "
+        f"({time.perf_counter() - start:.1f} s):"
+    )
     for path in paths:
         print(f"  {path}")
     return 0
@@ -149,8 +159,9 @@ def run_export(args: argparse.Namespace) -> int:
     log, sidecar = _load(args.log)
     check_writable(out, f"{FORMAT_NAMES[args.format]} file", force=args.force)
     if args.dry_run:
-        return report_dry_run(args, {"log": args.log, "rows": len(log.values), "out": out,
-                                     "format": args.format})
+        return report_dry_run(
+            args, {"log": args.log, "rows": len(log.values), "out": out, "format": args.format}
+        )
     export = export_mcap if args.format == "mcap" else export_parquet
     rows = export(log, sidecar, out)
     if args.json:

@@ -28,9 +28,19 @@ from snakebot.signals import STOP_SIGNALS
 
 # command name -> module under snakebot.cli providing add_parser(subparsers) and run(args) -> int
 COMMANDS: tuple[str, ...] = (
-    "run", "drive", "model", "gaits", "emulate", "scan", "config", "servo", "calibrate", "tune",
+    "run",
+    "drive",
+    "model",
+    "gaits",
+    "emulate",
+    "scan",
+    "config",
+    "servo",
+    "calibrate",
+    "tune",
     "sysid",
-    "log", "rl",
+    "log",
+    "rl",
 )
 COMMANDS += ("robots", "ports")  # issue 9: where robots come from, which serial ports exist
 

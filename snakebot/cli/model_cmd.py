@@ -69,8 +69,9 @@ def run(args: argparse.Namespace) -> int:
         what = f"{robot.joint_count} joints"
     xml = spec.to_xml()
     if args.dry_run:
-        return report_dry_run(args, {"robot": robot.name, "model": what, "out": args.out,
-                                     "bytes": len(xml.encode())})
+        return report_dry_run(
+            args, {"robot": robot.name, "model": what, "out": args.out, "bytes": len(xml.encode())}
+        )
     try:
         args.out.write_text(xml)
     except OSError as exc:

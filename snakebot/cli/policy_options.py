@@ -30,17 +30,20 @@ def parse_command(text: str | None) -> tuple[float, float] | None:
     return a, b
 
 
-def policy_gait(robot: RobotConfig | BodyConfig, backend: Backend,
-                args: argparse.Namespace) -> tuple[str, Gait]:
+def policy_gait(
+    robot: RobotConfig | BodyConfig, backend: Backend, args: argparse.Namespace
+) -> tuple[str, Gait]:
     """The --policy gait for ``backend`` (made, not yet connected); UsageError when --gait,
     --gait-file or --set come too, or the robot is a mass-spring body (no servos to drive)."""
     if args.gait or args.gait_file or args.set:
         raise UsageError("--policy is the gait: drop --gait, --gait-file and --set")
     if isinstance(robot, BodyConfig):
-        raise UsageError(f"--policy drives servo snakes (robot files); {robot.name} is a "
-                         "mass-spring body")
+        raise UsageError(
+            f"--policy drives servo snakes (robot files); {robot.name} is a mass-spring body"
+        )
     from snakebot.rl.policy_gait import policy_gait_for_backend
 
     with flag_errors({"command": "--command"}):  # --command's destination is policy_command
-        return policy_gait_for_backend(args.policy, robot, backend,
-                                       parse_command(args.policy_command), args.rate)
+        return policy_gait_for_backend(
+            args.policy, robot, backend, parse_command(args.policy_command), args.rate
+        )

@@ -50,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
         usb = f"  USB {port['vid']:04x}:{port['pid']:04x}" if port["vid"] is not None else ""
         print(f"{port['device']:<20} {port['description']}{usb}")
     if not ports:
-        print("no serial ports found: check the USB cable and the adapter's driver "
-              "(on Linux, `dmesg` names the ttyUSB/ttyACM device it created)")
+        print(
+            "no serial ports found: check the USB cable and the adapter's driver "
+            "(on Linux, `dmesg` names the ttyUSB/ttyACM device it created)"
+        )
     return 0

@@ -36,7 +36,8 @@ DEFAULT_ROLLOUT = 2048
 def add_parser(subparsers: Any) -> None:
     """Register ``rl`` and its subcommands."""
     parser = subparsers.add_parser(
-        "rl", help="train and evaluate learned gaits (needs snakebot[rl-train])",
+        "rl",
+        help="train and evaluate learned gaits (needs snakebot[rl-train])",
         description="Reinforcement learning on the twin: Gymnasium environments "
         "snakebot/SnakeGoal-v0 and snakebot/SnakeVelocity-v0, trained with PPO.",
     )
@@ -45,20 +46,33 @@ def add_parser(subparsers: Any) -> None:
     train = sub.add_parser("train", help="train a policy; saves it with its env settings")
     _env_options(train)
     train.add_argument("--algo", choices=("ppo",), default="ppo", help="algorithm (ppo)")
-    train.add_argument("--steps", type=positive_int, default=200_000,
-                       help="env steps to train (default 200000)")
+    train.add_argument(
+        "--steps", type=positive_int, default=200_000, help="env steps to train (default 200000)"
+    )
     _vec_options(train)
-    train.add_argument("--rollout", type=positive_int,
-                       help="env steps per PPO update, over all envs (default 2048; with "
-                       "--resume: the saved policy's)")
-    train.add_argument("--ppo", action="append", default=[], metavar="KEY=VALUE",
-                       help="PPO setting (repeatable), e.g. --ppo learning_rate=1e-4: "
-                       "learning_rate, batch_size, n_epochs, gamma, gae_lambda, clip_range, "
-                       "ent_coef, vf_coef, max_grad_norm (default SB3's; with --resume: the "
-                       "saved policy's)")
-    train.add_argument("--resume", type=Path, metavar="DIR",
-                       help="go on training the policy in DIR (its env and PPO settings) for "
-                       "--steps more steps; writes into DIR unless --out names another folder")
+    train.add_argument(
+        "--rollout",
+        type=positive_int,
+        help="env steps per PPO update, over all envs (default 2048; with "
+        "--resume: the saved policy's)",
+    )
+    train.add_argument(
+        "--ppo",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="PPO setting (repeatable), e.g. --ppo learning_rate=1e-4: "
+        "learning_rate, batch_size, n_epochs, gamma, gae_lambda, clip_range, "
+        "ent_coef, vf_coef, max_grad_norm (default SB3's; with --resume: the "
+        "saved policy's)",
+    )
+    train.add_argument(
+        "--resume",
+        type=Path,
+        metavar="DIR",
+        help="go on training the policy in DIR (its env and PPO settings) for "
+        "--steps more steps; writes into DIR unless --out names another folder",
+    )
     train.add_argument("--out", type=Path, help="policy folder (default rl-runs/ENV-ENCODING)")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_force_option(train)
@@ -67,11 +81,19 @@ def add_parser(subparsers: Any) -> None:
 
     evaluate = sub.add_parser("eval", help="evaluate a trained policy (and zero/random ones)")
     evaluate.add_argument("policy", type=Path, help="policy folder from `rl train`")
-    evaluate.add_argument("--episodes", type=positive_int, default=20,
-                          help="episodes, on seeds SEED..SEED+N-1 (default 20)")
+    evaluate.add_argument(
+        "--episodes",
+        type=positive_int,
+        default=20,
+        help="episodes, on seeds SEED..SEED+N-1 (default 20)",
+    )
     evaluate.add_argument("--seed", type=int, default=1000, help="first episode seed")
-    evaluate.add_argument("--baselines", choices=("on", "off"), default="on",
-                          help="also run a zero and a random policy on the same seeds")
+    evaluate.add_argument(
+        "--baselines",
+        choices=("on", "off"),
+        default="on",
+        help="also run a zero and a random policy on the same seeds",
+    )
     evaluate.add_argument("--video", type=Path, help="render the first episode to an MP4")
     evaluate.add_argument("--json", action="store_true", help="print the results as JSON")
     add_force_option(evaluate)
@@ -80,18 +102,35 @@ def add_parser(subparsers: Any) -> None:
 
     compare = sub.add_parser("compare", help="train every encoding, plot the curves together")
     compare.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0])
-    compare.add_argument("--encodings", default="simple,sinusoid,dft,dft_shift",
-                         help="comma-separated encodings (default the seed's four)")
-    compare.add_argument("--robot", default="snake8", type=robot_arg,
-                         help="robot name or file (default snake8)")
-    compare.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                         help="env setting for every run (repeatable)")
-    compare.add_argument("--steps", type=positive_int, default=100_000,
-                         help="env steps per encoding (default 100000)")
+    compare.add_argument(
+        "--encodings",
+        default="simple,sinusoid,dft,dft_shift",
+        help="comma-separated encodings (default the seed's four)",
+    )
+    compare.add_argument(
+        "--robot", default="snake8", type=robot_arg, help="robot name or file (default snake8)"
+    )
+    compare.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env setting for every run (repeatable)",
+    )
+    compare.add_argument(
+        "--steps",
+        type=positive_int,
+        default=100_000,
+        help="env steps per encoding (default 100000)",
+    )
     compare.add_argument("--seed", type=int, default=0)
     _vec_options(compare)
-    compare.add_argument("--out", type=Path, default=Path("rl-runs/compare"),
-                         help="folder: one policy folder per encoding and compare.png")
+    compare.add_argument(
+        "--out",
+        type=Path,
+        default=Path("rl-runs/compare"),
+        help="folder: one policy folder per encoding and compare.png",
+    )
     compare.add_argument("--json", action="store_true", help="print the results as JSON")
     add_force_option(compare)
     add_dry_run(compare, "no training, no policy folders, no plot")
@@ -101,24 +140,37 @@ def add_parser(subparsers: Any) -> None:
 def _env_options(parser: argparse.ArgumentParser) -> None:
     # No argparse defaults: --resume takes all three from the saved policy (run_train fills in
     # DEFAULT_ENV otherwise), and one given with it is refused rather than ignored.
-    parser.add_argument("--env", choices=ENV_CHOICES,
-                        help="environment (default snakebot/SnakeGoal-v0)")
-    parser.add_argument("--encoding", choices=ENCODING_CHOICES,
-                        help="action encoding (default dft_shift)")
+    parser.add_argument(
+        "--env", choices=ENV_CHOICES, help="environment (default snakebot/SnakeGoal-v0)"
+    )
+    parser.add_argument(
+        "--encoding", choices=ENCODING_CHOICES, help="action encoding (default dft_shift)"
+    )
     parser.add_argument("--robot", type=robot_arg, help="robot name or file (default snake8)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="env setting (repeatable), e.g. --set episode_s=20 "
-                        "--set goal_distance_bl=2,3; see docs/learning.md")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env setting (repeatable), e.g. --set episode_s=20 "
+        "--set goal_distance_bl=2,3; see docs/learning.md",
+    )
     parser.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
 
 
 def _vec_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--n-envs", type=positive_int, default=DEFAULT_N_ENVS,
-                        help=f"parallel envs (default {DEFAULT_N_ENVS}, measured fastest on two "
-                        "cores)")
-    parser.add_argument("--vec", choices=("dummy", "subproc"), default=DEFAULT_VEC,
-                        help=f"dummy: envs in this process; subproc: one process each "
-                        f"(default {DEFAULT_VEC})")
+    parser.add_argument(
+        "--n-envs",
+        type=positive_int,
+        default=DEFAULT_N_ENVS,
+        help=f"parallel envs (default {DEFAULT_N_ENVS}, measured fastest on two cores)",
+    )
+    parser.add_argument(
+        "--vec",
+        choices=("dummy", "subproc"),
+        default=DEFAULT_VEC,
+        help=f"dummy: envs in this process; subproc: one process each (default {DEFAULT_VEC})",
+    )
 
 
 def parse_settings(items: list[str]) -> dict[str, Any]:
@@ -169,8 +221,11 @@ def _check_robot(name: str) -> None:
     from snakebot.session import load_robot
 
     if not isinstance(load_robot(name), RobotConfig):
-        raise ConfigError("--robot", name, "the learning environments drive servo snakes (robot "
-                          "files), not mass-spring bodies")
+        raise ConfigError(
+            "--robot",
+            name,
+            "the learning environments drive servo snakes (robot files), not mass-spring bodies",
+        )
 
 
 def _check_out(out: Path) -> None:
@@ -209,8 +264,10 @@ def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
         given = [f"--{key}" for key in DEFAULT_ENV if getattr(args, key) is not None]
         given += ["--set"] if args.set else []
         if given:
-            raise UsageError(f"--resume trains on in the saved policy's environment: drop "
-                             f"{', '.join(given)} (or train a new policy without --resume)")
+            raise UsageError(
+                f"--resume trains on in the saved policy's environment: drop "
+                f"{', '.join(given)} (or train a new policy without --resume)"
+            )
         resume = resume_point(args.resume)
         _check_robot(resume.env_kwargs["robot"])
         env_id, kwargs = resume.env_id, resume.env_kwargs
@@ -227,9 +284,18 @@ def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
     in_place = resume is not None and out.resolve() == resume.folder.resolve()
     if not in_place:  # resuming in place is what --resume asks for
         refuse_replacing_in(out, TRAIN_FILES, "trained policy", force=args.force)
-    settings = TrainSettings(env_id, kwargs, args.steps, seed=args.seed, n_envs=args.n_envs,
-                             vec=args.vec, algo=args.algo, rollout_steps=rollout, ppo=ppo,
-                             resume=resume)
+    settings = TrainSettings(
+        env_id,
+        kwargs,
+        args.steps,
+        seed=args.seed,
+        n_envs=args.n_envs,
+        vec=args.vec,
+        algo=args.algo,
+        rollout_steps=rollout,
+        ppo=ppo,
+        resume=resume,
+    )
     return settings, out, in_place
 
 
@@ -241,9 +307,16 @@ def run_train(args: argparse.Namespace) -> int:
     resume = settings.resume
     kwargs = settings.env_kwargs
     if args.dry_run:
-        plan = {"env": settings.env_id, "encoding": kwargs["encoding"], "robot": kwargs["robot"],
-                "steps": args.steps, "out": str(out), "env_kwargs": kwargs,
-                "ppo": settings.ppo, "rollout": settings.rollout_steps}
+        plan = {
+            "env": settings.env_id,
+            "encoding": kwargs["encoding"],
+            "robot": kwargs["robot"],
+            "steps": args.steps,
+            "out": str(out),
+            "env_kwargs": kwargs,
+            "ppo": settings.ppo,
+            "rollout": settings.rollout_steps,
+        }
         if resume is not None:
             plan["resume"] = {"folder": str(resume.folder), "steps": resume.steps}
         return report_dry_run(args, plan)
@@ -251,11 +324,15 @@ def run_train(args: argparse.Namespace) -> int:
         what = f"{settings.env_id} ({kwargs['encoding']}, {kwargs['robot']})"
         if resume is not None:
             where = "in place" if in_place else f"-> {out}"
-            print(f"resuming {what} from {resume.steps} steps in {resume.folder} for "
-                  f"{args.steps} more on {args.n_envs} {args.vec} env(s) {where}")
+            print(
+                f"resuming {what} from {resume.steps} steps in {resume.folder} for "
+                f"{args.steps} more on {args.n_envs} {args.vec} env(s) {where}"
+            )
         else:
-            print(f"training {what} for {args.steps} steps on {args.n_envs} {args.vec} "
-                  f"env(s) -> {out}")
+            print(
+                f"training {what} for {args.steps} steps on {args.n_envs} {args.vec} "
+                f"env(s) -> {out}"
+            )
     result = train(settings, out)
     summary = dump_json(result)
     if args.json:
@@ -263,9 +340,11 @@ def run_train(args: argparse.Namespace) -> int:
     else:
         ended = "interrupted after" if result.interrupted else "done:"
         cpu = "" if summary["cpu_s"] is None else f", {summary['cpu_s']:.0f} CPU s"
-        print(f"{ended} {summary['steps']} steps in {summary['wall_s']:.0f} s "
-              f"({summary['steps_per_s']:.0f} steps/s{cpu}); "
-              f"policy, learning_curve.csv and .png in {out}")
+        print(
+            f"{ended} {summary['steps']} steps in {summary['wall_s']:.0f} s "
+            f"({summary['steps_per_s']:.0f} steps/s{cpu}); "
+            f"policy, learning_curve.csv and .png in {out}"
+        )
     return 130 if result.interrupted else 0
 
 
@@ -281,11 +360,23 @@ def run_eval(args: argparse.Namespace) -> int:
         policy = load_policy(args.policy)
         if args.video is not None:
             _check_out(args.video.parent)
-        return report_dry_run(args, {"policy": str(args.policy), "env": policy.env_id,
-                                     "episodes": args.episodes, "seed": args.seed,
-                                     "video": None if args.video is None else str(args.video)})
-    results = evaluate_folder(args.policy, episodes=args.episodes, seed=args.seed,
-                              baselines=args.baselines == "on", video=args.video)
+        return report_dry_run(
+            args,
+            {
+                "policy": str(args.policy),
+                "env": policy.env_id,
+                "episodes": args.episodes,
+                "seed": args.seed,
+                "video": None if args.video is None else str(args.video),
+            },
+        )
+    results = evaluate_folder(
+        args.policy,
+        episodes=args.episodes,
+        seed=args.seed,
+        baselines=args.baselines == "on",
+        video=args.video,
+    )
     if args.json:
         print_json({name: r.summary() for name, r in results.items()})
     else:
@@ -298,25 +389,32 @@ def run_compare(args: argparse.Namespace) -> int:
     encodings = [e.strip() for e in args.encodings.split(",") if e.strip()]
     bad = [e for e in encodings if e not in ENCODING_CHOICES]
     if bad or not encodings:
-        raise ConfigError("--encodings", args.encodings,
-                          f"expected a comma list of {', '.join(ENCODING_CHOICES)}")
+        raise ConfigError(
+            "--encodings", args.encodings, f"expected a comma list of {', '.join(ENCODING_CHOICES)}"
+        )
     from snakebot.rl.compare import compare
 
     runs = {e: env_kwargs(args, e) for e in encodings}
     _check_out(args.out)
     from snakebot.rl.policy_file import TRAIN_FILES
 
-    refuse_replacing_in(args.out, ("compare.png", "compare.json"), "comparison",
-                        force=args.force)
+    refuse_replacing_in(args.out, ("compare.png", "compare.json"), "comparison", force=args.force)
     for encoding in encodings:
-        refuse_replacing_in(args.out / encoding, TRAIN_FILES, "trained policy",
-                            force=args.force)
+        refuse_replacing_in(args.out / encoding, TRAIN_FILES, "trained policy", force=args.force)
     if args.dry_run:
-        return report_dry_run(args, {"env": args.env, "encodings": encodings,
-                                     "robot": args.robot, "steps": args.steps,
-                                     "out": str(args.out)})
-    summary = compare(args.env, runs, args.steps, args.out, seed=args.seed,
-                      n_envs=args.n_envs, vec=args.vec)
+        return report_dry_run(
+            args,
+            {
+                "env": args.env,
+                "encodings": encodings,
+                "robot": args.robot,
+                "steps": args.steps,
+                "out": str(args.out),
+            },
+        )
+    summary = compare(
+        args.env, runs, args.steps, args.out, seed=args.seed, n_envs=args.n_envs, vec=args.vec
+    )
     if args.json:
         print_json(summary)
     else:

@@ -31,10 +31,15 @@ def find_all() -> list[dict[str, Any]]:
         for kind, sub in (("robot", "robots"), ("body", "bodies")):
             for path in sorted((folder.path / sub).glob("*.toml")):
                 key = (kind, path.stem)
-                found.append({
-                    "name": path.stem, "kind": kind, "origin": folder.origin,
-                    "path": str(path), "shadowed": key in seen,
-                })
+                found.append(
+                    {
+                        "name": path.stem,
+                        "kind": kind,
+                        "origin": folder.origin,
+                        "path": str(path),
+                        "shadowed": key in seen,
+                    }
+                )
                 seen.add(key)
     return found
 
@@ -42,8 +47,10 @@ def find_all() -> list[dict[str, Any]]:
 def run(args: argparse.Namespace) -> int:
     """Print the robots and bodies with their origin and file, then the search path."""
     found = find_all()
-    search = [{"path": str(f.path), "origin": f.origin, "exists": f.path.is_dir()}
-              for f in config_search_path()]
+    search = [
+        {"path": str(f.path), "origin": f.origin, "exists": f.path.is_dir()}
+        for f in config_search_path()
+    ]
     if args.json:
         print_json({"robots": found, "search_path": search})
         return 0

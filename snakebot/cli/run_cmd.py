@@ -48,7 +48,13 @@ from snakebot.session import (
 from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = (
-    "friction", "friction_model", "directional", "terrain", "realtime", "port", "baud",
+    "friction",
+    "friction_model",
+    "directional",
+    "terrain",
+    "realtime",
+    "port",
+    "baud",
     "allow_extra_servos",
 )
 """The backend option flags ``run`` offers; each one is refused with a backend without it."""
@@ -69,12 +75,21 @@ def add_parser(subparsers: Any) -> None:
         help="override a gait parameter (repeatable), e.g. --set omega=pi",
     )
     parser.add_argument("--gait-file", type=Path, help="replay a saved gait (TOML)")
-    parser.add_argument("--policy", metavar="DIR", help="play a trained policy (`snakebot rl "
-                        "train`) as the gait, on a servo snake; needs snakebot[rl]")
+    parser.add_argument(
+        "--policy",
+        metavar="DIR",
+        help="play a trained policy (`snakebot rl "
+        "train`) as the gait, on a servo snake; needs snakebot[rl]",
+    )
     # dest: ``args.command`` is the subcommand's name (main.py's error messages use it)
-    parser.add_argument("--command", dest="policy_command", metavar="A,B", help="with --policy: "
-                        "speed,turn_rate (m/s, rad/s) for a velocity policy; goal X,Y (m, X "
-                        "ahead) for a goal policy")
+    parser.add_argument(
+        "--command",
+        dest="policy_command",
+        metavar="A,B",
+        help="with --policy: "
+        "speed,turn_rate (m/s, rad/s) for a velocity policy; goal X,Y (m, X "
+        "ahead) for a goal policy",
+    )
     add_backend_argument(parser)
     parser.add_argument(
         "--duration",
@@ -170,8 +185,11 @@ def run(args: argparse.Namespace) -> int:
     # that exists (without --force) or cannot be written stops the run before a file is
     # touched or a servo moves. Written rows stay on disk whatever ends the run.
     if args.video and args.video.suffix.lower() not in VIDEO_SUFFIXES:
-        raise ConfigError("--video", str(args.video), "expected a video file name ending in "
-                          f"{', '.join(VIDEO_SUFFIXES)}")
+        raise ConfigError(
+            "--video",
+            str(args.video),
+            f"expected a video file name ending in {', '.join(VIDEO_SUFFIXES)}",
+        )
     check_outputs(args, (args.video, "video"))
     if args.video:
         from snakebot.backends.twin.video import require_video_writer
@@ -184,14 +202,25 @@ def run(args: argparse.Namespace) -> int:
     # A rate the servo bus cannot hold is refused before anything opens (--rate, exit 2).
     snake.backend.check_rate(args.rate)
     if args.dry_run:
-        return report_dry_run(args, {
-            "robot": snake.robot.name, "gait": gait_name, "backend": spec.name,
-            "duration_s": args.duration, "rate_hz": args.rate, "log": args.log,
-            "video": args.video,
-        })
+        return report_dry_run(
+            args,
+            {
+                "robot": snake.robot.name,
+                "gait": gait_name,
+                "backend": spec.name,
+                "duration_s": args.duration,
+                "rate_hz": args.rate,
+                "log": args.log,
+                "video": args.video,
+            },
+        )
     with contextlib.ExitStack() as stack:
         telemetry = open_telemetry(
-            stack, args, command="run", robot=snake.robot, backend=snake.backend,
+            stack,
+            args,
+            command="run",
+            robot=snake.robot,
+            backend=snake.backend,
             rate_hz=args.rate,
             gait={"gait": gait_facts(gait_name, gait, {}), "duration_s": args.duration},
         )
@@ -275,9 +304,10 @@ class VideoOutput:
             raise OutputError(self.path, f"{what}: {exc}") from exc
         except mujoco.FatalError as exc:
             raise OutputError(
-                self.path, f"{what}: no offscreen rendering ({exc}); on a machine without a "
+                self.path,
+                f"{what}: no offscreen rendering ({exc}); on a machine without a "
                 "display install Mesa's EGL (libegl1) or OSMesa (libosmesa6), or set "
-                "MUJOCO_GL=egl (or osmesa) before anything imports mujoco"
+                "MUJOCO_GL=egl (or osmesa) before anything imports mujoco",
             ) from exc
 
     def __call__(self, cycle: int, gait_time_s: float) -> None:

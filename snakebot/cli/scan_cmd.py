@@ -56,17 +56,20 @@ def add_parser(subparsers: Any) -> None:
     """Register the ``scan`` command."""
     parser = subparsers.add_parser("scan", help="list the servos that answer on a port")
     parser.add_argument(
-        "--robot", type=robot_arg,
+        "--robot",
+        type=robot_arg,
         help="a robot name or file whose bus.port and bus.baud fill in --port and --baud "
         "(optional: scan reads, it moves and writes nothing)",
     )
     parser.add_argument(
-        "--port", type=port_arg,
+        "--port",
+        type=port_arg,
         help="serial port, e.g. /dev/ttyUSB0 or COM3 (default: the robot's bus.port)",
     )
     bauds = parser.add_mutually_exclusive_group()
     bauds.add_argument(
-        "--baud", type=baud_arg,
+        "--baud",
+        type=baud_arg,
         help=f"baud rate (default: the robot's bus.baud, else {DEFAULT_BAUD})",
     )
     bauds.add_argument(
@@ -76,13 +79,16 @@ def add_parser(subparsers: Any) -> None:
         "115200, 2000000, 3000000, 4000000, 9600; AX/MX also 500000, 2500000, 19200)",
     )
     parser.add_argument(
-        "--protocol", type=protocol_arg,
+        "--protocol",
+        type=protocol_arg,
         help="search one protocol only, 1 or 2 (default: both, the robot's first; Protocol 1.0 "
         "has no broadcast ping, so each ID is pinged on its own: about 8.7 s per rate at 1 Mbps "
         "for all 254 IDs)",
     )
     parser.add_argument(
-        "--ids", type=ids_arg, metavar="A-B",
+        "--ids",
+        type=ids_arg,
+        metavar="A-B",
         help="the IDs pinged one by one where there is no broadcast ping, e.g. 1-20 (default "
         "0..253; a 20-ID sweep takes under a second)",
     )
@@ -129,22 +135,35 @@ def run(args: argparse.Namespace) -> int:
         expected = tuple(robot.servo_ids)
         first = robot.bus.protocol
     if args.port is None:
-        raise UsageError("name the serial port with --port (`snakebot ports` lists them), or "
-                         "--robot NAME to use its bus.port")
+        raise UsageError(
+            "name the serial port with --port (`snakebot ports` lists them), or "
+            "--robot NAME to use its bus.port"
+        )
     args.baud = args.baud or DEFAULT_BAUD
     plan = _plan(args, first)
     start = time.monotonic()
     with Link(args.port, plan[0][1][0], protocol=plan[0][0].protocol) as link:
-        report = scan(link, plan, ids=args.ids,
-                      notify=lambda text: print(f"scan: {text}", file=sys.stderr, flush=True))
+        report = scan(
+            link,
+            plan,
+            ids=args.ids,
+            notify=lambda text: print(f"scan: {text}", file=sys.stderr, flush=True),
+        )
     elapsed = time.monotonic() - start
     bad_lines = report.bad_lines
     servos = [_as_dict(e, bad_lines) for e in report.entries]
     missing = _missing(report, expected)
     if args.json:
-        print_json({"port": args.port, "servos": servos, "missing": missing,
-                    "protocols": list(report.protocols), "mixed": report.mixed,
-                    "seconds": round(elapsed, 2)})
+        print_json(
+            {
+                "port": args.port,
+                "servos": servos,
+                "missing": missing,
+                "protocols": list(report.protocols),
+                "mixed": report.mixed,
+                "seconds": round(elapsed, 2),
+            }
+        )
     else:
         for entry in report.entries:
             print(_line(entry, bad_lines))
@@ -177,14 +196,18 @@ def _warn_missing(
     if expected is not None:
         what = f"{args.robot} has servo(s) {ids}, which did not answer"
     else:
-        what = (f"ID(s) {ids} did not answer, between IDs {missing[0] - 1} and "
-                f"{missing[-1] + 1} that did,")
+        what = (
+            f"ID(s) {ids} did not answer, between IDs {missing[0] - 1} and "
+            f"{missing[-1] + 1} that did,"
+        )
     if args.all_bauds:
         advice = "at any rate: check its cable, its power and its connector"
     else:
-        advice = (f"at {args.baud} baud: a servo not set up yet (or left half-way by an "
-                  f"interrupted setup) listens at another rate; `snakebot scan --port {args.port} "
-                  "--all-bauds` finds it, and `snakebot config apply` moves it to the robot's rate")
+        advice = (
+            f"at {args.baud} baud: a servo not set up yet (or left half-way by an "
+            f"interrupted setup) listens at another rate; `snakebot scan --port {args.port} "
+            "--all-bauds` finds it, and `snakebot config apply` moves it to the robot's rate"
+        )
     print(f"snakebot: warning: {what} {advice}", file=sys.stderr)
 
 
@@ -224,8 +247,10 @@ def _as_dict(entry: ScanEntry, bad_lines: list[tuple[float, int]]) -> dict[str, 
 
 def _line(entry: ScanEntry, bad_lines: list[tuple[float, int]]) -> str:
     text = _as_dict(entry, bad_lines)
-    line = (f"ID {entry.servo_id:>3}  {text['model']:<12} firmware {entry.firmware:<3} "
-            f"Protocol {entry.family.protocol:.1f} at {entry.baud} baud")
+    line = (
+        f"ID {entry.servo_id:>3}  {text['model']:<12} firmware {entry.firmware:<3} "
+        f"Protocol {entry.family.protocol:.1f} at {entry.baud} baud"
+    )
     if text["duplicate"]:
         label = "DUPLICATE ID" if entry.shared else "DUPLICATE ID?"
         return f"{line}  {label}: {text['duplicate']}"
@@ -260,20 +285,22 @@ def _raise_problems(args: argparse.Namespace, report: ScanReport) -> None:
     for line in report.bad_lines:
         ids = [e.servo_id for e in report.entries if e.line == line]
         raise BusError(
-            args.port, ids,
+            args.port,
+            ids,
             f"at {line[1]} baud every reply was corrupt ({len(ids)} IDs answered, none cleanly): "
             "this is the line, not shared IDs. Check the cable and connectors, the RS-485 "
             "termination and the power supply, and that nothing else drives the bus",
         )
-    clashes = [
-        (e.servo_id, e.baud, _clash_text(e)) for e in report.problems
-    ]
+    clashes = [(e.servo_id, e.baud, _clash_text(e)) for e in report.problems]
     if clashes:
         raise DuplicateIdError(args.port, clashes)
     if not report.entries:
         rates = "any rate" if args.all_bauds else f"{args.baud} baud"
-        which = (f"in Protocol {args.protocol:.1f} " if args.protocol is not None
-                 else "in either protocol ")
+        which = (
+            f"in Protocol {args.protocol:.1f} "
+            if args.protocol is not None
+            else "in either protocol "
+        )
         raise BusError(
             args.port,
             [],
@@ -284,7 +311,9 @@ def _raise_problems(args: argparse.Namespace, report: ScanReport) -> None:
 
 def _clash_text(entry: ScanEntry) -> str:
     if entry.garbled:
-        return (f"{entry.verdict.reason} while other IDs answer cleanly: two servos sharing the "
-                "ID garble each other's replies (if only one servo has it, its cable or "
-                "connector is damaged)")
+        return (
+            f"{entry.verdict.reason} while other IDs answer cleanly: two servos sharing the "
+            "ID garble each other's replies (if only one servo has it, its cable or "
+            "connector is damaged)"
+        )
     return entry.verdict.reason

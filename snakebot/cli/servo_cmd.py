@@ -39,7 +39,8 @@ from snakebot.setup.maintenance import (
 def add_parser(subparsers: Any) -> None:
     """Register ``servo`` and its actions."""
     parser = subparsers.add_parser(
-        "servo", help="reboot, factory-reset, inspect, go limp or jog servos")
+        "servo", help="reboot, factory-reset, inspect, go limp or jog servos"
+    )
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
 
     boot = actions.add_parser("reboot", help="reboot servos (clears a latched hardware error)")
@@ -68,7 +69,8 @@ def add_parser(subparsers: Any) -> None:
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(handler=run_info, writes=False)
     listing = actions.add_parser(
-        "models", help="servo models with control-table data (shipped and SNAKEBOT_SERVO_DATA)")
+        "models", help="servo models with control-table data (shipped and SNAKEBOT_SERVO_DATA)"
+    )
     listing.add_argument("--json", action="store_true", help="print one JSON object")
     listing.set_defaults(handler=run_models, writes=False)
     add_actions(actions, _port, servo_id_arg)
@@ -96,18 +98,34 @@ def run_reboot(args: argparse.Namespace) -> int:
         ids = sorted(link.listening(args.baud)) if args.all else [args.id]
         if not ids:
             raise BusError(args.port, [], f"no servo answered at {args.baud} baud")
-        before = {i: {"torque_enable": bus.read(i, "torque_enable"),
-                      "hardware_error_status": hardware_error(link, i, args.baud)} for i in ids}
+        before = {
+            i: {
+                "torque_enable": bus.read(i, "torque_enable"),
+                "hardware_error_status": hardware_error(link, i, args.baud),
+            }
+            for i in ids
+        }
         holding = [i for i, v in before.items() if v["torque_enable"]]
         if args.dry_run:
-            return report_dry_run(args, {
-                "port": args.port, "baud": args.baud, "reboot": ids, "holding_torque": holding,
-                "latched": {i: decode_hardware_error(v["hardware_error_status"])
-                            for i, v in before.items()},
-            })
+            return report_dry_run(
+                args,
+                {
+                    "port": args.port,
+                    "baud": args.baud,
+                    "reboot": ids,
+                    "holding_torque": holding,
+                    "latched": {
+                        i: decode_hardware_error(v["hardware_error_status"])
+                        for i, v in before.items()
+                    },
+                },
+            )
         if holding:
-            print(f"WARNING: servo(s) {', '.join(map(str, holding))} hold torque; a reboot turns "
-                  "it off and the joints go limp", file=sys.stderr)
+            print(
+                f"WARNING: servo(s) {', '.join(map(str, holding))} hold torque; a reboot turns "
+                "it off and the joints go limp",
+                file=sys.stderr,
+            )
             confirm("Reboot anyway?", assume_yes=args.yes, what="servo reboot")
         stuck = []
         rebooted = []
@@ -124,8 +142,11 @@ def run_reboot(args: argparse.Namespace) -> int:
     if args.json:
         print_json({"port": args.port, "baud": args.baud, "servos": rebooted, "stuck": stuck})
     if stuck:
-        print(f"snakebot: servo(s) {', '.join(map(str, stuck))} latch their error again: remove "
-              "the cause (voltage, heat, a jammed joint) and reboot again", file=sys.stderr)
+        print(
+            f"snakebot: servo(s) {', '.join(map(str, stuck))} latch their error again: remove "
+            "the cause (voltage, heat, a jammed joint) and reboot again",
+            file=sys.stderr,
+        )
         return 1
     return 0
 
@@ -133,8 +154,10 @@ def run_reboot(args: argparse.Namespace) -> int:
 def run_reset(args: argparse.Namespace) -> int:
     """Factory-reset one servo after checking it will not collide with another."""
     if args.keep_baud and not args.keep_id:
-        raise UsageError("the firmware keeps the baud rate only together with the ID (Factory "
-                         "Reset option 0x02): add --keep-id, or drop --keep-baud")
+        raise UsageError(
+            "the firmware keeps the baud rate only together with the ID (Factory "
+            "Reset option 0x02): add --keep-id, or drop --keep-baud"
+        )
     link = _link(args, "reset")  # nothing opens before the with
     if not args.yes and not args.dry_run:
         raise SetupError(f"servo reset erases every setting of servo {args.id}: add --yes")
@@ -145,8 +168,12 @@ def run_reset(args: argparse.Namespace) -> int:
             raise SetupError(f"{exc} (drop --keep-id and --keep-baud)") from None
         factory = factory_baud(link.bus.table)
         if link.ping_clean(args.id, args.baud) is None:
-            raise BusError(args.port, [args.id], f"no clean answer at {args.baud} baud; `snakebot "
-                           f"scan --port {args.port} --all-bauds` shows where the servos are")
+            raise BusError(
+                args.port,
+                [args.id],
+                f"no clean answer at {args.baud} baud; `snakebot "
+                f"scan --port {args.port} --all-bauds` shows where the servos are",
+            )
         was = link.family
         if not args.keep_id and (args.id, args.baud) != (FACTORY_ID, factory):
             taken = False
@@ -156,37 +183,57 @@ def run_reset(args: argparse.Namespace) -> int:
                 taken |= bool(other.models or other.corrupt)
             link.speak(was)
             if taken:
-                keep = ("reset with --keep-id, or unplug it"
-                        if "keep_id" in link.family.capabilities(link.bus.table)
-                        .factory_reset_options else "unplug it first")
+                keep = (
+                    "reset with --keep-id, or unplug it"
+                    if "keep_id" in link.family.capabilities(link.bus.table).factory_reset_options
+                    else "unplug it first"
+                )
                 raise SetupError(
                     f"after a reset without --keep-id the servo answers as ID {FACTORY_ID} at "
                     f"{factory} baud, where another servo already answers: {keep}"
                 )
         if args.dry_run:
-            return report_dry_run(args, {
-                "port": args.port, "id": args.id, "baud": args.baud,
-                "then_id": args.id if args.keep_id else FACTORY_ID,
-                "then_baud": args.baud if args.keep_baud else factory,
-            })
-        new_id, new_baud, family = factory_reset(link, args.id, args.baud,
-                                                 keep_id=args.keep_id, keep_baud=args.keep_baud)
+            return report_dry_run(
+                args,
+                {
+                    "port": args.port,
+                    "id": args.id,
+                    "baud": args.baud,
+                    "then_id": args.id if args.keep_id else FACTORY_ID,
+                    "then_baud": args.baud if args.keep_baud else factory,
+                },
+            )
+        new_id, new_baud, family = factory_reset(
+            link, args.id, args.baud, keep_id=args.keep_id, keep_baud=args.keep_baud
+        )
     if args.json:
-        print_json({"port": args.port, "id": args.id, "new_id": new_id, "new_baud": new_baud,
-                    "new_protocol": family.protocol})
+        print_json(
+            {
+                "port": args.port,
+                "id": args.id,
+                "new_id": new_id,
+                "new_baud": new_baud,
+                "new_protocol": family.protocol,
+            }
+        )
         return 0
     now = f" in Protocol {family.protocol:.1f}" if family != was else ""
-    print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} "
-          f"baud{now}")
+    print(f"servo {args.id}: factory reset; it now answers as ID {new_id} at {new_baud} baud{now}")
     if family != was:
-        print(f"snakebot: the reset put its Protocol Type back to the factory {family.protocol:.1f}"
-              f": switch it to {was.protocol:.1f} again (Protocol Type, address 13, e.g. with "
-              "Dynamixel Wizard 2.0) before `snakebot config assign-id` gives it its ID and rate "
-              "back", file=sys.stderr)
+        print(
+            f"snakebot: the reset put its Protocol Type back to the factory {family.protocol:.1f}"
+            f": switch it to {was.protocol:.1f} again (Protocol Type, address 13, e.g. with "
+            "Dynamixel Wizard 2.0) before `snakebot config assign-id` gives it its ID and rate "
+            "back",
+            file=sys.stderr,
+        )
     elif (new_id, new_baud) != (args.id, args.baud):
-        print(f"snakebot: `snakebot scan --port {args.port} --baud {new_baud} --protocol "
-              f"{family.protocol:g} --ids {new_id}` finds it; `snakebot config assign-id` gives "
-              "it its ID and rate back", file=sys.stderr)
+        print(
+            f"snakebot: `snakebot scan --port {args.port} --baud {new_baud} --protocol "
+            f"{family.protocol:g} --ids {new_id}` finds it; `snakebot config assign-id` gives "
+            "it its ID and rate back",
+            file=sys.stderr,
+        )
     return 0
 
 
@@ -195,20 +242,27 @@ def run_models(args: argparse.Namespace) -> int:
     rows: list[dict[str, Any]] = []
     for entry in model_entries():
         table = table_for_model(entry.name)
-        rows.append({
-            "model": table.model, "model_number": table.model_number, "family": table.family,
-            "protocols": list(table.protocols), "ticks": table.specs.ticks.count,
-            "registers": len(table.registers),
-            "file": "shipped" if entry.shipped else str(entry.path),
-        })
+        rows.append(
+            {
+                "model": table.model,
+                "model_number": table.model_number,
+                "family": table.family,
+                "protocols": list(table.protocols),
+                "ticks": table.specs.ticks.count,
+                "registers": len(table.registers),
+                "file": "shipped" if entry.shipped else str(entry.path),
+            }
+        )
     if args.json:
         print_json({"models": rows, "folders": [str(f) for f in model_dirs()]})
         return 0
     print(f"{'model':<14} {'number':>6}  {'protocols':<10} {'ticks':>5}  file")
     for row in rows:
         protocols = "/".join(f"{p:.1f}" for p in row["protocols"])
-        print(f"{row['model']:<14} {row['model_number']:>6}  {protocols:<10} {row['ticks']:>5}  "
-              f"{row['file']}")
+        print(
+            f"{row['model']:<14} {row['model_number']:>6}  {protocols:<10} {row['ticks']:>5}  "
+            f"{row['file']}"
+        )
     return 0
 
 
@@ -222,31 +276,50 @@ def run_info(args: argparse.Namespace) -> int:
         raw = info.values[register.key]
         value = display(register, None, raw, table)[0]
         si = f"{register.to_si(raw):.6g} {register.unit}" if register.unit else ""
-        rows.append({"address": register.address, "name": register.name, "key": register.key,
-                     "value": raw, "si": si, "eeprom": register.eeprom,
-                     "access": register.access, "shown": value})
+        rows.append(
+            {
+                "address": register.address,
+                "name": register.name,
+                "key": register.key,
+                "value": raw,
+                "si": si,
+                "eeprom": register.eeprom,
+                "access": register.access,
+                "shown": value,
+            }
+        )
     get = info.values.get
     summary = {
-        "id": info.servo_id, "baud": info.baud, "model": table.model,
-        "model_number": get("model_number"), "firmware": get("firmware_version"),
+        "id": info.servo_id,
+        "baud": info.baud,
+        "model": table.model,
+        "model_number": get("model_number"),
+        "firmware": get("firmware_version"),
         "hardware_error": list(info.hardware_errors),
         "temperature_c": get("present_temperature"),
-        "input_voltage_v": round(table["present_input_voltage"].to_si(
-            get("present_input_voltage", 0)), 3),
+        "input_voltage_v": round(
+            table["present_input_voltage"].to_si(get("present_input_voltage", 0)), 3
+        ),
         "torque_on": bool(get("torque_enable")),
     }
     if args.json:
         print_json({**summary, "registers": rows})
         return 0
     errors = ", ".join(info.hardware_errors) or "none"
-    print(f"servo {info.servo_id} at {info.baud} baud: {table.model} (model "
-          f"{summary['model_number']}), firmware {summary['firmware']}")
-    print(f"  hardware error: {errors}; temperature {summary['temperature_c']} degC; input "
-          f"{summary['input_voltage_v']:.1f} V; torque {'on' if summary['torque_on'] else 'off'}")
+    print(
+        f"servo {info.servo_id} at {info.baud} baud: {table.model} (model "
+        f"{summary['model_number']}), firmware {summary['firmware']}"
+    )
+    print(
+        f"  hardware error: {errors}; temperature {summary['temperature_c']} degC; input "
+        f"{summary['input_voltage_v']:.1f} V; torque {'on' if summary['torque_on'] else 'off'}"
+    )
     print(f"  {'addr':>4}  {'name':<24} {'value':>10}  {'SI':<18} memory")
     for row in rows:
         memory = "EEPROM" if row["eeprom"] else "RAM"
         access = "" if row["access"] == "RW" else " (read-only)"
-        print(f"  {row['address']:>4}  {row['name']:<24} {row['shown']:>10}  {row['si']:<18} "
-              f"{memory}{access}")
+        print(
+            f"  {row['address']:>4}  {row['name']:<24} {row['shown']:>10}  {row['si']:<18} "
+            f"{memory}{access}"
+        )
     return 0

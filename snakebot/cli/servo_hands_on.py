@@ -31,7 +31,8 @@ def angle_arg(text: str) -> float:
     match = _ANGLE.match(text)
     if match is None:
         raise argparse.ArgumentTypeError(
-            f"expected an angle in degrees (15, -15, 15deg) or radians (0.26rad), got {text!r}")
+            f"expected an angle in degrees (15, -15, 15deg) or radians (0.26rad), got {text!r}"
+        )
     value = float(match.group(1))
     return value if match.group(2) == "rad" else math.radians(value)
 
@@ -50,7 +51,8 @@ def speed_arg(text: str) -> float:
 def add_actions(actions: Any, port: Any, servo_id_arg: Any) -> None:
     """Register ``torque`` and ``jog`` under ``servo`` (``port`` adds --robot/--port/--baud)."""
     torque = actions.add_parser(
-        "torque", help="torque off (joints go limp) or on (hold where they stand)",
+        "torque",
+        help="torque off (joints go limp) or on (hold where they stand)",
         description="off: the joints go limp (support the snake first; asks when a servo holds "
         "torque). on: every joint holds where it stands now (nothing jumps).",
     )
@@ -65,20 +67,29 @@ def add_actions(actions: Any, port: Any, servo_id_arg: Any) -> None:
     torque.set_defaults(handler=run_torque, writes=True)
 
     move = actions.add_parser(
-        "jog", help="move one joint slowly to an angle, then hold it there",
+        "jog",
+        help="move one joint slowly to an angle, then hold it there",
         description="Move the joint of servo ID from where it stands to ANGLE (the joint angle "
         "of the robot file: direction and zero offset applied; degrees, or radians with a 'rad' "
         "suffix) at --speed, then hold it there (torque on; `snakebot servo torque off` goes "
         "limp). Refuses angles outside the joint's lower_rad..upper_rad.",
     )
     move.add_argument("id", metavar="ID", type=servo_id_arg, help="the servo to move")
-    move.add_argument("angle", metavar="ANGLE", type=angle_arg,
-                      help="joint angle: 15, -15, 15deg, 0.26rad (a negative one with a unit "
-                      "goes after --)")
+    move.add_argument(
+        "angle",
+        metavar="ANGLE",
+        type=angle_arg,
+        help="joint angle: 15, -15, 15deg, 0.26rad (a negative one with a unit goes after --)",
+    )
     port(move)
-    move.add_argument("--speed", type=speed_arg, default=JOG_SPEED_RAD_S, metavar="DEG_S",
-                      help=f"deg/s (default {math.degrees(JOG_SPEED_RAD_S):g}; at most the "
-                      "robot's joint speed limit)")
+    move.add_argument(
+        "--speed",
+        type=speed_arg,
+        default=JOG_SPEED_RAD_S,
+        metavar="DEG_S",
+        help=f"deg/s (default {math.degrees(JOG_SPEED_RAD_S):g}; at most the "
+        "robot's joint speed limit)",
+    )
     add_dry_run(move, "nothing moves")
     move.add_argument("--json", action="store_true", help="print one JSON object")
     move.set_defaults(handler=run_jog, writes=True)
@@ -90,8 +101,7 @@ def run_torque(args: argparse.Namespace) -> int:
     args.port = args.port or robot.bus.port
     args.baud = args.baud or robot.bus.baud
     on = args.torque == "on"
-    with Link(args.port, args.baud, model=robot.servo.name,
-              protocol=robot.bus.protocol) as link:
+    with Link(args.port, args.baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
         if args.all:
             ids = sorted(link.listening(args.baud))
             if not ids:
@@ -105,11 +115,16 @@ def run_torque(args: argparse.Namespace) -> int:
             if problems:
                 raise SetupError("torque stays off:\n  - " + "\n  - ".join(problems))
         if args.dry_run:
-            return report_dry_run(args, {"port": args.port, "torque": args.torque, "ids": ids,
-                                         "holding_torque": holding})
+            return report_dry_run(
+                args,
+                {"port": args.port, "torque": args.torque, "ids": ids, "holding_torque": holding},
+            )
         if not on and holding:
-            print(f"WARNING: servo(s) {', '.join(map(str, holding))} hold torque; their joints "
-                  "go limp: support the snake or lay it down", file=sys.stderr)
+            print(
+                f"WARNING: servo(s) {', '.join(map(str, holding))} hold torque; their joints "
+                "go limp: support the snake or lay it down",
+                file=sys.stderr,
+            )
             confirm("Turn torque off?", assume_yes=args.yes, what="servo torque off")
         set_torque(link, ids, args.baud, on=on)
     if args.json:
@@ -126,34 +141,48 @@ def run_jog(args: argparse.Namespace) -> int:
     robot = load_robot(robot_name(args, hardware=True, what="servo jog"))
     joints = {j.servo_id: i for i, j in enumerate(robot.joints)}
     if args.id not in joints:
-        raise SetupError(f"{robot.source}: no joint has servo_id {args.id} (the robot's servos: "
-                         f"{', '.join(map(str, robot.servo_ids))})")
+        raise SetupError(
+            f"{robot.source}: no joint has servo_id {args.id} (the robot's servos: "
+            f"{', '.join(map(str, robot.servo_ids))})"
+        )
     joint = joints[args.id]
     chain = load_settings(robot)
     check_jog(chain, joint, args.angle, args.speed)
     args.port = args.port or robot.bus.port
     if args.baud is not None and args.baud != chain.baud:
         chain = dataclasses.replace(chain, baud=args.baud)
-    with Link(args.port, chain.baud, model=robot.servo.name,
-              protocol=robot.bus.protocol) as link:
+    with Link(args.port, chain.baud, model=robot.servo.name, protocol=robot.bus.protocol) as link:
         if args.dry_run:
             (state,) = read_states(link, [args.id], chain.baud)
-            return report_dry_run(args, {
-                "port": args.port, "id": args.id, "joint": joint,
-                "target_deg": round(math.degrees(args.angle), 2),
-                "speed_deg_s": round(math.degrees(args.speed), 1),
-                "present_ticks": state.present_ticks, "torque_on": state.torque_on,
-            })
+            return report_dry_run(
+                args,
+                {
+                    "port": args.port,
+                    "id": args.id,
+                    "joint": joint,
+                    "target_deg": round(math.degrees(args.angle), 2),
+                    "speed_deg_s": round(math.degrees(args.speed), 1),
+                    "present_ticks": state.present_ticks,
+                    "torque_on": state.torque_on,
+                },
+            )
         result = jog(link, chain, joint, args.angle, speed_rad_s=args.speed)
-    summary = {"port": args.port, "id": result.servo_id, "joint": result.joint,
-               "start_deg": round(math.degrees(result.start_rad), 2),
-               "target_deg": round(math.degrees(result.target_rad), 2),
-               "end_deg": round(math.degrees(result.end_rad), 2),
-               "seconds": round(result.seconds, 2), "torque": "on"}
+    summary = {
+        "port": args.port,
+        "id": result.servo_id,
+        "joint": result.joint,
+        "start_deg": round(math.degrees(result.start_rad), 2),
+        "target_deg": round(math.degrees(result.target_rad), 2),
+        "end_deg": round(math.degrees(result.end_rad), 2),
+        "seconds": round(result.seconds, 2),
+        "torque": "on",
+    }
     if args.json:
         print_json(summary)
     else:
-        print(f"servo {result.servo_id} (joint {result.joint}): {summary['start_deg']:+.1f} -> "
-              f"{summary['end_deg']:+.1f} deg in {result.seconds:.1f} s; holds there (`snakebot "
-              "servo torque off` goes limp)")
+        print(
+            f"servo {result.servo_id} (joint {result.joint}): {summary['start_deg']:+.1f} -> "
+            f"{summary['end_deg']:+.1f} deg in {result.seconds:.1f} s; holds there (`snakebot "
+            "servo torque off` goes limp)"
+        )
     return 0

@@ -60,8 +60,9 @@ def add_parser(subparsers: Any) -> None:
         f"(delay: the actuator delay, fitted within 0 to {MAX_ACTUATOR_DELAY_S:g} s; p_divisor: "
         "the P-gain divisor, 256 or 128, instead of stiffness)",
     )
-    parser.add_argument("--workers", type=positive_int, default=2,
-                        help="parallel replays (default 2)")
+    parser.add_argument(
+        "--workers", type=positive_int, default=2, help="parallel replays (default 2)"
+    )
     parser.add_argument("--max-evaluations", type=positive_int, default=40, metavar="N")
     add_write_back_options(parser, "servo parameters")
     parser.add_argument("--report", type=Path, metavar="DIR", help="write plots and summary.json")
@@ -101,11 +102,18 @@ def run(args: argparse.Namespace) -> int:
     if args.record is not None:
         check_writable(args.record, "log", force=args.force)
         if args.dry_run:
-            return report_dry_run(args, {
-                "robot": robot.name, "backend": args.backend, "record": args.record,
-                "joint": args.joint, "hold_rad": args.hold, "amplitude_rad": args.amplitude,
-                "duration_s": args.duration,
-            })
+            return report_dry_run(
+                args,
+                {
+                    "robot": robot.name,
+                    "backend": args.backend,
+                    "record": args.record,
+                    "joint": args.joint,
+                    "hold_rad": args.hold,
+                    "amplitude_rad": args.amplitude,
+                    "duration_s": args.duration,
+                },
+            )
         return _record(robot, args)
     check_robot_copy(args, robot.source)
     if args.report is not None:

@@ -142,9 +142,13 @@ def open_telemetry(
         from snakebot.telemetry.sidecar import write_sidecar
 
         sidecar = write_sidecar(
-            args.log, command=command, robot=robot, backend=backend_spec(args).name,
+            args.log,
+            command=command,
+            robot=robot,
+            backend=backend_spec(args).name,
             rate_hz=rate_hz,
-            columns=column_names(robot.joint_count), extra=gait,
+            columns=column_names(robot.joint_count),
+            extra=gait,
         )
         telemetry.summary["log_sidecar"] = str(sidecar)
     port = getattr(args, "foxglove", None)
@@ -173,7 +177,9 @@ def _open_foxglove(
     from snakebot.telemetry.robot_scene import robot_geometry
 
     options = TelemetryOptions(
-        port=args.foxglove, host=args.foxglove_host, mcap_path=args.mcap,
+        port=args.foxglove,
+        host=args.foxglove_host,
+        mcap_path=args.mcap,
         origins=tuple(getattr(args, "foxglove_origin", ())),
         max_clients=getattr(args, "foxglove_max_clients", MAX_CLIENTS),
     )
@@ -197,13 +203,21 @@ def _open_foxglove(
         raise OutputError(f"--foxglove={args.foxglove}", exc.reason) from exc
     if sink.port is not None:
         url = client_url(options.host, sink.port)
-        print(f"snakebot: Foxglove: open connection {url} (layout: docs/foxglove/"
-              "snakebot-layout.json)", file=sys.stderr, flush=True)
+        print(
+            f"snakebot: Foxglove: open connection {url} (layout: docs/foxglove/"
+            "snakebot-layout.json)",
+            file=sys.stderr,
+            flush=True,
+        )
         if not _loopback(options.host):
-            print(f"snakebot: warning: the Foxglove server on {options.host} is reachable from "
-                  f"the network (other machines: ws://{_bracket(socket.gethostname())}:"
-                  f"{sink.port}); anyone who reaches it sees the stream, the protocol has no "
-                  "password", file=sys.stderr, flush=True)
+            print(
+                f"snakebot: warning: the Foxglove server on {options.host} is reachable from "
+                f"the network (other machines: ws://{_bracket(socket.gethostname())}:"
+                f"{sink.port}); anyone who reaches it sees the stream, the protocol has no "
+                "password",
+                file=sys.stderr,
+                flush=True,
+            )
     return sink
 
 
@@ -244,16 +258,30 @@ def drive_observer(telemetry: Telemetry) -> Any:
         state = cycle.state
         com = None if cycle.body is None else cycle.body.com_m
         imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
-        log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
-                  state.velocity_rad_s, state.effort_nm, com, imu)
+        log.write(
+            state.time_s,
+            cycle.cycle,
+            cycle.command_rad,
+            state.position_rad,
+            state.velocity_rad_s,
+            state.effort_nm,
+            com,
+            imu,
+        )
         if foxglove is not None:
             status = cycle.status
             controls = status.controls or status.setpoint
             foxglove.drive(
                 state.time_s,
-                {"gait": status.gait, "mode": status.mode, "speed": controls.speed,
-                 "turn": controls.turn, "amplitude": controls.amplitude,
-                 "wavelength": controls.wavelength, "blend": status.blend},
+                {
+                    "gait": status.gait,
+                    "mode": status.mode,
+                    "speed": controls.speed,
+                    "turn": controls.turn,
+                    "amplitude": controls.amplitude,
+                    "wavelength": controls.wavelength,
+                    "blend": status.blend,
+                },
                 cycle.target_rad,
                 cycle.keys,
             )

@@ -277,10 +277,12 @@ def _add_gains_parser(commands: Any) -> None:
         metavar="RAD",
         help="step size (default 0.2 rad on sim, 0.1 rad on hardware)",
     )
-    parser.add_argument("--max-overshoot", type=bounded_float(0.0, 1.0), default=0.10,
-                        metavar="FRACTION")
-    parser.add_argument("--budget", type=positive_int,
-                        help="candidates (default 20 sim, 9 hardware)")
+    parser.add_argument(
+        "--max-overshoot", type=bounded_float(0.0, 1.0), default=0.10, metavar="FRACTION"
+    )
+    parser.add_argument(
+        "--budget", type=positive_int, help="candidates (default 20 sim, 9 hardware)"
+    )
     parser.add_argument(
         "--i-values",
         help="Position I values to try, e.g. 0,100 (default: "
@@ -401,5 +403,6 @@ def _check_outputs(args: argparse.Namespace, robot: Any) -> None:
     elif args.out is not None:
         check_writable(args.out, "gait file", force=args.force)
     if args.report is not None:
-        check_folder(args.report, "report", replaces=REPORT_FILES[args.tune_command],
-                     force=args.force)
+        check_folder(
+            args.report, "report", replaces=REPORT_FILES[args.tune_command], force=args.force
+        )

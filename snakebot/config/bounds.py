@@ -82,8 +82,9 @@ SERVO: dict[str, Bounds] = {
     "physics.armature_kgm2": ARMATURE,
     "physics.friction_loss_nm": FRICTION_LOSS,
     "physics.viscous_damping_nms": SERVO_DAMPING,
-    "physics.pwm_limit": Bounds(1, 2009, "", "PWM full scale (885 on X series); at most the "
-                                "PWM Limit register's maximum"),
+    "physics.pwm_limit": Bounds(
+        1, 2009, "", "PWM full scale (885 on X series); at most the PWM Limit register's maximum"
+    ),
     "physics.d_gain_loop_period_s": Bounds(1e-5, 0.1, "s", "the firmware's D-term period"),
     "physics.p_gain_divisor": P_GAIN_DIVISOR,
     "physics.d_gain_divisor": Bounds(

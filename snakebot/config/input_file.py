@@ -39,11 +39,15 @@ def read_input(path: str | Path, *, what: str, limit_bytes: int) -> bytes:
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
-            raise ConfigError(source, "", f"not a regular file ({_kind(info.st_mode)}); "
-                              f"expected a {what}")
+            raise ConfigError(
+                source, "", f"not a regular file ({_kind(info.st_mode)}); expected a {what}"
+            )
         if info.st_size > limit_bytes:
-            raise ConfigError(source, "", f"{info.st_size} bytes is larger than a {what} may be "
-                              f"({limit_bytes} bytes)")
+            raise ConfigError(
+                source,
+                "",
+                f"{info.st_size} bytes is larger than a {what} may be ({limit_bytes} bytes)",
+            )
         chunks = []
         left = limit_bytes + 1
         while left > 0:
@@ -63,9 +67,13 @@ def read_input(path: str | Path, *, what: str, limit_bytes: int) -> bytes:
 
 
 def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"),
-                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-                       (stat.S_ISSOCK, "a socket")):
+    for test, name in (
+        (stat.S_ISDIR, "a directory"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return name
     return "not a plain file"
@@ -83,6 +91,8 @@ def text_problem(value: str, *, max_chars: int) -> str | None:
     for index, char in enumerate(value):
         if unicodedata.category(char) in ("Cc", "Cf", "Zl", "Zp"):
             name = unicodedata.name(char, "a control character")
-            return (f"expected no control or bidirectional characters, got U+{ord(char):04X} "
-                    f"({name}) at character {index}")
+            return (
+                f"expected no control or bidirectional characters, got U+{ord(char):04X} "
+                f"({name}) at character {index}"
+            )
     return None

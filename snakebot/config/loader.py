@@ -181,10 +181,12 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
     settings = parse_settings(path, "settings", root.data.get("settings", {}), control_table)
     root.mark_read("settings")
     if servo.gain_kind == "compliance" and {"torque_limit", "max_torque"} & set(settings):
-        base = parse_settings(servo.source, "settings",
-                              read_toml(servo.source).get("settings", {}), control_table)
-        servo = replace(servo, torque_limit=torque_limit_fraction({**base, **settings},
-                                                                  control_table))
+        base = parse_settings(
+            servo.source, "settings", read_toml(servo.source).get("settings", {}), control_table
+        )
+        servo = replace(
+            servo, torque_limit=torque_limit_fraction({**base, **settings}, control_table)
+        )
     if root.has("gains"):
         gains, position_i = parse_gains(root.table("gains"), servo)
     else:
@@ -236,8 +238,11 @@ def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, 
         fields = {**defaults, **_joint_fields(item)}
         for key in ("servo_id", "axis", "lower_rad", "upper_rad"):
             if key not in fields:
-                raise item.error(key, "missing (required; lower_rad, upper_rad and axis may come "
-                                 "from [joint_defaults])")
+                raise item.error(
+                    key,
+                    "missing (required; lower_rad, upper_rad and axis may come "
+                    "from [joint_defaults])",
+                )
         servo_id = fields["servo_id"]
         if servo_id in seen_ids:
             raise item.error(
@@ -254,8 +259,9 @@ def _parse_joints(root: Table, control_table: ServoTable) -> tuple[JointConfig, 
         )
         if joint.upper_rad - joint.lower_rad <= 0:
             raise item.error("upper_rad", "expected upper_rad > lower_rad")
-        parse_settings(Path(root.source), f"{item.path}.settings", item.data.get("settings", {}),
-                       control_table)
+        parse_settings(
+            Path(root.source), f"{item.path}.settings", item.data.get("settings", {}), control_table
+        )
         item.mark_read("settings")
         item.done()
         joints.append(joint)

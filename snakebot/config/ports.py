@@ -48,12 +48,16 @@ def check_port(
         return port
     if scheme == EMULATOR_SCHEME:
         raise ConfigError(
-            source, key, f"refusing {port!r} here: emulator URLs ({EMULATOR_SCHEME}://) work only "
+            source,
+            key,
+            f"refusing {port!r} here: emulator URLs ({EMULATOR_SCHEME}://) work only "
             f"as a port given directly (the command line's, a program's), never from a file; this "
             f"needs {DEVICE_EXAMPLES}",
         )
     also = f", or an emulator URL {EMULATOR_SCHEME}://NAME" if allow_emulator else ""
     raise ConfigError(
-        source, key, f"refusing to open {port!r}: a {scheme}:// URL is not a serial port; "
+        source,
+        key,
+        f"refusing to open {port!r}: a {scheme}:// URL is not a serial port; "
         f"snakebot opens {DEVICE_EXAMPLES}{also}",
     )

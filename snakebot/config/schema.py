@@ -179,8 +179,9 @@ class ServoModel:
                 values.get("position_d_gain", factory.position_d),
             )
         mapping = self.compliance_mapping
-        stiffness = [mapping.kp_nm_per_rad(values.get(k, self.default_slope))
-                     for k in COMPLIANCE_GAIN_KEYS]
+        stiffness = [
+            mapping.kp_nm_per_rad(values.get(k, self.default_slope)) for k in COMPLIANCE_GAIN_KEYS
+        ]
         return PDGains(sum(stiffness) / len(stiffness), 0.0)
 
     def gains_of(self, registers: GainRegisters) -> PDGains:

@@ -58,8 +58,10 @@ def servo_table(model: str, path: Path) -> ServoTable:
         return table_for_model(model)
     except UnknownModelError:
         raise ConfigError(
-            path, "model", f"no control table for servo model {model!r}; snakebot supports "
-            f"{', '.join(supported_models())}"
+            path,
+            "model",
+            f"no control table for servo model {model!r}; snakebot supports "
+            f"{', '.join(supported_models())}",
         ) from None
 
 
@@ -81,30 +83,46 @@ def _refuse_other_loop(table: Table, servo: ServoModel) -> None:
         why = "is a Position P/I/D Gain setting"
     for key in wrong:
         if table.has(key):
-            detail = " (the damping has no register; it comes from the twin's joint damping)" \
-                if key == "kd_nms_per_rad" else ""
-            raise table.error(
-                key, f"{key} {why}; {servo.name} has {have} instead{detail}"
+            detail = (
+                " (the damping has no register; it comes from the twin's joint damping)"
+                if key == "kd_nms_per_rad"
+                else ""
             )
+            raise table.error(key, f"{key} {why}; {servo.name} has {have} instead{detail}")
 
 
 def _parse_compliance(table: Table, servo: ServoModel, control: ServoTable) -> PDGains:
     if table.has("compliance_slope") and table.has("kp_nm_per_rad"):
         raise table.error(
-            "kp_nm_per_rad", "give the stiffness either as compliance_slope or in SI "
-            "(kp_nm_per_rad), not both"
+            "kp_nm_per_rad",
+            "give the stiffness either as compliance_slope or in SI (kp_nm_per_rad), not both",
         )
     if table.has("kp_nm_per_rad"):
         reach = servo.max_gains.kp_nm_per_rad
-        return PDGains(table.number("kp_nm_per_rad", within=bounds.Bounds(
-            0, reach, "N·m/rad", f"what {servo.name}'s smallest Compliance Slope reaches at the "
-            "supply voltage and Torque Limit"
-        )), 0.0)
+        return PDGains(
+            table.number(
+                "kp_nm_per_rad",
+                within=bounds.Bounds(
+                    0,
+                    reach,
+                    "N·m/rad",
+                    f"what {servo.name}'s smallest Compliance Slope reaches at the "
+                    "supply voltage and Torque Limit",
+                ),
+            ),
+            0.0,
+        )
     register = control["cw_compliance_slope"]
-    slope = table.integer("compliance_slope", servo.default_slope, within=bounds.Bounds(
-        max(register.minimum, 1), register.maximum, "",
-        f"{servo.name}'s Compliance Slope register range (levels 2, 4, ..., 128)"
-    ))
+    slope = table.integer(
+        "compliance_slope",
+        servo.default_slope,
+        within=bounds.Bounds(
+            max(register.minimum, 1),
+            register.maximum,
+            "",
+            f"{servo.name}'s Compliance Slope register range (levels 2, 4, ..., 128)",
+        ),
+    )
     return servo.gains_from(dict.fromkeys(COMPLIANCE_GAIN_KEYS, slope))
 
 
@@ -129,7 +147,8 @@ def parse_gains(table: Table, servo: ServoModel) -> tuple[PDGains, int]:
     registers = [k for k in ("position_p", "position_d") if table.has(k)]
     if si and registers:
         raise table.error(
-            si[0], f"give the gains either as registers ({', '.join(registers)}) or in SI "
+            si[0],
+            f"give the gains either as registers ({', '.join(registers)}) or in SI "
             "(kp_nm_per_rad, kd_nms_per_rad), not both",
         )
     position_i = table.integer(
@@ -177,10 +196,15 @@ def _refuse_table_facts(root: Table, table: ServoTable) -> None:
         holder = root.data.get(section) if section else root.data
         if isinstance(holder, dict) and name in holder:
             raise ConfigError(
-                root.source, key, f"{what} of {table.model} is kept once, in snakebot's "
+                root.source,
+                key,
+                f"{what} of {table.model} is kept once, in snakebot's "
                 "control-table data (snakebot/servo_tables/data); remove this key"
-                + ("; a robot's gains go in its robot file's [gains]" if key == "default_gains"
-                   else ""),
+                + (
+                    "; a robot's gains go in its robot file's [gains]"
+                    if key == "default_gains"
+                    else ""
+                ),
             )
 
 
@@ -230,9 +254,7 @@ def parse_servo_file(path: Path) -> ServoModel:
     name = root.text("model")
     table = servo_table(name, path)
     if servo_file_name(name) != path.stem:
-        raise root.error(
-            "model", f"this file is servos/{path.stem}.toml but names model {name!r}"
-        )
+        raise root.error("model", f"this file is servos/{path.stem}.toml but names model {name!r}")
     _refuse_table_facts(root, table)
     limits = bounds.SERVO
     phys = root.table("physics")
@@ -245,8 +267,11 @@ def parse_servo_file(path: Path) -> ServoModel:
     if compliance:
         for key in _PID_PHYSICS:
             if phys.has(key):
-                raise phys.error(key, f"{table.model} has no Position P/D Gain (its loop is "
-                                 "Compliance Slope, snakebot.servo.ComplianceMapping); remove it")
+                raise phys.error(
+                    key,
+                    f"{table.model} has no Position P/D Gain (its loop is "
+                    "Compliance Slope, snakebot.servo.ComplianceMapping); remove it",
+                )
     full_key, full_max = output_full_scale(table)
     physics = ServoPhysics(
         stall_torque_nm=specs.stall_torque_nm,
@@ -258,8 +283,9 @@ def parse_servo_file(path: Path) -> ServoModel:
         viscous_damping_nms=number("viscous_damping_nms"),
         ticks=specs.ticks,
         # On a compliance model the P/D mapping is unused: the full scale and unit divisors.
-        pwm_limit=full_max if compliance else phys.integer(
-            "pwm_limit", within=limits["physics.pwm_limit"]),
+        pwm_limit=full_max
+        if compliance
+        else phys.integer("pwm_limit", within=limits["physics.pwm_limit"]),
         d_gain_loop_period_s=1e-3 if compliance else number("d_gain_loop_period_s"),
         p_gain_divisor=1.0 if compliance else number("p_gain_divisor"),
         d_gain_divisor=1.0 if compliance else number("d_gain_divisor"),
@@ -271,8 +297,9 @@ def parse_servo_file(path: Path) -> ServoModel:
     twin = root.table("twin", required=False)
     if twin.has("p_gain_divisor"):
         raise twin.error(
-            "p_gain_divisor", "the P-gain divisor is physics.p_gain_divisor (one key for the twin "
-            "and the bus); a robot's [twin.servo] may override it"
+            "p_gain_divisor",
+            "the P-gain divisor is physics.p_gain_divisor (one key for the twin "
+            "and the bus); a robot's [twin.servo] may override it",
         )
     physics = replace(physics, extras=read_servo_extras(twin, physics.extras))
     twin.done()
@@ -285,6 +312,8 @@ def parse_servo_file(path: Path) -> ServoModel:
     if not compliance:
         return model
     return replace(
-        model, gain_kind="compliance", default_slope=table["cw_compliance_slope"].default,
+        model,
+        gain_kind="compliance",
+        default_slope=table["cw_compliance_slope"].default,
         torque_limit=torque_limit_fraction(settings, table),
     )

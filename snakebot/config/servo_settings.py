@@ -18,9 +18,13 @@ from snakebot.errors import ConfigError
 from snakebot.servo_tables import Register, ServoTable
 from snakebot.servo_tables.units import Unit, UnitError, display, parse_key, to_raw
 
-GAIN_KEYS = {"position_p_gain": "position_p", "position_i_gain": "position_i",
-             "position_d_gain": "position_d", "cw_compliance_slope": "compliance_slope",
-             "ccw_compliance_slope": "compliance_slope"}
+GAIN_KEYS = {
+    "position_p_gain": "position_p",
+    "position_i_gain": "position_i",
+    "position_d_gain": "position_d",
+    "cw_compliance_slope": "compliance_slope",
+    "ccw_compliance_slope": "compliance_slope",
+}
 """The position-loop registers (P/I/D Gain, or an AX's Compliance Slope) -> their [gains] key."""
 DERIVED = {
     "id": "comes from the robot file ([[joints]] servo_id)",
@@ -63,9 +67,7 @@ class Setting:
         return display(self.register, self.unit, raw, self.table)
 
 
-def parse_settings(
-    source: Path, where: str, data: object, table: ServoTable
-) -> dict[str, Setting]:
+def parse_settings(source: Path, where: str, data: object, table: ServoTable) -> dict[str, Setting]:
     """The settings table ``data`` found at key path ``where`` of ``source``, by register key.
 
     ConfigError naming ``source`` and ``where.<key>`` for a key that names no register (or a
@@ -98,10 +100,15 @@ def parse_settings(
         except UnitError as exc:
             raise ConfigError(source, path, str(exc)) from None
         if not register.minimum <= raw <= register.maximum:
-            low, high = (display(register, unit, r, table)[0] for r in
-                         (register.minimum, register.maximum))
-            raise ConfigError(source, path, f"{value} is outside {low}..{high} "
-                              f"{unit.symbol if unit else '(raw)'} for {table.model}")
+            low, high = (
+                display(register, unit, r, table)[0] for r in (register.minimum, register.maximum)
+            )
+            raise ConfigError(
+                source,
+                path,
+                f"{value} is outside {low}..{high} "
+                f"{unit.symbol if unit else '(raw)'} for {table.model}",
+            )
         if register.key in out:
             raise ConfigError(source, path, f"{register.key} is set twice in [{where}]")
         out[register.key] = Setting(register, raw, unit, f"{source.name} {path}", table)
@@ -116,9 +123,12 @@ def joint_settings(
     ``joints[i].settings`` (register key -> Setting). ConfigError naming the file and key for a
     bad one. What the robot file implies besides ([bus] baud, [gains]) is the caller's to add.
     """
-    base = parse_settings(servo_file, "settings",
-                          read_toml(servo_file).get("settings", {}) if servo_file.is_file()
-                          else {}, table)
+    base = parse_settings(
+        servo_file,
+        "settings",
+        read_toml(servo_file).get("settings", {}) if servo_file.is_file() else {},
+        table,
+    )
     robot_data = read_toml(robot_file)
     overrides = parse_settings(robot_file, "settings", robot_data.get("settings", {}), table)
     raw_joints = robot_data.get("joints", [])

@@ -43,7 +43,8 @@ def read_servo_extras(table: Table, extras: ServoExtras) -> ServoExtras:
     extras = replace(extras, **changes)  # type: ignore[arg-type]
     if extras.battery_resistance_ohm is not None and extras.stall_current_a is None:
         raise table.error(
-            "battery_resistance_ohm", "battery sag needs the current draw: set stall_current_a "
-            "(the datasheet's stall current) in the servo file's [twin] too"
+            "battery_resistance_ohm",
+            "battery sag needs the current draw: set stall_current_a "
+            "(the datasheet's stall current) in the servo file's [twin] too",
         )
     return extras

@@ -95,8 +95,16 @@ class CycleLoop:
         if self.log is not None:
             com = None if body is None else body.com_m
             imu = None if body is None else (body.head_quat, body.head_gyro_rad_s)
-            self.log.write(state.time_s, self.cycle, command, state.position_rad,
-                           state.velocity_rad_s, state.effort_nm, com, imu)
+            self.log.write(
+                state.time_s,
+                self.cycle,
+                command,
+                state.position_rad,
+                state.velocity_rad_s,
+                state.effort_nm,
+                com,
+                imu,
+            )
         self.cycle += 1
         period = state.time_s - before.time_s
         self._last_period_s = period

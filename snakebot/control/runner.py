@@ -97,8 +97,15 @@ def run_gait(
     """
     backend.check_rate(plan.rate_hz)  # a servo bus that cannot hold the rate refuses it here
     schedule = plan.schedule(safety.ramp_s)
-    loop = CycleLoop(backend, GaitCycle([gait], safety), schedule, metrics, log=log,
-                     on_cycle=on_cycle, observers=observers)
+    loop = CycleLoop(
+        backend,
+        GaitCycle([gait], safety),
+        schedule,
+        metrics,
+        log=log,
+        on_cycle=on_cycle,
+        observers=observers,
+    )
     loop.start()
     interrupted = False
     stopped_by = ""
@@ -153,8 +160,7 @@ def _ramp_out(
         while fraction > 0.0:
             since_end = loop.elapsed_s - gait_end_s
             fraction = schedule.ramp_out_fraction(since_end)
-            loop.step(gait_end_s + since_end, start_amplitude * smooth_ramp(fraction),
-                      scored=False)
+            loop.step(gait_end_s + since_end, start_amplitude * smooth_ramp(fraction), scored=False)
         # The last command is exactly the rest pose, whatever the timing.
         span = float(np.max(np.abs(loop.command - safety.rest_rad)))
         for _ in range(math.ceil(span / (safety.max_speed_rad_s * schedule.period_s)) + 1):

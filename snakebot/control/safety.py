@@ -57,8 +57,9 @@ class SafetyLayer:
         outside the limits: the slew limit then brings the joint in)."""
         measured = np.asarray(measured_rad, dtype=float)
         if measured.shape != self.lower_rad.shape or not np.isfinite(measured).all():
-            raise SafetyLimitError(f"measured pose {measured} is not {self.lower_rad.shape} finite "
-                                   "angles")
+            raise SafetyLimitError(
+                f"measured pose {measured} is not {self.lower_rad.shape} finite angles"
+            )
         self._last = measured.copy()
 
     def filter(self, target_rad: np.ndarray, dt_s: float, amplitude: float = 1.0) -> np.ndarray:

@@ -257,4 +257,3 @@ class DriveDisplay:
         self.stream.write(up + body + tail)
         self.stream.flush()
         self._lines = len(lines)
-

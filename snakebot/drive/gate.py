@@ -59,8 +59,10 @@ class KeyGate:
         if self._flood_until is not None and not keys and now_s >= self._flood_until:
             self._flood_until = None
         backlog = self.backlog
-        if keys and backlog is not None and (
-            self.flooding or len(self._waiting) + len(keys) > backlog
+        if (
+            keys
+            and backlog is not None
+            and (self.flooding or len(self._waiting) + len(keys) > backlog)
         ):
             self._drop([*self._waiting, *keys], now_s)
         else:

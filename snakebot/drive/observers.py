@@ -18,8 +18,16 @@ def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
         state = cycle.state
         com = None if cycle.body is None else cycle.body.com_m
         imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
-        log.write(state.time_s, cycle.cycle, cycle.command_rad, state.position_rad,
-                  state.velocity_rad_s, state.effort_nm, com, imu)
+        log.write(
+            state.time_s,
+            cycle.cycle,
+            cycle.command_rad,
+            state.position_rad,
+            state.velocity_rad_s,
+            state.effort_nm,
+            com,
+            imu,
+        )
 
     return write
 

@@ -16,8 +16,13 @@ from snakebot.gaits.live import LiveGait
 
 PLANAR_GAITS = ("serpenoid",)
 """The default keys 1-9 on an all-yaw (planar) robot."""
-SPATIAL_GAITS = ("sidewinding", "rolling", "lateral_undulation", "turn_in_place",
-                 "linear_progression")
+SPATIAL_GAITS = (
+    "sidewinding",
+    "rolling",
+    "lateral_undulation",
+    "turn_in_place",
+    "linear_progression",
+)
 """The default keys 1-9 on a robot with pitch joints."""
 MAX_GAITS = 9
 DEFAULT_SMOOTHING_S = 0.5

@@ -17,7 +17,8 @@ from typing import Any
 from snakebot.signals import STOP_SIGNALS
 
 _REASONS = {
-    sig: "input lost: the terminal hung up (SIGHUP)" if sig.name == "SIGHUP"
+    sig: "input lost: the terminal hung up (SIGHUP)"
+    if sig.name == "SIGHUP"
     else f"interrupted ({sig.name})"
     for sig in STOP_SIGNALS
 }

@@ -99,8 +99,10 @@ class ScriptSource(InputSource):
             raise ConfigError(path, "", f"cannot read the drive script ({exc.strerror})") from exc
         except UnicodeDecodeError as exc:
             raise ConfigError(
-                path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason}); a drive script is "
-                "'<time_s> <key>' lines"
+                path,
+                "",
+                f"not UTF-8 text (byte {exc.start}: {exc.reason}); a drive script is "
+                "'<time_s> <key>' lines",
             ) from None
         return cls(parse_script(text, str(path)), f"script {path}")
 
@@ -141,16 +143,21 @@ def parse_script(text: str, source: str = "<script>") -> list[InputEvent]:
             )
         if events and time_s < events[-1].time_s:
             raise ConfigError(
-                where, "", f"time {time_s:g} s is before the line above ({events[-1].time_s:g} "
-                "s); keep the lines in time order"
+                where,
+                "",
+                f"time {time_s:g} s is before the line above ({events[-1].time_s:g} "
+                "s); keep the lines in time order",
             )
         try:
             key = normalise(fields[1])
         except ValueError as exc:
             raise ConfigError(where, "", str(exc)) from None
         if action_for(key) is None:
-            raise ConfigError(where, "", f"key {key!r} does nothing while driving (see the key "
-                              "map in docs/driving.md)")
+            raise ConfigError(
+                where,
+                "",
+                f"key {key!r} does nothing while driving (see the key map in docs/driving.md)",
+            )
         events.append(InputEvent(time_s, key))
     return events
 

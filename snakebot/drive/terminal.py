@@ -57,8 +57,10 @@ class TerminalSource(InputSource):
             import termios
         except ImportError:  # Windows: no termios
             raise ConfigError(
-                "script", "", "keyboard driving needs a POSIX terminal (Linux, macOS); "
-                "here, drive with a gamepad or a key script"
+                "script",
+                "",
+                "keyboard driving needs a POSIX terminal (Linux, macOS); "
+                "here, drive with a gamepad or a key script",
             ) from None
 
         if self._fd is None:
@@ -69,8 +71,10 @@ class TerminalSource(InputSource):
                     self._fd = os.open("/dev/tty", os.O_RDWR | os.O_NOCTTY)
                 except OSError:
                     raise ConfigError(
-                        "script", "", "no terminal to read keys from: drive from a terminal, or "
-                        "give a key script or a gamepad"
+                        "script",
+                        "",
+                        "no terminal to read keys from: drive from a terminal, or "
+                        "give a key script or a gamepad",
                     ) from None
                 self._owned = True
         if not os.isatty(self._fd):

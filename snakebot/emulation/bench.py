@@ -23,7 +23,10 @@ from snakebot.servo_tables import ServoTable, table_for_model
 
 
 def new_servo(
-    model: str | int | ServoTable, serial: int, *, servo_id: int = FACTORY_ID,
+    model: str | int | ServoTable,
+    serial: int,
+    *,
+    servo_id: int = FACTORY_ID,
     baud: int | None = None,
 ) -> VirtualServo:
     """A servo with factory defaults and serial number ``serial``, at ``baud`` (default: the
@@ -67,7 +70,11 @@ class ServoBench:
     """
 
     def __init__(
-        self, chain: EmulatedChain, model: str | int | ServoTable, *, fresh: int = 0,
+        self,
+        chain: EmulatedChain,
+        model: str | int | ServoTable,
+        *,
+        fresh: int = 0,
         state_path: Path | None = None,
     ) -> None:
         self.chain = chain
@@ -115,8 +122,9 @@ class ServoBench:
             return False
         with self.chain.lock:
             servos = self.chain.servos
-            images = {s.serial_number: bytes(s.memory.data[: s.table.specs.eeprom_end])
-                      for s in servos}
+            images = {
+                s.serial_number: bytes(s.memory.data[: s.table.specs.eeprom_end]) for s in servos
+            }
             if {k: v.eeprom for k, v in self._saved.items()} == images and self.state_path.exists():
                 return False
             self._saved = save_state(self.state_path, servos)
@@ -135,6 +143,7 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
     middle = len(servos) // 2
     with chain.lock:
         for index, servo in enumerate(servos):
+
             def poke(key: str, value: int, servo: VirtualServo = servo) -> None:
                 if servo.memory.has(key):  # an AX has no drive or operating mode, no offset
                     servo.poke(key, min(value, servo.table[key].maximum))

@@ -34,6 +34,8 @@ class PtyServerCrashedError(RuntimeError):
 
     Not a `SnakebotError`: nothing the user did causes it, so the CLI reports it as a bug.
     """
+
+
 _RATES = {getattr(termios, f"B{rate}"): rate for rate in LINE_RATES if hasattr(termios, f"B{rate}")}
 
 

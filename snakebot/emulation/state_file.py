@@ -54,15 +54,21 @@ def save_state(path: Path, servos: Iterable[VirtualServo]) -> dict[int, SavedSer
     """
     images = {s.serial_number: eeprom_image(s) for s in servos}
     payload = {
-        "format": FORMAT, "version": VERSION,
-        "servos": {str(serial): {"model_number": image.model_number, "eeprom": image.eeprom.hex()}
-                   for serial, image in sorted(images.items())},
+        "format": FORMAT,
+        "version": VERSION,
+        "servos": {
+            str(serial): {"model_number": image.model_number, "eeprom": image.eeprom.hex()}
+            for serial, image in sorted(images.items())
+        },
     }
     data = (json.dumps(payload, indent=1) + "\n").encode("utf-8")
     kept = " (the previous state file is kept)" if path.is_file() else ""
     if os.path.lexists(path) and not path.is_file():
-        raise OutputError(path, "cannot save the emulated servos' EEPROM here: not a regular "
-                          "file; give a state file path")
+        raise OutputError(
+            path,
+            "cannot save the emulated servos' EEPROM here: not a regular "
+            "file; give a state file path",
+        )
     temp: Path | None = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -71,15 +77,16 @@ def save_state(path: Path, servos: Iterable[VirtualServo]) -> dict[int, SavedSer
         try:
             view = memoryview(data)
             while view:
-                view = view[os.write(handle, view):]
+                view = view[os.write(handle, view) :]
             os.fsync(handle)
         finally:
             os.close(handle)
         os.replace(temp, path)
         temp = None
     except OSError as exc:
-        raise OutputError(path, f"cannot save the emulated servos' EEPROM: "
-                          f"{exc.strerror or exc}{kept}") from exc
+        raise OutputError(
+            path, f"cannot save the emulated servos' EEPROM: {exc.strerror or exc}{kept}"
+        ) from exc
     finally:
         if temp is not None:
             temp.unlink(missing_ok=True)
@@ -102,8 +109,10 @@ def load_state(path: Path) -> dict[int, SavedServo]:
         servos = data["servos"]
         if not isinstance(servos, Mapping):
             raise ValueError("'servos' must be an object keyed by serial number")
-        return {int(serial): SavedServo(int(entry["model_number"]), bytes.fromhex(entry["eeprom"]))
-                for serial, entry in servos.items()}
+        return {
+            int(serial): SavedServo(int(entry["model_number"]), bytes.fromhex(entry["eeprom"]))
+            for serial, entry in servos.items()
+        }
     except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
         raise EmulationError(f"{path}: not a usable emulator state file: {exc}") from exc
 
@@ -111,12 +120,16 @@ def load_state(path: Path) -> dict[int, SavedServo]:
 def restore(servo: VirtualServo, saved: SavedServo) -> None:
     """Load a saved EEPROM image into ``servo`` and power it up (RAM at its defaults)."""
     if saved.model_number != servo.table.model_number:
-        raise EmulationError(f"serial {servo.serial_number} was saved as model "
-                             f"{saved.model_number}, not {servo.table.model_number}")
+        raise EmulationError(
+            f"serial {servo.serial_number} was saved as model "
+            f"{saved.model_number}, not {servo.table.model_number}"
+        )
     end = servo.table.specs.eeprom_end
     if len(saved.eeprom) != end:
-        raise EmulationError(f"serial {servo.serial_number}: {len(saved.eeprom)} EEPROM bytes "
-                             f"saved, the model has {end}")
+        raise EmulationError(
+            f"serial {servo.serial_number}: {len(saved.eeprom)} EEPROM bytes "
+            f"saved, the model has {end}"
+        )
     servo.memory.data[:end] = saved.eeprom
     servo.memory.version += 1
     servo.reboot()

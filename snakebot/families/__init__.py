@@ -41,7 +41,8 @@ def family_for(table: ServoTable, protocol: float | None = None) -> ServoFamily:
             return family
     has = ", ".join(f"{p:.1f}" for p in table.protocols)
     raise ConfigError(
-        "protocol", f"{wanted:.1f}",
+        "protocol",
+        f"{wanted:.1f}",
         f"{table.model} servos speak Protocol {has} only; set [bus] protocol to one of them",
     )
 

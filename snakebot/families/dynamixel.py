@@ -88,8 +88,9 @@ class DynamixelProtocol2(ServoFamily):
             return WireCost(10 + 5 * n + n * reply, n, 1)
         if method == "read":
             return WireCost(n * (self.read_overhead_bytes + reply), n, n)
-        raise ValueError(f"unknown read method {method!r}; known: fast_sync_read, sync_read, "
-                         "bulk_read, read")
+        raise ValueError(
+            f"unknown read method {method!r}; known: fast_sync_read, sync_read, bulk_read, read"
+        )
 
     def sync_write_bytes(self, n_servos: int, length: int) -> int:
         """14 bytes of header, address and length, then ID + data per servo."""
@@ -121,6 +122,7 @@ class DynamixelProtocol1(ServoFamily):
     def capabilities(self, table: ServoTable) -> Capabilities:
         """Bulk Read where the model has it (MX, X in 1.0 mode; not AX); the Bus Watchdog and
         Hardware Error Status registers where the (X) table has them below address 256."""
+
         def reachable(key: str) -> bool:
             return key in table and table[key].address + table[key].size <= 256
 

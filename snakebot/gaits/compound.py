@@ -89,9 +89,7 @@ class CompoundGait(PhasedGait):
     def _at_phases(self, phases: FloatArray) -> FloatArray:
         n = np.arange(self.joint_count)
         side = np.where(self.offset_split & (n >= self.joint_count // 2), -1.0, 1.0)
-        even = side * self.offset_even + self.amplitude_even * np.sin(
-            self._even - phases[:, :1]
-        )
+        even = side * self.offset_even + self.amplitude_even * np.sin(self._even - phases[:, :1])
         odd = side * self.offset_odd + self.amplitude_odd * np.sin(self._odd - phases[:, 1:2])
         out: FloatArray = np.where(n % 2 == 0, even, odd)
         return out

@@ -95,7 +95,7 @@ class _FourierPose(PhasedGait):
 
     @property
     def gait_label(self) -> str:
-        """"dft" or "dft_shift"."""
+        """ "dft" or "dft_shift"."""
         return self.gait_name
 
     def _limit(self, key: str, values: tuple[float, ...], default: float) -> FloatArray:

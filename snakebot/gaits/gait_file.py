@@ -36,8 +36,9 @@ def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, 
     data = read_toml(source)
     for key in data:
         if key not in _TOP_KEYS:
-            raise ConfigError(source, shown_key(key),
-                              "unknown key; a gait file has gait, [params] and [meta]")
+            raise ConfigError(
+                source, shown_key(key), "unknown key; a gait file has gait, [params] and [meta]"
+            )
     name = data.get("gait")
     if not isinstance(name, str) or name not in gait_names():
         shown = name[:100] if isinstance(name, str) else name
@@ -59,8 +60,12 @@ def load_gait_file(path: str | Path) -> tuple[str, dict[str, object], dict[str, 
         typed = params[key]
         numbers = typed if isinstance(typed, tuple) else (typed,)
         if any(isinstance(v, float) and abs(v) > MAX_GAIT_VALUE for v in numbers):
-            raise ConfigError(source, where, f"expected numbers within +-{MAX_GAIT_VALUE:g} (no "
-                              f"angle, rate or length of a gait comes near), got {value!r}")
+            raise ConfigError(
+                source,
+                where,
+                f"expected numbers within +-{MAX_GAIT_VALUE:g} (no "
+                f"angle, rate or length of a gait comes near), got {value!r}",
+            )
     meta = data.get("meta", {})
     if not isinstance(meta, dict):
         raise ConfigError(source, "meta", "expected a [meta] table")

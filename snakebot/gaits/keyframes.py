@@ -116,7 +116,7 @@ class KeyframeGait(PhasedGait):
 
     @property
     def gait_label(self) -> str:
-        """"keyframes"."""
+        """ "keyframes"."""
         return "keyframes"
 
     @property

@@ -269,7 +269,8 @@ SPECS = (
         ),
         factory=_sidewinding,
         live=LiveRoles(
-            amplitude=("amplitude", "amplitude_pitch"), frequency=("omega",),
+            amplitude=("amplitude", "amplitude_pitch"),
+            frequency=("omega",),
             spatial_frequency=("waves",),
         ),
     ),

@@ -61,7 +61,12 @@ GAITS: Registry[GaitSpec] = Registry(
     builtins={
         spec.name: spec
         for spec in (
-            serpenoid.SPEC, *compound.SPECS, *dft.SPECS, simple.SPEC, keyframes.SPEC, *miller.SPECS
+            serpenoid.SPEC,
+            *compound.SPECS,
+            *dft.SPECS,
+            simple.SPEC,
+            keyframes.SPEC,
+            *miller.SPECS,
         )
     },
 )
@@ -151,9 +156,7 @@ def check_joint_axes(name: str, joint_axes: Sequence[str], robot: str = "the rob
     return text
 
 
-def parse_set_options(
-    name: str, items: Sequence[str], *, source: str = "set"
-) -> dict[str, object]:
+def parse_set_options(name: str, items: Sequence[str], *, source: str = "set") -> dict[str, object]:
     """Parse ``"key=value"`` strings for gait ``name`` into typed values (numbers may be
     ``"pi/4"``). GaitParamError (source ``source``, key the offending text) for a malformed
     item, an unknown key or a value of the wrong kind."""
@@ -164,8 +167,10 @@ def parse_set_options(
         key = key.strip()
         if not sep or not key:
             raise GaitParamError(
-                source, str(item), f"expected key=value, e.g. {_example(spec.params[0])}; "
-                f"valid keys for {name}: {', '.join(spec.param_names)}"
+                source,
+                str(item),
+                f"expected key=value, e.g. {_example(spec.params[0])}; "
+                f"valid keys for {name}: {', '.join(spec.param_names)}",
             )
         try:
             param = spec.param(key)
@@ -174,9 +179,7 @@ def parse_set_options(
         try:
             parsed[key] = convert_value(param, raw)
         except (TypeError, ValueError) as exc:
-            raise GaitParamError(
-                source, str(item), f"{expectation(name, param)} ({exc})"
-            ) from None
+            raise GaitParamError(source, str(item), f"{expectation(name, param)} ({exc})") from None
     return parsed
 
 

@@ -41,7 +41,7 @@ class SerpenoidGait(PhasedGait):
 
     @property
     def gait_label(self) -> str:
-        """"serpenoid"."""
+        """ "serpenoid"."""
         return "serpenoid"
 
     @property
@@ -111,7 +111,9 @@ SPEC = GaitSpec(
     ),
     factory=_build,
     live=LiveRoles(
-        amplitude=("amplitude",), frequency=("omega",), spatial_frequency=("phase_lag",),
+        amplitude=("amplitude",),
+        frequency=("omega",),
+        spatial_frequency=("phase_lag",),
         offset=("offset",),
     ),
     axes=JointAxes("yaw", "yaw", False, "it is a planar wave (lateral undulation)"),

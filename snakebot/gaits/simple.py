@@ -29,7 +29,7 @@ class SimpleGait(PhasedGait):
 
     @property
     def gait_label(self) -> str:
-        """"simple"."""
+        """ "simple"."""
         return "simple"
 
     @property

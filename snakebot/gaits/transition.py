@@ -138,7 +138,10 @@ def blend_into(
     if depth(current) >= MAX_NESTING:
         current = Hold(current.pose(), "frozen")
     needed = blend_duration_s(
-        current, incoming, duration_s=duration_s, speed_budget_rad_s=speed_budget_rad_s,
+        current,
+        incoming,
+        duration_s=duration_s,
+        speed_budget_rad_s=speed_budget_rad_s,
         setpoint=setpoint,
     )
     return Blend(current, incoming, max(duration_s, needed))

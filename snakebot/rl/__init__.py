@@ -36,5 +36,10 @@ def register_envs() -> None:
 register_envs()
 
 __all__ = [
-    "ENCODINGS", "ENV_IDS", "GOAL_ENV_ID", "SEED_ENCODINGS", "VELOCITY_ENV_ID", "register_envs",
+    "ENCODINGS",
+    "ENV_IDS",
+    "GOAL_ENV_ID",
+    "SEED_ENCODINGS",
+    "VELOCITY_ENV_ID",
+    "register_envs",
 ]

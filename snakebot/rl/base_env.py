@@ -25,8 +25,10 @@ class SnakeEnv(gymnasium.Env[np.ndarray, np.ndarray]):
 
     def __init__(self, settings: EnvSettings, render_mode: str | None = None) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or "
-                             f"None, got {render_mode!r}")
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']} or "
+                f"None, got {render_mode!r}"
+            )
         self.settings = settings
         self.render_mode = render_mode
         self.loop = TwinLoop(settings)
@@ -62,9 +64,7 @@ class SnakeEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         info = self._task_reset(options or {})
         return self._obs(), info
 
-    def step(
-        self, action: np.ndarray
-    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One policy period of the gait ``action`` encodes."""
         outcome = self.loop.step(np.asarray(action, dtype=np.float64))
         self.steps += 1

@@ -120,18 +120,27 @@ def make_encoding(
         low, high = tuple(lower.tolist()), tuple(upper.tolist())
         if name == "dft":
             return Encoding(
-                name, n, dim, 0, phase_hz,
+                name,
+                n,
+                dim,
+                0,
+                phase_hz,
                 lambda a: DftGait(n, _coefficients(a, scale), lower_rad=low, upper_rad=high),
             )
         rate = n * phase_hz  # joints/s: one lap of the shape per 1/phase_hz s
         return Encoding(
-            name, n, dim, 1, phase_hz,
+            name,
+            n,
+            dim,
+            1,
+            phase_hz,
             lambda a: DftShiftGait(
                 n, _coefficients(a, scale), shift_rate=rate, lower_rad=low, upper_rad=high
             ),
         )
-    raise ConfigError("encoding", "", f"unknown encoding {name!r}; expected one of "
-                      f"{', '.join(ENCODINGS)}")
+    raise ConfigError(
+        "encoding", "", f"unknown encoding {name!r}; expected one of {', '.join(ENCODINGS)}"
+    )
 
 
 def _check_bins(joint_count: int, bins: int) -> int:
@@ -141,8 +150,10 @@ def _check_bins(joint_count: int, bins: int) -> int:
     top = (joint_count - 1) // 2 + 1
     if isinstance(bins, bool) or not isinstance(bins, int) or not 2 <= bins <= top:
         raise ConfigError(
-            "dft_bins", "", f"expected an integer 2..{top} for {joint_count} joints (bins below "
-            f"Nyquist, bin 0 included), got {bins!r}"
+            "dft_bins",
+            "",
+            f"expected an integer 2..{top} for {joint_count} joints (bins below "
+            f"Nyquist, bin 0 included), got {bins!r}",
         )
     return bins
 

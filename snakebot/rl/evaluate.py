@@ -62,20 +62,20 @@ class EvalResult:
             "mean_return": _mean([e.episode_return for e in eps]),
             # a velocity task has commands to follow, no goal to reach
             "success_rate": len(successes) / len(eps)
-            if eps and all(e.command is None for e in eps) else None,
+            if eps and all(e.command is None for e in eps)
+            else None,
             "successes": len(successes),
             "time_to_goal_s": _mean([e.duration_s for e in successes]),
             "speed_mps": path / time_s if time_s > 0 else None,
             # A snake that stayed put has no cost of transport (work over numerical drift
             # gave 1.6e-21 for a zero policy): defined from MIN_PATH_M per episode on.
             "cost_of_transport": work / (self.mass_kg * GRAVITY_M_S2 * path)
-            if eps and path >= MIN_PATH_M * len(eps) else None,
+            if eps and path >= MIN_PATH_M * len(eps)
+            else None,
         }
         if any(e.command is not None for e in eps):
             out["speed_error_mps"] = _mean([e.speed_error_mps for e in eps])
-            out["commands"] = [
-                {"command": e.command, "achieved": e.achieved} for e in eps
-            ]
+            out["commands"] = [{"command": e.command, "achieved": e.achieved} for e in eps]
         return out
 
 
@@ -84,8 +84,9 @@ def _mean(values: list[float]) -> float | None:
     return float(np.mean(finite)) if finite else None
 
 
-def run_episodes(env: Any, policy: Policy, name: str, seeds: list[int], *,
-                 frames: list[np.ndarray] | None = None) -> EvalResult:
+def run_episodes(
+    env: Any, policy: Policy, name: str, seeds: list[int], *, frames: list[np.ndarray] | None = None
+) -> EvalResult:
     """Play ``policy`` for one episode per seed; frames of the first go to ``frames``."""
     result = EvalResult(name, float(env.unwrapped.robot.total_mass_kg))
     for index, seed in enumerate(seeds):
@@ -122,8 +123,9 @@ def run_episodes(env: Any, policy: Policy, name: str, seeds: list[int], *,
     return result
 
 
-def evaluate_folder(folder: Path, *, episodes: int, seed: int, baselines: bool,
-                    video: Path | None) -> dict[str, EvalResult]:
+def evaluate_folder(
+    folder: Path, *, episodes: int, seed: int, baselines: bool, video: Path | None
+) -> dict[str, EvalResult]:
     """The trained policy (and, with ``baselines``, zero and random actions) on seeds
     ``seed..seed+episodes-1``. Velocity policies hold one command per episode, drawn by seed."""
     import gymnasium
@@ -173,14 +175,17 @@ def write_video(path: Path, frames: list[np.ndarray], fps: int) -> None:
 
 def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
     """One line per policy."""
+
     def fmt(value: object, spec: str, unit: str = "") -> str:
         if value is None:  # "n/a", right-aligned where the number and its unit would stand
             width = int(spec.split(".")[0] or 0) + len(unit)
             return "n/a".rjust(width)
         return format(value, spec) + unit
 
-    out.write(f"{'policy':8s} {'episodes':>8s} {'success':>8s} {'to goal':>9s} {'speed':>10s} "
-              f"{'CoT':>7s} {'return':>9s}\n")
+    out.write(
+        f"{'policy':8s} {'episodes':>8s} {'success':>8s} {'to goal':>9s} {'speed':>10s} "
+        f"{'CoT':>7s} {'return':>9s}\n"
+    )
     for name, result in results.items():
         s = result.summary()
         rate = None if s["success_rate"] is None else 100 * s["success_rate"]

@@ -41,8 +41,13 @@ class SnakeGoalEnv(SnakeEnv):
 
     def _obs(self) -> np.ndarray:
         return goal_observation(
-            self.loop.state, self.loop.body(), self.goal_xy_m, self.phases, self.limits,
-            self.max_speed_rad_s, self.loop.body_length_m,
+            self.loop.state,
+            self.loop.body(),
+            self.goal_xy_m,
+            self.phases,
+            self.limits,
+            self.max_speed_rad_s,
+            self.loop.body_length_m,
         )
 
     def _task_reset(self, options: dict[str, Any]) -> dict[str, Any]:

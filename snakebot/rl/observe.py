@@ -16,8 +16,9 @@ from snakebot.types import BodyState, JointState
 OBS_BOUND = 10.0
 
 
-def joint_features(state: JointState, lower_rad: FloatArray, upper_rad: FloatArray,
-                   max_speed_rad_s: float) -> FloatArray:
+def joint_features(
+    state: JointState, lower_rad: FloatArray, upper_rad: FloatArray, max_speed_rad_s: float
+) -> FloatArray:
     """Angles as a fraction of their limit, velocities per servo speed limit: shape (2N,)."""
     limit = np.where(state.position_rad >= 0.0, upper_rad, -lower_rad)
     angles = state.position_rad / np.maximum(limit, 1e-6)
@@ -33,9 +34,15 @@ def goal_in_head_frame(body: BodyState, goal_xy_m: FloatArray, body_length_m: fl
     return np.array([c * dx + s * dy, -s * dx + c * dy]) / body_length_m
 
 
-def goal_observation(state: JointState, body: BodyState, goal_xy_m: FloatArray,
-                     phases: FloatArray, limits: tuple[FloatArray, FloatArray],
-                     max_speed_rad_s: float, body_length_m: float) -> np.ndarray:
+def goal_observation(
+    state: JointState,
+    body: BodyState,
+    goal_xy_m: FloatArray,
+    phases: FloatArray,
+    limits: tuple[FloatArray, FloatArray],
+    max_speed_rad_s: float,
+    body_length_m: float,
+) -> np.ndarray:
     """SnakeGoal's observation, float32: joints (2N), phases (sin, cos) (2P), goal (2)."""
     parts = (
         joint_features(state, *limits, max_speed_rad_s),
@@ -45,9 +52,15 @@ def goal_observation(state: JointState, body: BodyState, goal_xy_m: FloatArray,
     return _finish(parts)
 
 
-def velocity_observation(state: JointState, phases: FloatArray, command: FloatArray,
-                         limits: tuple[FloatArray, FloatArray], max_speed_rad_s: float,
-                         stall_torque_nm: float, command_scale: FloatArray) -> np.ndarray:
+def velocity_observation(
+    state: JointState,
+    phases: FloatArray,
+    command: FloatArray,
+    limits: tuple[FloatArray, FloatArray],
+    max_speed_rad_s: float,
+    stall_torque_nm: float,
+    command_scale: FloatArray,
+) -> np.ndarray:
     """SnakeVelocity's observation, float32: joints (2N), efforts per stall torque (N), phases
     (2P), command (speed m/s, turn rate rad/s) divided by ``command_scale`` (2)."""
     parts = (

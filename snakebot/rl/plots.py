@@ -18,8 +18,9 @@ def curve_plot(curves: Mapping[str, Sequence[Any]], path: Path, *, title: str = 
     for label, points in curves.items():
         steps = [p.steps for p in points]
         ax_return.plot(steps, [p.mean_return for p in points], "-", lw=1.6, label=label)
-        rates = [100 * p.success_rate if not math.isnan(p.success_rate) else math.nan
-                 for p in points]
+        rates = [
+            100 * p.success_rate if not math.isnan(p.success_rate) else math.nan for p in points
+        ]
         ax_success.plot(steps, rates, "-", lw=1.6, label=label)
     ax_return.set(xlabel="env steps", ylabel="mean episode return", title=title or "return")
     ax_success.set(xlabel="env steps", ylabel="success rate [%]", title="goals reached")

@@ -34,8 +34,15 @@ SETTINGS_FILE = "policy.json"
 ACTOR_FILE = "actor.npz"
 MODEL_FILE = "policy.zip"
 CURVE_FILE = "learning_curve.csv"
-CURVE_FIELDS = ("steps", "wall_s", "episodes", "mean_return", "success_rate",
-                "mean_episode_steps", "steps_per_s")
+CURVE_FIELDS = (
+    "steps",
+    "wall_s",
+    "episodes",
+    "mean_return",
+    "success_rate",
+    "mean_episode_steps",
+    "steps_per_s",
+)
 # Every file `rl train` writes into its folder: what a second run there would replace.
 TRAIN_FILES = (SETTINGS_FILE, ACTOR_FILE, MODEL_FILE, CURVE_FILE, "learning_curve.png")
 FORMAT = 1
@@ -58,11 +65,15 @@ class NumpyActor:
             raise ValueError("expected as many bias vectors as weight matrices, at least one")
         for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
             if w.ndim != 2 or b.shape != (w.shape[0],) or 0 in w.shape:
-                raise ValueError(f"layer {i}: expected weights (out, in) and biases (out,), got "
-                                 f"{w.shape} and {b.shape}")
+                raise ValueError(
+                    f"layer {i}: expected weights (out, in) and biases (out,), got "
+                    f"{w.shape} and {b.shape}"
+                )
             if i and w.shape[1] != self.weights[i - 1].shape[0]:
-                raise ValueError(f"layer {i} takes {w.shape[1]} inputs, layer {i - 1} gives "
-                                 f"{self.weights[i - 1].shape[0]}")
+                raise ValueError(
+                    f"layer {i} takes {w.shape[1]} inputs, layer {i - 1} gives "
+                    f"{self.weights[i - 1].shape[0]}"
+                )
 
     @property
     def obs_dim(self) -> int:
@@ -108,8 +119,9 @@ class PolicyFile:
     meta: dict[str, Any]
 
 
-def write_settings(folder: Path, env_id: str, env_kwargs: dict[str, Any],
-                   meta: dict[str, Any]) -> Path:
+def write_settings(
+    folder: Path, env_id: str, env_kwargs: dict[str, Any], meta: dict[str, Any]
+) -> Path:
     """Write policy.json into ``folder``."""
     path = folder / SETTINGS_FILE
     payload = {"format": FORMAT, "env_id": env_id, "env_kwargs": env_kwargs, **meta}
@@ -138,9 +150,13 @@ def check_env_id(source: str | Path, env_id: object) -> str:
     handed to it, and nothing is imported by a name from a file.
     """
     if not isinstance(env_id, str) or env_id not in ENV_IDS:
-        raise ConfigError(source, "env_id", f"expected one of {', '.join(ENV_IDS)}, got "
-                          f"{env_id!r}: a policy folder names only snakebot's own environments "
-                          "(nothing named in it is imported)")
+        raise ConfigError(
+            source,
+            "env_id",
+            f"expected one of {', '.join(ENV_IDS)}, got "
+            f"{env_id!r}: a policy folder names only snakebot's own environments "
+            "(nothing named in it is imported)",
+        )
     return env_id
 
 
@@ -193,8 +209,9 @@ def _read_json(path: Path) -> dict[str, Any]:
     try:
         payload = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ConfigError(path, "", "missing: not a policy folder written by "
-                          "`snakebot rl train`") from None
+        raise ConfigError(
+            path, "", "missing: not a policy folder written by `snakebot rl train`"
+        ) from None
     except RecursionError:
         raise ConfigError(path, "", f"nested more than {MAX_DEPTH} levels deep") from None
     except (OSError, ValueError) as exc:  # UnicodeDecodeError and JSONDecodeError included
@@ -209,13 +226,18 @@ def read_settings(folder: Path) -> tuple[str, dict[str, Any], dict[str, Any]]:
     ``folder``; ConfigError naming the file and the key path of what is wrong."""
     path = folder / SETTINGS_FILE
     if not folder.is_dir():
-        raise ConfigError(folder, "", "no such policy folder (expected a folder that training "
-                          "wrote: `snakebot rl train --out DIR`)")
+        raise ConfigError(
+            folder,
+            "",
+            "no such policy folder (expected a folder that training "
+            "wrote: `snakebot rl train --out DIR`)",
+        )
     payload = _read_json(path)
     _check_values(path, payload)
     if payload.get("format") != FORMAT:
-        raise ConfigError(path, "format", f"expected format {FORMAT}, got "
-                          f"{payload.get('format')!r}")
+        raise ConfigError(
+            path, "format", f"expected format {FORMAT}, got {payload.get('format')!r}"
+        )
     env_id = check_env_id(path, payload.get("env_id"))
     kwargs = payload.get("env_kwargs")
     if not isinstance(kwargs, dict):
@@ -224,8 +246,11 @@ def read_settings(folder: Path) -> tuple[str, dict[str, Any], dict[str, Any]]:
     for key, value in meta.items():
         check = META_KEYS.get(key)
         if check is None:
-            raise ConfigError(path, key, f"unknown key; expected format, env_id, env_kwargs or "
-                              f"{', '.join(META_KEYS)}")
+            raise ConfigError(
+                path,
+                key,
+                f"unknown key; expected format, env_id, env_kwargs or {', '.join(META_KEYS)}",
+            )
         if not check(value):
             raise ConfigError(path, key, f"not what training writes there: {value!r}")
     task = GoalSettings if env_id == GOAL_ENV_ID else VelocitySettings

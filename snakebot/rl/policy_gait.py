@@ -59,6 +59,7 @@ def knows_pose(backend: Backend) -> bool:
 def state_reader(backend: Backend) -> StateReader:
     """The joint state the runner read last: the bus backend keeps it (``last_state``), so no
     extra bus transaction; on the twin a read is a copy of the simulation state."""
+
     def read() -> JointState:
         last = getattr(backend, "last_state", None)
         return last if isinstance(last, JointState) else backend.read_state()
@@ -93,24 +94,37 @@ class PolicyGait(Gait):
         self.task = task
         if self.goal_task and pose is None:
             raise ConfigError(
-                source, "", "a SnakeGoal policy observes the goal from the snake's pose (centre "
+                source,
+                "",
+                "a SnakeGoal policy observes the goal from the snake's pose (centre "
                 "of mass and heading) every step; this backend has no pose source (the servos "
                 "report joints only). Play it on the twin (backend sim), train a "
                 "SnakeVelocity policy for the bus, or plug in a pose source (docs/learning.md, "
-                "'Pose sources')"
+                "'Pose sources')",
             )
         self.joint_count = robot.joint_count
         if settings.robot not in (robot.name, str(robot.source)):
-            raise ConfigError(source, "env_kwargs.robot", f"the policy was trained on "
-                              f"{settings.robot!r}, not {robot.name!r}")
+            raise ConfigError(
+                source,
+                "env_kwargs.robot",
+                f"the policy was trained on {settings.robot!r}, not {robot.name!r}",
+            )
         self.encoding = make_encoding(
-            settings.encoding, robot.joint_count, robot.lower_rad, robot.upper_rad,
-            phase_hz=settings.phase_hz, dft_bins=settings.dft_bins,
+            settings.encoding,
+            robot.joint_count,
+            robot.lower_rad,
+            robot.upper_rad,
+            phase_hz=settings.phase_hz,
+            dft_bins=settings.dft_bins,
         )
         if policy.actor.action_dim != self.encoding.action_dim:
-            raise ConfigError(source, "actor.npz", f"the actor gives {policy.actor.action_dim} "
-                              f"actions, the {settings.encoding} encoding takes "
-                              f"{self.encoding.action_dim}")
+            raise ConfigError(
+                source,
+                "actor.npz",
+                f"the actor gives {policy.actor.action_dim} "
+                f"actions, the {settings.encoding} encoding takes "
+                f"{self.encoding.action_dim}",
+            )
         self.policy = policy
         self.robot = robot
         self.read_state = read_state
@@ -131,9 +145,13 @@ class PolicyGait(Gait):
         n = self.joint_count
         expected = 2 * n + phases + 2 if self.goal_task else 3 * n + phases + 2
         if self.policy.actor.obs_dim != expected:
-            raise ConfigError(self.policy.folder, "actor.npz", f"the actor reads "
-                              f"{self.policy.actor.obs_dim} observations, this robot and "
-                              f"encoding give {expected}")
+            raise ConfigError(
+                self.policy.folder,
+                "actor.npz",
+                f"the actor reads "
+                f"{self.policy.actor.obs_dim} observations, this robot and "
+                f"encoding give {expected}",
+            )
 
     @property
     def uses_measured_pose(self) -> bool:
@@ -151,8 +169,10 @@ class PolicyGait(Gait):
 
     def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
         """Not defined: a policy's targets depend on what the servos measure as it runs."""
-        raise GaitError("a policy is a closed-loop gait: its targets exist only as it runs "
-                        "(use command(), as the runner does)")
+        raise GaitError(
+            "a policy is a closed-loop gait: its targets exist only as it runs "
+            "(use command(), as the runner does)"
+        )
 
     def command(self, time_s: float, measured_rad: FloatArray | None = None) -> FloatArray:
         """Targets (N,) in rad for gait time ``time_s``; a new action every 1/action_hz s."""
@@ -175,13 +195,20 @@ class PolicyGait(Gait):
         limits = (robot.lower_rad, robot.upper_rad)
         state = self.read_state()
         if not self.goal_task:
-            scale = np.array([
-                max(abs(v) for v in self.task.speed_range_mps) or 1.0,
-                max(abs(v) for v in self.task.turn_range_rad_s) or 1.0,
-            ])
+            scale = np.array(
+                [
+                    max(abs(v) for v in self.task.speed_range_mps) or 1.0,
+                    max(abs(v) for v in self.task.turn_range_rad_s) or 1.0,
+                ]
+            )
             return velocity_observation(
-                state, self.clock.observed(), np.array(self.user_command), limits,
-                float(robot.max_speed_rad_s), robot.servo.physics.stall_torque_nm, scale,
+                state,
+                self.clock.observed(),
+                np.array(self.user_command),
+                limits,
+                float(robot.max_speed_rad_s),
+                robot.servo.physics.stall_torque_nm,
+                scale,
             )
         assert self.pose is not None
         body = self.pose.body_state()
@@ -190,18 +217,29 @@ class PolicyGait(Gait):
         if self.goal_xy_m is None:
             yaw = head_yaw_rad(body.head_quat)
             x, y = self.user_command
-            offset = np.array([x * math.cos(yaw) - y * math.sin(yaw),
-                               x * math.sin(yaw) + y * math.cos(yaw)])
+            offset = np.array(
+                [x * math.cos(yaw) - y * math.sin(yaw), x * math.sin(yaw) + y * math.cos(yaw)]
+            )
             self.goal_xy_m = body.com_m[:2] + offset
         return goal_observation(
-            state, body, self.goal_xy_m, self.clock.observed(), limits,
-            float(robot.max_speed_rad_s), float(robot.body_length_m),
+            state,
+            body,
+            self.goal_xy_m,
+            self.clock.observed(),
+            limits,
+            float(robot.max_speed_rad_s),
+            float(robot.body_length_m),
         )
 
 
 def policy_gait_for_backend(
-    folder: str, robot: RobotConfig, backend: Backend, command: tuple[float, float] | None,
-    rate_hz: float, *, pose: PoseSource | None = None,
+    folder: str,
+    robot: RobotConfig,
+    backend: Backend,
+    command: tuple[float, float] | None,
+    rate_hz: float,
+    *,
+    pose: PoseSource | None = None,
 ) -> tuple[str, PolicyGait]:
     """The policy in ``folder`` as a gait on ``backend`` (not yet connected), and its name for
     the run summary. The backend is the goal policy's pose source when it knows the pose and no
@@ -212,13 +250,20 @@ def policy_gait_for_backend(
 
     policy = load_policy(Path(folder))
     if command is None:
-        what = "speed,turn_rate (m/s, rad/s)" if policy.env_id == VELOCITY_ENV_ID else \
-            "goal X,Y (m, from the snake, X forward)"
+        what = (
+            "speed,turn_rate (m/s, rad/s)"
+            if policy.env_id == VELOCITY_ENV_ID
+            else "goal X,Y (m, from the snake, X forward)"
+        )
         raise ConfigError("command", "", f"the policy in {folder} needs a command: {what}")
     action_hz = float(policy.env_kwargs.get("action_hz", EnvSettings.action_hz))
     if rate_hz < action_hz:
-        raise ConfigError("rate_hz", "", f"the policy acts at {action_hz:g} Hz; run the "
-                          f"control loop at least that fast (e.g. 100 Hz)")
+        raise ConfigError(
+            "rate_hz",
+            "",
+            f"the policy acts at {action_hz:g} Hz; run the "
+            f"control loop at least that fast (e.g. 100 Hz)",
+        )
     if pose is None and knows_pose(backend):
         pose = backend
     gait = PolicyGait(policy, robot, state_reader(backend), command, pose=pose)

@@ -26,12 +26,14 @@ from snakebot.rl.policy_file import (
 )
 
 
-def _real(low: float, high: float = math.inf, *,
-          low_open: bool = False) -> Callable[[object], bool]:
+def _real(
+    low: float, high: float = math.inf, *, low_open: bool = False
+) -> Callable[[object], bool]:
     def check(v: object) -> bool:
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             return False
         return (v > low if low_open else v >= low) and v <= high
+
     return check
 
 
@@ -63,8 +65,11 @@ def check_ppo(values: dict[str, Any], source: str | Path, prefix: str = "") -> d
         if key == "n_steps":
             continue
         if key not in PPO_SETTINGS:
-            raise ConfigError(source, f"{prefix}{key}", f"unknown PPO setting; expected one of "
-                              f"{', '.join(PPO_SETTINGS)}")
+            raise ConfigError(
+                source,
+                f"{prefix}{key}",
+                f"unknown PPO setting; expected one of {', '.join(PPO_SETTINGS)}",
+            )
         check, expected = PPO_SETTINGS[key]
         if not check(value):
             raise ConfigError(source, f"{prefix}{key}", f"expected {expected}, got {value!r}")
@@ -107,8 +112,9 @@ def resume_point(folder: Path) -> ResumePoint:
     settings = folder / SETTINGS_FILE
     model = folder / MODEL_FILE
     if not model.is_file():
-        raise ConfigError(model, "", "missing: the model to train on (rl train writes it beside "
-                          "policy.json)")
+        raise ConfigError(
+            model, "", "missing: the model to train on (rl train writes it beside policy.json)"
+        )
     if not zipfile.is_zipfile(model):
         raise ConfigError(model, "", "not a stable-baselines3 model (not a zip file)")
     for key in ("steps", "n_envs", "ppo"):
@@ -135,10 +141,12 @@ def resume_point(folder: Path) -> ResumePoint:
                 if len(row) != len(CURVE_FIELDS) or any(math.isinf(float(v)) for v in row):
                     raise ValueError(row)
             except ValueError:
-                raise ConfigError(curve, f"line {i}", f"expected {len(CURVE_FIELDS)} numbers, "
-                                  f"got {row!r}") from None
-    return ResumePoint(folder, env_id, kwargs, ppo, int(meta["steps"]),
-                       int(n_steps) * int(meta["n_envs"]), rows)
+                raise ConfigError(
+                    curve, f"line {i}", f"expected {len(CURVE_FIELDS)} numbers, got {row!r}"
+                ) from None
+    return ResumePoint(
+        folder, env_id, kwargs, ppo, int(meta["steps"]), int(n_steps) * int(meta["n_envs"]), rows
+    )
 
 
 __all__ = ["PPO_SETTINGS", "ResumePoint", "check_ppo", "ppo_defaults", "resume_point"]

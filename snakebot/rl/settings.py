@@ -47,24 +47,35 @@ class EnvSettings:
             if not isinstance(getattr(self, key), str):
                 raise ConfigError(key, "", f"expected a name (text), got {getattr(self, key)!r}")
         if self.encoding not in ENCODINGS:
-            raise ConfigError("encoding", "", f"unknown encoding {self.encoding!r}; expected "
-                              f"one of {', '.join(ENCODINGS)}")
+            raise ConfigError(
+                "encoding",
+                "",
+                f"unknown encoding {self.encoding!r}; expected one of {', '.join(ENCODINGS)}",
+            )
         if self.friction_model is not None and not isinstance(self.friction_model, str):
-            raise ConfigError("friction_model", "", f"expected auto, pairs, scale or null, got "
-                              f"{self.friction_model!r}")
+            raise ConfigError(
+                "friction_model",
+                "",
+                f"expected auto, pairs, scale or null, got {self.friction_model!r}",
+            )
         for key, most in MOST.items():
             _positive(key, getattr(self, key), most)
         if self.timestep_s is not None:
             _positive("timestep_s", self.timestep_s, 0.1)
             if self.timestep_s < 1e-5:  # 100,000 physics steps per simulated second at most
-                raise ConfigError("timestep_s", "", f"expected at least 1e-05 s, got "
-                                  f"{self.timestep_s!r}")
+                raise ConfigError(
+                    "timestep_s", "", f"expected at least 1e-05 s, got {self.timestep_s!r}"
+                )
         if isinstance(self.dft_bins, bool) or not isinstance(self.dft_bins, int):
             raise ConfigError("dft_bins", "", f"expected a whole number, got {self.dft_bins!r}")
         ratio = self.control_hz / self.action_hz
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-            raise ConfigError("control_hz", "", f"expected a whole multiple of action_hz "
-                              f"{self.action_hz:g} Hz, got {self.control_hz:g} Hz")
+            raise ConfigError(
+                "control_hz",
+                "",
+                f"expected a whole multiple of action_hz "
+                f"{self.action_hz:g} Hz, got {self.control_hz:g} Hz",
+            )
 
     @property
     def cycles_per_action(self) -> int:
@@ -127,8 +138,10 @@ class VelocitySettings:
 
 
 def _positive(key: str, value: object, most: float = math.inf) -> None:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not (
-        0 < value <= most and math.isfinite(value)
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not (0 < value <= most and math.isfinite(value))
     ):
         bound = "" if math.isinf(most) else f" up to {most:g}"
         raise ConfigError(key, "", f"expected a positive number{bound}, got {value!r}")
@@ -156,8 +169,9 @@ def _range(key: str, value: object, minimum: float) -> None:
             low = high = math.nan
         ok = math.isfinite(low) and math.isfinite(high) and minimum <= low <= high
     if not ok:
-        raise ConfigError(key, "", f"expected (low, high) with {minimum:g} <= low <= high, "
-                          f"got {value!r}")
+        raise ConfigError(
+            key, "", f"expected (low, high) with {minimum:g} <= low <= high, got {value!r}"
+        )
 
 
 def split_kwargs(kwargs: dict[str, Any], *task: type) -> tuple[Any, ...]:
@@ -167,8 +181,9 @@ def split_kwargs(kwargs: dict[str, Any], *task: type) -> tuple[Any, ...]:
     known = {f.name: cls for cls in classes for f in dataclasses.fields(cls)}
     unknown = sorted(set(kwargs) - set(known))
     if unknown:
-        raise ConfigError(unknown[0], "", f"unknown env setting; expected one of "
-                          f"{', '.join(sorted(known))}")
+        raise ConfigError(
+            unknown[0], "", f"unknown env setting; expected one of {', '.join(sorted(known))}"
+        )
     out = []
     for cls in classes:
         mine = {k: _tuple(v) for k, v in kwargs.items() if known[k] is cls}
@@ -189,6 +204,13 @@ def settings_dict(*settings: object) -> dict[str, Any]:
 
 
 __all__ = [
-    "ENV_IDS", "GOAL_ENV_ID", "MOST", "VELOCITY_ENV_ID", "EnvSettings", "GoalSettings",
-    "VelocitySettings", "settings_dict", "split_kwargs",
+    "ENV_IDS",
+    "GOAL_ENV_ID",
+    "MOST",
+    "VELOCITY_ENV_ID",
+    "EnvSettings",
+    "GoalSettings",
+    "VelocitySettings",
+    "settings_dict",
+    "split_kwargs",
 ]

@@ -60,15 +60,22 @@ class TrainSettings:
         if self.vec not in VECTORISATIONS:
             raise ConfigError("vec", "", f"expected one of {', '.join(VECTORISATIONS)}")
         if self.n_envs < 1 or self.rollout_steps % self.n_envs:
-            raise ConfigError("n_envs", "", f"expected a divisor of the rollout "
-                              f"({self.rollout_steps} steps), got {self.n_envs}")
+            raise ConfigError(
+                "n_envs",
+                "",
+                f"expected a divisor of the rollout "
+                f"({self.rollout_steps} steps), got {self.n_envs}",
+            )
         if self.steps < 1:
             raise ConfigError("steps", "", f"expected a positive count, got {self.steps}")
         check_ppo(self.ppo, "ppo")
         batch = self.ppo.get("batch_size", 2)
         if batch > self.rollout_steps:
-            raise ConfigError("ppo", "batch_size", f"expected at most the rollout "
-                              f"({self.rollout_steps} steps), got {batch}")
+            raise ConfigError(
+                "ppo",
+                "batch_size",
+                f"expected at most the rollout ({self.rollout_steps} steps), got {batch}",
+            )
 
 
 @dataclass
@@ -103,8 +110,7 @@ class TrainResult:
         return taken / self.wall_s if self.wall_s > 0 else 0.0
 
 
-def make_vec_env(env_id: str, env_kwargs: dict[str, Any], n_envs: int, vec: str,
-                 seed: int) -> Any:
+def make_vec_env(env_id: str, env_kwargs: dict[str, Any], n_envs: int, vec: str, seed: int) -> Any:
     """An SB3 VecEnv of ``n_envs`` copies, in this process (dummy) or one process each."""
     sb3_vec = require("stable_baselines3.common.vec_env", "rl train")
     fns = [_env_fn(env_id, env_kwargs) for _ in range(n_envs)]
@@ -144,8 +150,14 @@ def _workers_cpu_s(venv: Any) -> float:
 class _Tracker:
     """Episode returns and successes per env, and the curve rows written as they come."""
 
-    def __init__(self, n_envs: int, csv_file: TextIO, progress: TextIO | None,
-                 total: int, previous: list[list[str]] | None = None) -> None:
+    def __init__(
+        self,
+        n_envs: int,
+        csv_file: TextIO,
+        progress: TextIO | None,
+        total: int,
+        previous: list[list[str]] | None = None,
+    ) -> None:
         self.returns = np.zeros(n_envs)
         self.lengths = np.zeros(n_envs, dtype=int)
         self.done_returns: list[float] = []
@@ -179,7 +191,9 @@ class _Tracker:
         wall = time.monotonic() - self.start + self.wall_offset_s
         returns, success = self.done_returns, self.done_success
         point = CurvePoint(
-            steps=steps, wall_s=round(wall, 3), episodes=self.episodes,
+            steps=steps,
+            wall_s=round(wall, 3),
+            episodes=self.episodes,
             mean_return=float(np.mean(returns)) if returns else math.nan,
             success_rate=float(np.mean(success)) if success else math.nan,
             mean_episode_steps=float(np.mean(self.done_lengths)) if returns else math.nan,
@@ -190,8 +204,7 @@ class _Tracker:
         self.writer.writerow([getattr(point, name) for name in CURVE_FIELDS])
         self.csv_file.flush()
         if self.progress is not None:
-            ended = f"({point.episodes} episodes)" if point.episodes else \
-                "(no episode ended yet)"
+            ended = f"({point.episodes} episodes)" if point.episodes else "(no episode ended yet)"
             self.progress.write(
                 f"  {steps:>9d}/{self.total} steps  {wall:7.0f} s  {point.steps_per_s:6.0f} "
                 f"steps/s  return {_number(point.mean_return, '8.2f')}  success "
@@ -214,8 +227,13 @@ def _last_wall_s(rows: list[list[str]]) -> float:
     return float(rows[-1][CURVE_FIELDS.index("wall_s")]) if rows else 0.0
 
 
-def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sys.stderr,
-          plot: bool = True) -> TrainResult:
+def train(
+    settings: TrainSettings,
+    folder: Path,
+    *,
+    progress: TextIO | None = sys.stderr,
+    plot: bool = True,
+) -> TrainResult:
     """Train, then save policy.json, actor.npz, policy.zip, learning_curve.csv (+ .png).
 
     With ``settings.resume`` it goes on from that saved model's weights (and optimiser state)
@@ -232,8 +250,11 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
     callbacks = require("stable_baselines3.common.callbacks", "rl train")
     torch.set_num_threads(1)  # one core per env process; PPO's small MLP gains nothing more
     resume = settings.resume
-    ppo_kwargs = {"n_steps": settings.rollout_steps // settings.n_envs, **ppo_defaults(),
-                  **settings.ppo}
+    ppo_kwargs = {
+        "n_steps": settings.rollout_steps // settings.n_envs,
+        **ppo_defaults(),
+        **settings.ppo,
+    }
     previous = resume.curve_rows if resume is not None else []
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -243,8 +264,7 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         raise OutputError(folder, f"cannot write the training output: {reason}") from exc
     cpu_start = _cpu_s()
     start_steps = resume.steps if resume is not None else 0
-    tracker = _Tracker(settings.n_envs, csv_file, progress, start_steps + settings.steps,
-                       previous)
+    tracker = _Tracker(settings.n_envs, csv_file, progress, start_steps + settings.steps, previous)
 
     class Callback(callbacks.BaseCallback):  # type: ignore[misc,name-defined]
         def _on_step(self) -> bool:
@@ -257,17 +277,22 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
     interrupted = False
     workers_cpu = 0.0
     try:
-        venv = make_vec_env(settings.env_id, settings.env_kwargs, settings.n_envs, settings.vec,
-                            settings.seed)
+        venv = make_vec_env(
+            settings.env_id, settings.env_kwargs, settings.n_envs, settings.vec, settings.seed
+        )
         try:
-            model = sb3.PPO("MlpPolicy", venv, seed=settings.seed, verbose=0, device="cpu",
-                            **ppo_kwargs)
+            model = sb3.PPO(
+                "MlpPolicy", venv, seed=settings.seed, verbose=0, device="cpu", **ppo_kwargs
+            )
             if resume is not None:
                 _load_weights(model, resume.model_path)
                 model.num_timesteps = resume.steps
             try:
-                model.learn(total_timesteps=settings.steps, callback=Callback(),
-                            reset_num_timesteps=resume is None)
+                model.learn(
+                    total_timesteps=settings.steps,
+                    callback=Callback(),
+                    reset_num_timesteps=resume is None,
+                )
             except KeyboardInterrupt:  # Ctrl-C: keep the policy learned so far
                 interrupted = True
             if settings.vec == "subproc":
@@ -296,18 +321,21 @@ def train(settings: TrainSettings, folder: Path, *, progress: TextIO | None = sy
         "final_mean_return": None if last is None else _finite(last.mean_return),
         "final_success_rate": None if last is None else _finite(last.success_rate),
         "versions": {"stable_baselines3": sb3.__version__, "torch": torch.__version__},
-        "resumed_from": None if resume is None else {"folder": str(resume.folder),
-                                                     "steps": resume.steps},
+        "resumed_from": None
+        if resume is None
+        else {"folder": str(resume.folder), "steps": resume.steps},
     }
     write_settings(folder, settings.env_id, settings.env_kwargs, meta)
-    result = TrainResult(tracker.curve, wall, steps, folder, cpu, interrupted,
-                         steps - start_steps)
+    result = TrainResult(tracker.curve, wall, steps, folder, cpu, interrupted, steps - start_steps)
     if plot:
         from snakebot.rl.plots import curve_plot
 
         rows = read_curve(folder / CURVE_FILE)  # the saved rows of a resumed run too
-        curve_plot({_label(settings): rows}, folder / "learning_curve.png",
-                   title=f"{settings.env_id} ({settings.env_kwargs.get('encoding', '')})")
+        curve_plot(
+            {_label(settings): rows},
+            folder / "learning_curve.png",
+            title=f"{settings.env_id} ({settings.env_kwargs.get('encoding', '')})",
+        )
     return result
 
 
@@ -318,10 +346,21 @@ def _load_weights(model: Any, path: Path) -> None:
 
     try:
         model.set_parameters(str(path), exact_match=True, device="cpu")
-    except (ValueError, RuntimeError, KeyError, OSError, EOFError, pickle.UnpicklingError,
-            zipfile.BadZipFile) as exc:
-        raise ConfigError(path, "", f"cannot train on this model (not the network this "
-                          f"policy's settings make): {str(exc).splitlines()[0]}") from None
+    except (
+        ValueError,
+        RuntimeError,
+        KeyError,
+        OSError,
+        EOFError,
+        pickle.UnpicklingError,
+        zipfile.BadZipFile,
+    ) as exc:
+        raise ConfigError(
+            path,
+            "",
+            f"cannot train on this model (not the network this "
+            f"policy's settings make): {str(exc).splitlines()[0]}",
+        ) from None
 
 
 def _cpu_s() -> float:
@@ -359,9 +398,18 @@ def read_curve(path: Path) -> list[CurvePoint]:
     """A learning_curve.csv back as points."""
     with path.open() as f:
         rows = list(csv.DictReader(f))
-    return [CurvePoint(int(r["steps"]), float(r["wall_s"]), int(r["episodes"]),
-                       float(r["mean_return"]), float(r["success_rate"]),
-                       float(r["mean_episode_steps"]), float(r["steps_per_s"])) for r in rows]
+    return [
+        CurvePoint(
+            int(r["steps"]),
+            float(r["wall_s"]),
+            int(r["episodes"]),
+            float(r["mean_return"]),
+            float(r["success_rate"]),
+            float(r["mean_episode_steps"]),
+            float(r["steps_per_s"]),
+        )
+        for r in rows
+    ]
 
 
 def dump_json(result: TrainResult) -> dict[str, Any]:

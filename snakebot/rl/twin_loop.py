@@ -49,12 +49,19 @@ class TwinLoop:
         self.settings = settings
         self.robot = robot if robot is not None else load_robot(settings.robot)
         self.encoding: Encoding = make_encoding(
-            settings.encoding, self.robot.joint_count, self.robot.lower_rad,
-            self.robot.upper_rad, phase_hz=settings.phase_hz, dft_bins=settings.dft_bins,
+            settings.encoding,
+            self.robot.joint_count,
+            self.robot.lower_rad,
+            self.robot.upper_rad,
+            phase_hz=settings.phase_hz,
+            dft_bins=settings.dft_bins,
         )
         self.clock = GaitClock(self.encoding)
         backend = make_backend(
-            self.robot, "twin", timestep_s=settings.timestep_s, terrain=settings.terrain,
+            self.robot,
+            "twin",
+            timestep_s=settings.timestep_s,
+            terrain=settings.terrain,
             friction_model=settings.friction_model,
         )
         assert isinstance(backend, TwinBackend)  # a robot file's twin (RobotConfig above)
@@ -132,4 +139,3 @@ class TwinLoop:
     def close(self) -> None:
         """Release the twin."""
         self.backend.close()
-

@@ -33,10 +33,12 @@ class SnakeVelocityEnv(SnakeEnv):
         settings, task = split_kwargs(kwargs, VelocitySettings)
         self.task: VelocitySettings = task
         self.command = np.zeros(2)
-        self.command_scale = np.array([
-            max(abs(v) for v in task.speed_range_mps) or 1.0,
-            max(abs(v) for v in task.turn_range_rad_s) or 1.0,
-        ])
+        self.command_scale = np.array(
+            [
+                max(abs(v) for v in task.speed_range_mps) or 1.0,
+                max(abs(v) for v in task.turn_range_rad_s) or 1.0,
+            ]
+        )
         self._fixed: np.ndarray | None = None
         self._heading = 0.0
         super().__init__(settings, render_mode)
@@ -47,18 +49,25 @@ class SnakeVelocityEnv(SnakeEnv):
 
     def _obs(self) -> np.ndarray:
         return velocity_observation(
-            self.loop.state, self.phases, self.command, self.limits, self.max_speed_rad_s,
-            self.robot.servo.physics.stall_torque_nm, self.command_scale,
+            self.loop.state,
+            self.phases,
+            self.command,
+            self.limits,
+            self.max_speed_rad_s,
+            self.robot.servo.physics.stall_torque_nm,
+            self.command_scale,
         )
 
     def _draw_command(self) -> None:
         if self._fixed is not None:
             self.command = self._fixed.copy()
             return
-        self.command = np.array([
-            self.np_random.uniform(*self.task.speed_range_mps),
-            self.np_random.uniform(*self.task.turn_range_rad_s),
-        ])
+        self.command = np.array(
+            [
+                self.np_random.uniform(*self.task.speed_range_mps),
+                self.np_random.uniform(*self.task.turn_range_rad_s),
+            ]
+        )
 
     def _task_reset(self, options: dict[str, Any]) -> dict[str, Any]:
         fixed = options.get("command")
@@ -79,8 +88,8 @@ class SnakeVelocityEnv(SnakeEnv):
         effort = outcome.state.effort_nm / self.robot.servo.physics.stall_torque_nm
         command = self.command.copy()
         terms = {
-            "speed": math.exp(-((speed - command[0]) / t.speed_sigma_mps) ** 2),
-            "turn": t.turn_weight * math.exp(-((turn - command[1]) / t.turn_sigma_rad_s) ** 2),
+            "speed": math.exp(-(((speed - command[0]) / t.speed_sigma_mps) ** 2)),
+            "turn": t.turn_weight * math.exp(-(((turn - command[1]) / t.turn_sigma_rad_s) ** 2)),
             "effort": -t.effort_weight * float(np.mean(effort**2)),
         }
         period = max(1, round(t.command_period_s * rate))

@@ -59,8 +59,10 @@ class TickModel:
     @property
     def travel_rad(self) -> tuple[float, float]:
         """The joint angles (rad, before offset and direction) at ``minimum`` and ``maximum``."""
-        return ((self.minimum - self.centre) / self.ticks_per_rad,
-                (self.maximum - self.centre) / self.ticks_per_rad)
+        return (
+            (self.minimum - self.centre) / self.ticks_per_rad,
+            (self.maximum - self.centre) / self.ticks_per_rad,
+        )
 
     def to_ticks(
         self, angle_rad: float, *, zero_offset_rad: float = 0.0, direction: int = 1

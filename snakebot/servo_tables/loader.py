@@ -193,13 +193,16 @@ def _register(source: Path, key: str, facts: dict[str, Any], eeprom_end: int) ->
         raise ConfigError(source, f"{where}.access", f"must be R or RW, not {register.access!r}")
     if not low <= register.minimum <= register.maximum <= high:
         raise ConfigError(
-            source, where, f"range {register.minimum}..{register.maximum} does not fit "
-            f"{size} byte(s) {sign} ({low}..{high})"
+            source,
+            where,
+            f"range {register.minimum}..{register.maximum} does not fit "
+            f"{size} byte(s) {sign} ({low}..{high})",
         )
     checked = register.access == "RW" or "default" in facts
     if checked and not register.minimum <= register.default <= register.maximum:
         raise ConfigError(
-            source, f"{where}.default",
+            source,
+            f"{where}.default",
             f"{register.default} lies outside {register.minimum}..{register.maximum}",
         )
     return register
@@ -212,7 +215,8 @@ def _check_overlaps(source: Path, registers: dict[str, Register]) -> None:
         alias = (first.address, first.size) == (second.address, second.size)
         if second.address < first.address + first.size and not alias:
             raise ConfigError(
-                source, f"registers.{second.key}",
+                source,
+                f"registers.{second.key}",
                 f"address {second.address} overlaps {first.key} "
                 f"({first.address}..{first.address + first.size - 1})",
             )
@@ -295,8 +299,10 @@ def _model_file_rows(
 
 def _protocols(source: Path, model: dict[str, Any]) -> tuple[float, ...]:
     protocols = model.get("protocols", [model.get("protocol", 2.0)])
-    if not isinstance(protocols, list) or not protocols or any(
-        p not in (1.0, 2.0) for p in protocols
+    if (
+        not isinstance(protocols, list)
+        or not protocols
+        or any(p not in (1.0, 2.0) for p in protocols)
     ):
         raise ConfigError(source, "model.protocols", f"must list 1.0 and/or 2.0, not {protocols!r}")
     return tuple(float(p) for p in protocols)
@@ -312,9 +318,11 @@ def build_table(source: Path) -> ServoTable:
     """
     data = read_data_file(source)
     model = data.get("model", {})
-    unknown = set(model) - _SPEC_FIELDS - {
-        "name", "model_number", "protocol", "protocols", "family", "model_file"
-    }
+    unknown = (
+        set(model)
+        - _SPEC_FIELDS
+        - {"name", "model_number", "protocol", "protocols", "family", "model_file"}
+    )
     if unknown:
         raise ConfigError(source, "model", f"unknown field(s) {sorted(unknown)}")
     for needed in ("name", "model_number"):

@@ -96,7 +96,8 @@ def _catalogue(folders: tuple[Path, ...]) -> dict[str, ModelEntry]:
         other = by_number.setdefault(entry.model_number, entry)
         if other is not entry:
             raise ConfigError(
-                entry.path, "model.model_number",
+                entry.path,
+                "model.model_number",
                 f"{entry.model_number} is also {other.name}'s ({other.path})",
             )
     return entries

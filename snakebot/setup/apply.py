@@ -77,18 +77,21 @@ class ApplyPlan:
 def _refusals(chain: ChainSettings, diff: ChainDiff) -> list[str]:
     """Why the plan cannot be carried out by any order of writes: a locked EEPROM (AX/MX Lock,
     which snakebot never sets) or a latched error in a family without Reboot."""
-    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(
-        chain.table).reboot
+    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(chain.table).reboot
     out = []
     for wanted in chain.servos:
         state = diff.servos[wanted.servo_id]
         eeprom = [d.key for d in diff.for_id(wanted.servo_id) if d.setting.eeprom]
         if state.locked and eeprom:
-            out.append(f"servo {wanted.servo_id} has its EEPROM locked (Lock = 1) and "
-                       f"{', '.join(eeprom)} differ: power-cycle it (the lock clears only then)")
+            out.append(
+                f"servo {wanted.servo_id} has its EEPROM locked (Lock = 1) and "
+                f"{', '.join(eeprom)} differ: power-cycle it (the lock clears only then)"
+            )
         if state.hardware_error and not can_reboot:
-            out.append(f"servo {wanted.servo_id} has a latched hardware error and Protocol "
-                       f"{chain.robot.bus.protocol:.1f} has no Reboot: power-cycle it")
+            out.append(
+                f"servo {wanted.servo_id} has a latched hardware error and Protocol "
+                f"{chain.robot.bus.protocol:.1f} has no Reboot: power-cycle it"
+            )
     return out
 
 
@@ -100,8 +103,7 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
     refused = _refusals(chain, diff)
     if refused:
         raise SetupError("cannot apply the settings: " + "; ".join(refused))
-    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(
-        chain.table).reboot
+    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(chain.table).reboot
     steps: list[Step] = []
     bauds: list[Step] = []
     limp: list[int] = []
@@ -129,12 +131,16 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
             steps.append(Step(servo_id, "reboot", reason=f"{', '.join(booted)} acts at boot"))
         if resets or booted:
             why = "reboot" if state.hardware_error or booted else "mode change"
-            steps += [Step(servo_id, "write", s, None, recheck=True, reason=why)
-                      for s in wanted.settings if not s.eeprom]
+            steps += [
+                Step(servo_id, "write", s, None, recheck=True, reason=why)
+                for s in wanted.settings
+                if not s.eeprom
+            ]
         else:
             steps += [_write(d) for d in ram]
-        bauds += [Step(servo_id, "baud", d.setting, d.current) for d in diffs
-                  if d.key == "baud_rate"]
+        bauds += [
+            Step(servo_id, "baud", d.setting, d.current) for d in diffs if d.key == "baud_rate"
+        ]
     return ApplyPlan(tuple(steps + bauds), tuple(limp))
 
 
@@ -149,8 +155,9 @@ class Applier:
         self.link = link
         self.where = {i: s.baud for i, s in diff.servos.items()}
         # Status Return Level < 2: writes get no status reply (e-Manual Status Return Level).
-        self.quiet = {i for i, s in diff.servos.items()
-                      if s.values.get("status_return_level", 2) < 2}
+        self.quiet = {
+            i for i, s in diff.servos.items() if s.values.get("status_return_level", 2) < 2
+        }
 
     def run(self, step: Step) -> bool:
         """Execute one step; False if a ``recheck`` write found the value already right."""
@@ -213,15 +220,17 @@ class Applier:
             raise VerifyError(self.link.port, servo_id, "baud_rate", index, back)
 
 
-def outside_new_limits(link: Link, chain: ChainSettings, plan: ApplyPlan, diff: ChainDiff
-                       ) -> list[str]:
+def outside_new_limits(
+    link: Link, chain: ChainSettings, plan: ApplyPlan, diff: ChainDiff
+) -> list[str]:
     """One line per servo whose Present Position lies outside the position limits ``plan`` writes.
 
     Such a servo cannot hold where it stands once torque is on (a goal there is refused; the
     backend refuses to start), so the user should move the joint inside by hand first.
     """
-    changing = {s.servo_id for s in plan.steps if s.setting is not None and s.setting.key in
-                LIMIT_KEYS}
+    changing = {
+        s.servo_id for s in plan.steps if s.setting is not None and s.setting.key in LIMIT_KEYS
+    }
     notes = []
     for wanted in chain.servos:
         if wanted.servo_id not in changing:
@@ -260,7 +269,8 @@ def apply(
         applier.run(step)
     after = survey(link, chain)
     if not after.identical:
-        left = "; ".join(f"servo {d.servo_id} {d.key} {d.current} != {d.wanted}"
-                         for d in after.differences)
+        left = "; ".join(
+            f"servo {d.servo_id} {d.key} {d.current} != {d.wanted}" for d in after.differences
+        )
         raise SetupError(f"{link.port}: settings still differ after apply: {left}")
     return after

@@ -103,11 +103,17 @@ def _lone(link: Link, found: list[Found], from_id: int | None, bauds: Sequence[i
         )
     if len(found) > 1:
         hint = (
-            "connect only the new servo, or name the ID to change (option from_id; a new "
-            f"{table.model} is ID {table['id'].default} at {factory_baud(table)})"
-        ) if from_id is None else "unplug all but the one to change"
-        raise SetupError(f"{link.port}: {len(found)} servos answer ({_describe(found)}); "
-                         f"assign-id changes one servo at a time: {hint}")
+            (
+                "connect only the new servo, or name the ID to change (option from_id; a new "
+                f"{table.model} is ID {table['id'].default} at {factory_baud(table)})"
+            )
+            if from_id is None
+            else "unplug all but the one to change"
+        )
+        raise SetupError(
+            f"{link.port}: {len(found)} servos answer ({_describe(found)}); "
+            f"assign-id changes one servo at a time: {hint}"
+        )
     return found[0]
 
 
@@ -124,8 +130,13 @@ def _check_free(link: Link, servo: Found, to_id: int, bauds: set[int]) -> None:
 
 
 def assign_id(
-    link: Link, *, to_id: int, baud: int, from_id: int | None = None,
-    bauds: Sequence[int] | None = None, dry_run: bool = False,
+    link: Link,
+    *,
+    to_id: int,
+    baud: int,
+    from_id: int | None = None,
+    bauds: Sequence[int] | None = None,
+    dry_run: bool = False,
 ) -> Assignment:
     """Find the lone servo, then set its ID to ``to_id`` and its rate to ``baud`` (verified).
 

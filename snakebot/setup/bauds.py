@@ -13,8 +13,25 @@ from collections.abc import Iterable
 from snakebot.families import ServoFamily
 from snakebot.servo_tables import ServoTable, supported_models, table_for_model
 
-PORT_BAUDS = (9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000, 576000, 921600,
-              1_000_000, 1_152_000, 2_000_000, 2_500_000, 3_000_000, 3_500_000, 4_000_000)
+PORT_BAUDS = (
+    9600,
+    19200,
+    38400,
+    57600,
+    115200,
+    230400,
+    460800,
+    500000,
+    576000,
+    921600,
+    1_000_000,
+    1_152_000,
+    2_000_000,
+    2_500_000,
+    3_000_000,
+    3_500_000,
+    4_000_000,
+)
 """Rates dynamixel_sdk's PortHandler opens (``getCFlagBaud``; 4.5 Mbps needs a custom handler)."""
 TOLERANCE = 0.03
 """How far a servo's rate may lie from the port's for the two to hear each other."""

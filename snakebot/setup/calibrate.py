@@ -76,17 +76,23 @@ def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
         ticks = {i: bus.read_block(i, ("present_position",)) for i in robot.servo_ids}
     tpr = robot.servo.physics.ticks
     return [
-        JointZero(index, joint.servo_id, ticks[joint.servo_id]["present_position"],
-                  joint.zero_offset_rad,
-                  zero_offset_rad(ticks[joint.servo_id]["present_position"], joint.direction, tpr))
+        JointZero(
+            index,
+            joint.servo_id,
+            ticks[joint.servo_id]["present_position"],
+            joint.zero_offset_rad,
+            zero_offset_rad(ticks[joint.servo_id]["present_position"], joint.direction, tpr),
+        )
         for index, joint in enumerate(robot.joints)
     ]
 
 
 def with_offsets(robot: RobotConfig, offsets: Sequence[float]) -> RobotConfig:
     """``robot`` with new zero offsets, one per joint."""
-    joints = tuple(dataclasses.replace(j, zero_offset_rad=o)
-                   for j, o in zip(robot.joints, offsets, strict=True))
+    joints = tuple(
+        dataclasses.replace(j, zero_offset_rad=o)
+        for j, o in zip(robot.joints, offsets, strict=True)
+    )
     return dataclasses.replace(robot, joints=joints)
 
 
@@ -105,36 +111,41 @@ def refusals(
         return out
     robot = with_offsets(chain.robot, [z.new_offset_rad for z in zeros])
     values = {s.servo_id: {x.key: x.raw for x in s.settings} for s in chain.servos}
-    errors, _ = check_settings(values, robot.servo_ids, TickConverter.for_robot(robot),
-                               watchdog=has_watchdog(chain))
+    errors, _ = check_settings(
+        values, robot.servo_ids, TickConverter.for_robot(robot), watchdog=has_watchdog(chain)
+    )
     return [f"{e}: widen the Position Limits in the settings" for e in errors]
 
 
-def write_offsets(
-    robot: RobotConfig, zeros: Sequence[JointZero], path: Path | None = None
-) -> None:
+def write_offsets(robot: RobotConfig, zeros: Sequence[JointZero], path: Path | None = None) -> None:
     """Write the new offsets (rad) into robot file ``path`` (default the robot's own) in place,
     then reload it to check. ConfigError if the joints table cannot be edited, OutputError if
     the file cannot be written, SetupError (file restored) if the edit does not load back."""
     path = robot.source if path is None else path
     original = path.read_text(encoding="utf-8")
     try:
-        text = set_in_joints(original, "zero_offset_rad",
-                             [format_float(z.new_offset_rad) for z in zeros])
+        text = set_in_joints(
+            original, "zero_offset_rad", [format_float(z.new_offset_rad) for z in zeros]
+        )
     except ValueError as exc:
         raise ConfigError(path, "joints", str(exc)) from None
     try:
         write_atomic(path, text)
     except OSError as exc:
-        raise OutputError(path, f"cannot write the offsets ({exc.strerror or exc}); the file is "
-                          "unchanged") from exc
+        raise OutputError(
+            path, f"cannot write the offsets ({exc.strerror or exc}); the file is unchanged"
+        ) from exc
     try:
         loaded = load_robot(path)
-        ok = all(math.isclose(j.zero_offset_rad, float(format_float(z.new_offset_rad)))
-                 for j, z in zip(loaded.joints, zeros, strict=True))
+        ok = all(
+            math.isclose(j.zero_offset_rad, float(format_float(z.new_offset_rad)))
+            for j, z in zip(loaded.joints, zeros, strict=True)
+        )
     except ConfigError:
         ok = False
     if not ok:
         write_atomic(path, original)
-        raise SetupError(f"{path}: the edited file did not load back with the new offsets; "
-                         "it was restored unchanged")
+        raise SetupError(
+            f"{path}: the edited file did not load back with the new offsets; "
+            "it was restored unchanged"
+        )

@@ -46,9 +46,15 @@ class Difference:
         have, unit = self.setting.show(self.current)
         want, _ = self.setting.show(self.wanted)
         return {
-            "id": self.servo_id, "setting": self.key, "servo_value": have, "wanted_value": want,
-            "unit": unit, "servo_raw": self.current, "wanted_raw": self.wanted,
-            "eeprom": self.setting.eeprom, "source": self.setting.source,
+            "id": self.servo_id,
+            "setting": self.key,
+            "servo_value": have,
+            "wanted_value": want,
+            "unit": unit,
+            "servo_raw": self.current,
+            "wanted_raw": self.wanted,
+            "eeprom": self.setting.eeprom,
+            "source": self.setting.source,
         }
 
 
@@ -115,8 +121,9 @@ def locate(link: Link, ids: Sequence[int], model_number: int, first_baud: int) -
         )
     if problems:
         expected = _model_name(model_number)
-        raise SetupError(f"{link.port}: the chain is not the configured {expected} chain: "
-                         + "; ".join(problems))
+        raise SetupError(
+            f"{link.port}: the chain is not the configured {expected} chain: " + "; ".join(problems)
+        )
     return found
 
 
@@ -134,8 +141,10 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
     state_keys = [k for k in STATE_KEYS if k in bus.table]
     values: dict[str, int] = {}
     try:
-        for group in ([k for k in keys if bus.table[k].eeprom],
-                      [k for k in (*keys, *state_keys) if not bus.table[k].eeprom]):
+        for group in (
+            [k for k in keys if bus.table[k].eeprom],
+            [k for k in (*keys, *state_keys) if not bus.table[k].eeprom],
+        ):
             if group:
                 values.update(bus.read_block(servo_id, group))
     except BusError as exc:
@@ -144,8 +153,14 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
             "Its Status Return Level may be 0: `snakebot servo reset` or Dynamixel Wizard fixes it"
         ) from exc
     state = {k: values.pop(k) for k in state_keys}
-    return ServoState(servo_id, baud, values, bool(state["torque_enable"]),
-                      state.get("hardware_error_status", 0), bool(state.get("lock", 0)))
+    return ServoState(
+        servo_id,
+        baud,
+        values,
+        bool(state["torque_enable"]),
+        state.get("hardware_error_status", 0),
+        bool(state.get("lock", 0)),
+    )
 
 
 def survey(link: Link, chain: ChainSettings) -> ChainDiff:
@@ -165,11 +180,15 @@ def survey(link: Link, chain: ChainSettings) -> ChainDiff:
                 differences.append(Difference(servo_id, setting, current))
         if state.hardware_error:
             flags = ", ".join(decode_hardware_error(state.hardware_error))
-            fix = (f"`snakebot servo reboot --port {link.port} --id {servo_id}` clears it"
-                   if link.family.capabilities(link.bus.table).reboot
-                   else "a power cycle clears it (no Reboot in this protocol)")
+            fix = (
+                f"`snakebot servo reboot --port {link.port} --id {servo_id}` clears it"
+                if link.family.capabilities(link.bus.table).reboot
+                else "a power cycle clears it (no Reboot in this protocol)"
+            )
             notes.append(f"servo {servo_id} has a latched hardware error ({flags}); {fix}")
         if state.locked:
-            notes.append(f"servo {servo_id} has its EEPROM locked (Lock = 1): it takes no EEPROM "
-                         "write until it is power-cycled")
+            notes.append(
+                f"servo {servo_id} has its EEPROM locked (Lock = 1): it takes no EEPROM "
+                "write until it is power-cycled"
+            )
     return ChainDiff(servos, tuple(differences), tuple(notes))

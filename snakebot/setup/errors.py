@@ -19,8 +19,10 @@ class VerifyError(BusError):
         self.wrote = wrote
         self.read = read
         super().__init__(
-            port, [servo_id], f"wrote {key} = {wrote} but it reads back {read}; the servo did not "
-            "take the value (torque on? out of range for this model?)"
+            port,
+            [servo_id],
+            f"wrote {key} = {wrote} but it reads back {read}; the servo did not "
+            "take the value (torque on? out of range for this model?)",
         )
 
 
@@ -31,7 +33,8 @@ class DuplicateIdError(BusError):
         self.problems = tuple(problems)
         lines = "; ".join(f"ID {i} at {b} baud: {why}" for i, b, why in self.problems)
         super().__init__(
-            port, sorted({i for i, _, _ in self.problems}),
+            port,
+            sorted({i for i, _, _ in self.problems}),
             f"{lines}. Where two servos share an ID, connect them one at a time and give each "
             "its own ID with `snakebot config assign-id` (Dynamixel Wizard's ID Inspection also "
             "works)",

@@ -29,8 +29,13 @@ ARRIVED_TICKS = 6
 """A jog has arrived within this many ticks of its goal (0.5 deg on a 4096-tick servo)."""
 SETTLE_S = 0.1
 """A jog within ARRIVED_TICKS whose position has not changed for this long has arrived."""
-_STATE = ("torque_enable", "hardware_error_status", "present_position", "min_position_limit",
-          "max_position_limit")
+_STATE = (
+    "torque_enable",
+    "hardware_error_status",
+    "present_position",
+    "min_position_limit",
+    "max_position_limit",
+)
 _PREREQUISITES = ("operating_mode", "drive_mode", "homing_offset")
 
 
@@ -63,16 +68,25 @@ def read_states(link: Link, ids: Sequence[int], baud: int) -> list[ServoState]:
     answered = bus.ping_all(ids)
     missing = [i for i in ids if i not in answered]
     if missing:
-        raise BusError(link.port, missing, f"no answer at {baud} baud; `snakebot scan --port "
-                       f"{link.port} --all-bauds` shows where the servos are")
+        raise BusError(
+            link.port,
+            missing,
+            f"no answer at {baud} baud; `snakebot scan --port "
+            f"{link.port} --all-bauds` shows where the servos are",
+        )
     states = []
     keys = [k for k in _STATE if k in bus.table]  # an AX has no Hardware Error Status
     for servo_id in ids:
         v = bus.read_block(servo_id, keys)
-        states.append(ServoState(servo_id, bool(v["torque_enable"]),
-                                 decode_hardware_error(v.get("hardware_error_status", 0)),
-                                 v["present_position"],
-                                 (v["min_position_limit"], v["max_position_limit"])))
+        states.append(
+            ServoState(
+                servo_id,
+                bool(v["torque_enable"]),
+                decode_hardware_error(v.get("hardware_error_status", 0)),
+                v["present_position"],
+                (v["min_position_limit"], v["max_position_limit"]),
+            )
+        )
     return states
 
 
@@ -82,12 +96,16 @@ def torque_on_refusals(states: Sequence[ServoState]) -> list[str]:
     out = []
     for s in states:
         if s.errors:
-            out.append(f"servo {s.servo_id} has a latched hardware error ({', '.join(s.errors)}) "
-                       "and keeps torque off: remove the cause, then `snakebot servo reboot`")
+            out.append(
+                f"servo {s.servo_id} has a latched hardware error ({', '.join(s.errors)}) "
+                "and keeps torque off: remove the cause, then `snakebot servo reboot`"
+            )
         elif not s.limits[0] <= s.present_ticks <= s.limits[1]:
-            out.append(f"servo {s.servo_id} stands at tick {s.present_ticks}, outside its Min/Max "
-                       f"Position Limit {s.limits[0]}..{s.limits[1]}: it would jump to the limit; "
-                       "move the joint inside by hand")
+            out.append(
+                f"servo {s.servo_id} stands at tick {s.present_ticks}, outside its Min/Max "
+                f"Position Limit {s.limits[0]}..{s.limits[1]}: it would jump to the limit; "
+                "move the joint inside by hand"
+            )
     return out
 
 
@@ -100,8 +118,10 @@ def set_torque(link: Link, ids: Sequence[int], baud: int, *, on: bool) -> None:
             bus.write(servo_id, "goal_position", bus.read(servo_id, "present_position"))
         bus.write(servo_id, "torque_enable", int(on))
         if bool(bus.read(servo_id, "torque_enable")) != on:
-            raise SetupError(f"{link.port}: servo {servo_id} did not turn torque "
-                             f"{'on' if on else 'off'}; `snakebot servo info` shows why")
+            raise SetupError(
+                f"{link.port}: servo {servo_id} did not turn torque "
+                f"{'on' if on else 'off'}; `snakebot servo info` shows why"
+            )
 
 
 def check_jog(chain: ChainSettings, joint: int, target_rad: float, speed_rad_s: float) -> None:
@@ -119,8 +139,10 @@ def check_jog(chain: ChainSettings, joint: int, target_rad: float, speed_rad_s: 
         )
     limit = robot.max_speed_rad_s
     if not 0.0 < speed_rad_s <= limit:
-        raise SetupError(f"a jog speed of {math.degrees(speed_rad_s):.1f} deg/s is beyond "
-                         f"{robot.name}'s joint speed limit {math.degrees(limit):.1f} deg/s")
+        raise SetupError(
+            f"a jog speed of {math.degrees(speed_rad_s):.1f} deg/s is beyond "
+            f"{robot.name}'s joint speed limit {math.degrees(limit):.1f} deg/s"
+        )
 
 
 def jog_limits(link: Link, speed_rad_s: float) -> dict[str, int]:
@@ -130,18 +152,27 @@ def jog_limits(link: Link, speed_rad_s: float) -> dict[str, int]:
     table = link.bus.table
     if "profile_velocity" in table and "profile_acceleration" in table:
         return {
-            "profile_acceleration": max(1, math.ceil(speed_rad_s / JOG_RAMP_S
-                                                     / table["profile_acceleration"].scale)),
+            "profile_acceleration": max(
+                1, math.ceil(speed_rad_s / JOG_RAMP_S / table["profile_acceleration"].scale)
+            ),
             "profile_velocity": max(1, math.floor(speed_rad_s / table["profile_velocity"].scale)),
         }
     if "moving_speed" in table:
         return {"moving_speed": max(1, math.floor(speed_rad_s / table["moving_speed"].scale))}
-    raise SetupError(f"{link.port}: a {table.model} has no Profile Velocity or Moving Speed "
-                     "register to limit a jog's speed with")
+    raise SetupError(
+        f"{link.port}: a {table.model} has no Profile Velocity or Moving Speed "
+        "register to limit a jog's speed with"
+    )
 
 
-def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
-        speed_rad_s: float = JOG_SPEED_RAD_S) -> JogResult:
+def jog(
+    link: Link,
+    chain: ChainSettings,
+    joint: int,
+    target_rad: float,
+    *,
+    speed_rad_s: float = JOG_SPEED_RAD_S,
+) -> JogResult:
     """Move one joint from where it stands to ``target_rad`` at ``speed_rad_s``; it then holds
     there (torque on). SetupError (nothing moved) for a bad target, speed or servo state, or
     (holding where it got to) when it does not arrive."""
@@ -152,23 +183,32 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
     (state,) = read_states(link, [j.servo_id], chain.baud)
     prerequisites = [k for k in _PREREQUISITES if k in bus.table]
     values = bus.read_block(j.servo_id, prerequisites) if prerequisites else {}
-    wrong = [f"{k} is {values[k]}" for k in prerequisites
-             if values[k] != chain.for_id(j.servo_id).get(k).raw]
+    wrong = [
+        f"{k} is {values[k]}"
+        for k in prerequisites
+        if values[k] != chain.for_id(j.servo_id).get(k).raw
+    ]
     if wrong:
-        raise SetupError(f"{link.port}: servo {j.servo_id}: jogging needs the configured settings "
-                         f"({'; '.join(wrong)}): run `snakebot config apply --robot {robot.name}`")
+        raise SetupError(
+            f"{link.port}: servo {j.servo_id}: jogging needs the configured settings "
+            f"({'; '.join(wrong)}): run `snakebot config apply --robot {robot.name}`"
+        )
     problems = torque_on_refusals([state])
-    goal = rad_to_ticks(target_rad, ticks=tpr, zero_offset_rad=j.zero_offset_rad,
-                        direction=j.direction)
+    goal = rad_to_ticks(
+        target_rad, ticks=tpr, zero_offset_rad=j.zero_offset_rad, direction=j.direction
+    )
     if not state.limits[0] <= goal <= state.limits[1]:
-        problems.append(f"servo {j.servo_id}: tick {goal} is outside its Min/Max Position Limit "
-                        f"{state.limits[0]}..{state.limits[1]}")
+        problems.append(
+            f"servo {j.servo_id}: tick {goal} is outside its Min/Max Position Limit "
+            f"{state.limits[0]}..{state.limits[1]}"
+        )
     if problems:
         raise SetupError(f"{link.port}: jog refused, nothing moved: {'; '.join(problems)}")
 
     def angle(ticks: int) -> float:
-        return ticks_to_rad(ticks, ticks=tpr, zero_offset_rad=j.zero_offset_rad,
-                            direction=j.direction)
+        return ticks_to_rad(
+            ticks, ticks=tpr, zero_offset_rad=j.zero_offset_rad, direction=j.direction
+        )
 
     table = bus.table
     limits = jog_limits(link, speed_rad_s)
@@ -204,8 +244,14 @@ def jog(link: Link, chain: ChainSettings, joint: int, target_rad: float, *,
             bus.write(j.servo_id, "goal_position", held)
         for key in reversed(limits):
             bus.write(j.servo_id, key, saved[key])
-    result = JogResult(joint, j.servo_id, angle(state.present_ticks), target_rad, angle(held),
-                       link.clock_s() - start_s)
+    result = JogResult(
+        joint,
+        j.servo_id,
+        angle(state.present_ticks),
+        target_rad,
+        angle(held),
+        link.clock_s() - start_s,
+    )
     if abs(held - goal) > ARRIVED_TICKS:
         raise SetupError(
             f"{link.port}: joint {joint} (servo {j.servo_id}) stopped at "

@@ -71,14 +71,27 @@ class Link:
     speak it). :meth:`speak` switches the family on the same open port (``scan`` tries both).
     """
 
-    def __init__(self, port: str, baud: int, *, model: str | int = "XL430-W250",
-                 protocol: float | None = None, retries: int = 2) -> None:
+    def __init__(
+        self,
+        port: str,
+        baud: int,
+        *,
+        model: str | int = "XL430-W250",
+        protocol: float | None = None,
+        retries: int = 2,
+    ) -> None:
         self.port = port
         self.handler: sdk.PortHandlerLike
         self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
-        self.bus = DynamixelBus(port, baud, model=model, family=self.family, retries=retries,
-                                port_handler_factory=self._make_handler)
+        self.bus = DynamixelBus(
+            port,
+            baud,
+            model=model,
+            family=self.family,
+            retries=retries,
+            port_handler_factory=self._make_handler,
+        )
         self._raw = sdk.SdkLink(self.handler, self.family)
         self._open = False
 
@@ -88,9 +101,14 @@ class Link:
         if family == self.family:
             return
         old = self.bus
-        self.bus = DynamixelBus(self.port, old.baud, family=family, model=old.table.model,
-                                retries=old.retries,
-                                port_handler_factory=lambda _port: self.handler)
+        self.bus = DynamixelBus(
+            self.port,
+            old.baud,
+            family=family,
+            model=old.table.model,
+            retries=old.retries,
+            port_handler_factory=lambda _port: self.handler,
+        )
         self._raw = sdk.SdkLink(self.handler, family)
         self.family = family
 
@@ -103,7 +121,9 @@ class Link:
         return self
 
     def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None,
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
         self.close()
@@ -187,8 +207,11 @@ class Link:
         ID: some 9 s for all 254)."""
         if self.family.broadcast_ping:
             return set(self.at(baud).broadcast_ping())
-        return {i for i in range(self.family.max_id + 1)
-                if (probe := self.probe(i, baud, tries=1)).models or probe.corrupt}
+        return {
+            i
+            for i in range(self.family.max_id + 1)
+            if (probe := self.probe(i, baud, tries=1)).models or probe.corrupt
+        }
 
     def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
         """One Read without retries: (data, SDK result code); for collision checks."""

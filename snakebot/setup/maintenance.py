@@ -32,8 +32,10 @@ def wait_for_boot(link: Link, servo_id: int, baud: int, timeout_s: float = BOOT_
         if model is not None:
             return model
         if time.monotonic() > deadline:
-            raise SetupError(f"{link.port}: servo {servo_id} did not answer at {baud} baud within "
-                             f"{timeout_s:.0f} s of a reboot; power-cycle it")
+            raise SetupError(
+                f"{link.port}: servo {servo_id} did not answer at {baud} baud within "
+                f"{timeout_s:.0f} s of a reboot; power-cycle it"
+            )
         time.sleep(0.05)
 
 
@@ -75,8 +77,10 @@ def reset_option(link: Link, *, keep_id: bool, keep_baud: bool) -> str:
     """The Factory Reset option keeping what is asked; SetupError naming what the model's family
     has where it cannot (the baud rate is kept only with the ID; Protocol 1.0 keeps nothing)."""
     if keep_baud and not keep_id:
-        raise SetupError("the firmware keeps the baud rate only together with the ID (Factory "
-                         "Reset option 0x02): keep the ID too, or do not keep the baud rate")
+        raise SetupError(
+            "the firmware keeps the baud rate only together with the ID (Factory "
+            "Reset option 0x02): keep the ID too, or do not keep the baud rate"
+        )
     option = RESET_KEEP[(keep_id, keep_baud)]
     table = link.bus.table
     if option not in link.family.capabilities(table).factory_reset_options:
@@ -89,8 +93,9 @@ def reset_option(link: Link, *, keep_id: bool, keep_baud: bool) -> str:
     return option
 
 
-def factory_reset(link: Link, servo_id: int, baud: int, *, keep_id: bool,
-                  keep_baud: bool) -> tuple[int, int, ServoFamily]:
+def factory_reset(
+    link: Link, servo_id: int, baud: int, *, keep_id: bool, keep_baud: bool
+) -> tuple[int, int, ServoFamily]:
     """Factory-reset one servo; the (ID, baud, family) it answers at afterwards.
 
     The firmware keeps the baud only together with the ID (option 0x02); without the ID the servo
@@ -124,8 +129,9 @@ def reset_families(link: Link, option: str) -> tuple[ServoFamily, ...]:
     return tuple(dict.fromkeys((link.family, family_for(link.bus.table))))
 
 
-def _find_after_reset(link: Link, servo_id: int, baud: int,
-                      families: tuple[ServoFamily, ...]) -> ServoFamily:
+def _find_after_reset(
+    link: Link, servo_id: int, baud: int, families: tuple[ServoFamily, ...]
+) -> ServoFamily:
     """Ping ``servo_id`` at ``baud`` in each of ``families`` until it answers; the link is left
     speaking the family it answered in."""
     deadline = time.monotonic() + BOOT_TIMEOUT_S
@@ -136,9 +142,11 @@ def _find_after_reset(link: Link, servo_id: int, baud: int,
                 return family
         if time.monotonic() > deadline:
             spoken = " or ".join(f"{f.protocol:.1f}" for f in families)
-            raise SetupError(f"{link.port}: servo {servo_id} did not answer at {baud} baud in "
-                             f"Protocol {spoken} within {BOOT_TIMEOUT_S:.0f} s of a factory "
-                             "reset; power-cycle it")
+            raise SetupError(
+                f"{link.port}: servo {servo_id} did not answer at {baud} baud in "
+                f"Protocol {spoken} within {BOOT_TIMEOUT_S:.0f} s of a factory "
+                "reset; power-cycle it"
+            )
         time.sleep(0.05)
 
 
@@ -165,15 +173,22 @@ def servo_info(link: Link, servo_id: int, baud: int) -> ServoInfo:
     """Read the whole control table of one servo (indirect address/data entries left out)."""
     model = link.ping_clean(servo_id, baud)
     if model is None:
-        raise BusError(link.port, [servo_id], f"no clean answer at {baud} baud; `snakebot scan "
-                       f"--port {link.port} --all-bauds` shows where the servos are")
+        raise BusError(
+            link.port,
+            [servo_id],
+            f"no clean answer at {baud} baud; `snakebot scan "
+            f"--port {link.port} --all-bauds` shows where the servos are",
+        )
     try:
         table = table_for_model(model)
     except LookupError as exc:
         raise SetupError(f"{link.port}: servo {servo_id} is model {model}: {exc}") from exc
     link.bus.table = table
-    keys = [k for k, r in table.registers.items()
-            if r.key == k and not k.startswith("indirect") and table.by_address(r.address) is r]
+    keys = [
+        k
+        for k, r in table.registers.items()
+        if r.key == k and not k.startswith("indirect") and table.by_address(r.address) is r
+    ]
     values: dict[str, int] = {}
     for group in ([k for k in keys if table[k].eeprom], [k for k in keys if not table[k].eeprom]):
         values.update(link.at(baud).read_block(servo_id, group))

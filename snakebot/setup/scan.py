@@ -86,7 +86,8 @@ class ScanReport:
         shared IDs."""
         lines = list(dict.fromkeys(e.line for e in self.entries))
         return [
-            line for line in lines
+            line
+            for line in lines
             if len([e for e in self.entries if e.line == line]) >= 2
             and all(e.verdict.kind is Kind.GARBLED for e in self.entries if e.line == line)
         ]
@@ -96,7 +97,8 @@ class ScanReport:
         """Entries that look like two servos on one ID (outside the bad lines)."""
         bad = self.bad_lines
         return [
-            e for e in self.entries
+            e
+            for e in self.entries
             if e.verdict.kind in (Kind.SHARED, Kind.GARBLED) and e.line not in bad
         ]
 
@@ -108,8 +110,11 @@ class ScanReport:
     @property
     def protocols(self) -> tuple[float, ...]:
         """The protocols that single servos answered in, in search order."""
-        return tuple(dict.fromkeys(
-            e.family.protocol for e in self.entries if e.verdict.kind is Kind.ONE_SERVO))
+        return tuple(
+            dict.fromkeys(
+                e.family.protocol for e in self.entries if e.verdict.kind is Kind.ONE_SERVO
+            )
+        )
 
     @property
     def mixed(self) -> bool:
@@ -183,8 +188,7 @@ def _scan_baud(
         evidence[servo_id] = found
         if found.answered and servo_id >= highest:
             highest = servo_id
-            todo |= {i for i in range(servo_id + 1, servo_id + LOOK_PAST + 1)
-                     if i <= family.max_id}
+            todo |= {i for i in range(servo_id + 1, servo_id + LOOK_PAST + 1) if i <= family.max_id}
             todo -= set(evidence)
     explained = any(e.answered for i, e in evidence.items() if i not in pinged)
     if garbled and not explained and family.broadcast_ping:
@@ -208,8 +212,8 @@ def _entry(found: Evidence, pinged: tuple[int, int] | None, family: ServoFamily)
     model, firmware = pinged or (0, 0)
     if verdict.kind is Kind.ABSENT and pinged is not None:
         verdict = Verdict(
-            Kind.ONE_SERVO, f"answered the first ping but none of {found.pings.silent} "
-            "pings on its own"
+            Kind.ONE_SERVO,
+            f"answered the first ping but none of {found.pings.silent} pings on its own",
         )
     if verdict.kind is Kind.ONE_SERVO:
         model = model or (found.models[0] if found.models else 0)
@@ -217,6 +221,13 @@ def _entry(found: Evidence, pinged: tuple[int, int] | None, family: ServoFamily)
     else:
         model = firmware = 0
     return ScanEntry(
-        found.servo_id, found.baud, model, firmware, verdict, pinged is not None,
-        found.corrupt, found.replies, family,
+        found.servo_id,
+        found.baud,
+        model,
+        firmware,
+        verdict,
+        pinged is not None,
+        found.corrupt,
+        found.replies,
+        family,
     )

@@ -103,8 +103,12 @@ def _checked(
         keys = {s.key: s.raw for s in servo.settings}
         missing = [k for k in required if k not in keys and k in chain.table]
         if missing:
-            raise ConfigError(servo_file, "settings", f"missing {', '.join(missing)}: `snakebot "
-                              "run --backend dynamixel` checks them at connect, so set them here")
+            raise ConfigError(
+                servo_file,
+                "settings",
+                f"missing {', '.join(missing)}: `snakebot "
+                "run --backend dynamixel` checks them at connect, so set them here",
+            )
         values[servo.servo_id] = keys
     ids = [j.servo_id for j in joints]
     errors, notes = check_settings(
@@ -112,7 +116,8 @@ def _checked(
     )
     if errors:
         raise ConfigError(
-            chain.robot.source, "settings", "`snakebot run --backend dynamixel` would refuse "
-            "these settings: " + "; ".join(errors)
+            chain.robot.source,
+            "settings",
+            "`snakebot run --backend dynamixel` would refuse these settings: " + "; ".join(errors),
         )
     return ChainSettings(chain.robot, chain.table, chain.baud, chain.servos, tuple(notes))

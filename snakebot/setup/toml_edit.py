@@ -29,8 +29,10 @@ def set_in_joints(text: str, key: str, values: Sequence[str]) -> str:
     lines = text.splitlines(keepends=True)
     starts = [i for i, line in enumerate(lines) if _HEADER.match(line)]
     if len(starts) != len(values):
-        raise ValueError(f"found {len(starts)} [[joints]] tables, expected {len(values)} (joints "
-                         "written as an inline array cannot be edited in place)")
+        raise ValueError(
+            f"found {len(starts)} [[joints]] tables, expected {len(values)} (joints "
+            "written as an inline array cannot be edited in place)"
+        )
     pattern = re.compile(rf"^(\s*{re.escape(key)}\s*=\s*)([^#]*?)(\s*(#.*)?)$")
     for start, value in reversed(list(zip(starts, values, strict=True))):
         end = next((i for i in range(start + 1, len(lines)) if _TABLE.match(lines[i])), len(lines))
@@ -38,7 +40,7 @@ def set_in_joints(text: str, key: str, values: Sequence[str]) -> str:
         anchor = start
         for i in range(start + 1, end):
             body = lines[i].rstrip("\r\n")
-            ending = lines[i][len(body):]
+            ending = lines[i][len(body) :]
             match = pattern.match(body)
             if match:
                 lines[i] = f"{match.group(1)}{value}{match.group(3)}{ending}"

@@ -127,7 +127,7 @@ def _write_all(fd: int, data: bytes) -> None:
     # next attempt surfaces; the reader drops the torn row it leaves.
     view = memoryview(data)
     while view:
-        view = view[os.write(fd, view):]
+        view = view[os.write(fd, view) :]
 
 
 def _reason(exc: OSError) -> str:
@@ -210,18 +210,20 @@ def _check_header(source: str, columns: list[str]) -> None:
     for index, name in enumerate(columns):
         problem = text_problem(name, max_chars=MAX_NAME_CHARS) if name else "an empty name"
         if problem is not None:
-            raise ConfigError(source, f"line 1, column {index + 1}",
-                              f"not a column name: {problem}")
+            raise ConfigError(
+                source, f"line 1, column {index + 1}", f"not a column name: {problem}"
+            )
         if name in columns[:index]:
             raise ConfigError(source, f"line 1, column {name}", "the column appears twice")
 
 
-def _check_values(
-    source: str, columns: list[str], values: np.ndarray, lines: list[int]
-) -> None:
+def _check_values(source: str, columns: list[str], values: np.ndarray, lines: list[int]) -> None:
     def refuse(row: int, col: int, why: str) -> None:
-        raise ConfigError(source, f"line {lines[row]}, column {columns[col]}",
-                          f"{why}, got {float(values[row, col])!r}")
+        raise ConfigError(
+            source,
+            f"line {lines[row]}, column {columns[col]}",
+            f"{why}, got {float(values[row, col])!r}",
+        )
 
     with np.errstate(invalid="ignore"):
         bad = np.isinf(values) | (np.abs(values) > MAX_LOG_VALUE)
@@ -241,7 +243,8 @@ def _check_values(
         if backwards.any():
             row = int(np.argmax(backwards)) + 1
             raise ConfigError(
-                source, f"line {lines[row]}, column time_s",
+                source,
+                f"line {lines[row]}, column time_s",
                 f"time runs backwards: {float(values[row, col])!r} s after "
                 f"{float(values[row - 1, col])!r} s",
             )

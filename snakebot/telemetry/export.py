@@ -44,8 +44,15 @@ def export_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -
         velocity, effort = log.joints("velocity_rad_s"), log.joints("effort_nm")
         com = com_path(log)
         for row in range(len(time_s)):
-            sink.write(float(time_s[row]), int(cycle[row]), command[row], position[row],
-                       velocity[row], effort[row], None if com is None else com[row])
+            sink.write(
+                float(time_s[row]),
+                int(cycle[row]),
+                command[row],
+                position[row],
+                velocity[row],
+                effort[row],
+                None if com is None else com[row],
+            )
     return sink.rows
 
 
@@ -58,8 +65,9 @@ def export_parquet(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path
         raise MissingDependencyError(
             f"Parquet export needs pyarrow: {PARQUET_INSTALL} (or export to MCAP)"
         ) from exc
-    columns = {name: pa.array(np.ascontiguousarray(log.values[:, i]))
-               for i, name in enumerate(log.columns)}
+    columns = {
+        name: pa.array(np.ascontiguousarray(log.values[:, i])) for i, name in enumerate(log.columns)
+    }
     table = pa.table(columns)
     if sidecar:
         table = table.replace_schema_metadata({"snakebot": json.dumps(sidecar)})

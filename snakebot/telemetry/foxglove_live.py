@@ -167,9 +167,7 @@ class FoxgloveTelemetry:
             path = options.mcap_path
             quiet_sink_errors()
             try:
-                self._writer = foxglove.open_mcap(
-                    path, allow_overwrite=True, context=self._context
-                )
+                self._writer = foxglove.open_mcap(path, allow_overwrite=True, context=self._context)
             except OSError as exc:
                 raise OutputError(path, f"cannot write the MCAP file: {exc.strerror}") from exc
             self._flush()  # the header: a full disk or a device that refuses it fails here
@@ -185,8 +183,11 @@ class FoxgloveTelemetry:
                 raise OutputError(where, f"cannot start the Foxglove server: {reason}") from exc
             try:
                 self._gate = WebSocketGate(
-                    options.host, options.port, int(self._server.port),
-                    origins=options.origins, max_clients=options.max_clients,
+                    options.host,
+                    options.port,
+                    int(self._server.port),
+                    origins=options.origins,
+                    max_clients=options.max_clients,
                     stall_s=options.stall_s,
                 )
             except OSError as exc:

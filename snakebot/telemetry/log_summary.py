@@ -73,8 +73,14 @@ def summarize(log: TelemetryLog, sidecar: dict[str, Any] | None) -> dict[str, An
     }
     com = com_path(log)
     if com is None or rows < 2:
-        out.update(distance_m=None, displacement_m=None, speed_mps=None, heading_deg=None,
-                   path_length_m=None, cost_of_transport=None)
+        out.update(
+            distance_m=None,
+            displacement_m=None,
+            speed_mps=None,
+            heading_deg=None,
+            path_length_m=None,
+            cost_of_transport=None,
+        )
         return out
     dx, dy = (com[-1, :2] - com[0, :2]).tolist()
     distance = math.hypot(dx, dy)
@@ -86,7 +92,8 @@ def summarize(log: TelemetryLog, sidecar: dict[str, Any] | None) -> dict[str, An
         heading_deg=math.degrees(math.atan2(dy, dx)) if distance > 0 else 0.0,
         path_length_m=float(np.linalg.norm(np.diff(com[:, :2], axis=0), axis=1).sum()),
         cost_of_transport=(work / (mass * GRAVITY_M_S2 * distance))
-        if mass and distance > 1e-9 else None,
+        if mass and distance > 1e-9
+        else None,
     )
     return out
 

@@ -48,10 +48,18 @@ def plot_log(log: TelemetryLog, sidecar: dict[str, Any] | None, folder: Path) ->
     command, position = log.joints("command_rad"), log.joints("position_rad")
     paths = [
         _joint_grid(plt, time_s, command, position, title, folder / "joints.png"),
-        _per_joint(plt, time_s, command - position, "tracking error (command - measured) [rad]",
-                   title, folder / "tracking.png", rms=True),
-        _per_joint(plt, time_s, log.joints("effort_nm"), "effort [N m]", title,
-                   folder / "efforts.png"),
+        _per_joint(
+            plt,
+            time_s,
+            command - position,
+            "tracking error (command - measured) [rad]",
+            title,
+            folder / "tracking.png",
+            rms=True,
+        ),
+        _per_joint(
+            plt, time_s, log.joints("effort_nm"), "effort [N m]", title, folder / "efforts.png"
+        ),
     ]
     com = com_path(log)
     if com is not None:
@@ -83,14 +91,19 @@ def _save(plt: Any, fig: Any, path: Path) -> Path:
 
 
 def _joint_grid(
-    plt: Any, time_s: np.ndarray, command: np.ndarray, position: np.ndarray, title: str,
+    plt: Any,
+    time_s: np.ndarray,
+    command: np.ndarray,
+    position: np.ndarray,
+    title: str,
     path: Path,
 ) -> Path:
     joints = command.shape[1]
     cols = 2 if joints > 4 else 1
     rows = math.ceil(joints / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 1.5 * rows + 1), sharex=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(6.5 * cols, 1.5 * rows + 1), sharex=True, squeeze=False
+    )
     for joint in range(joints):
         ax = axes[joint % rows][joint // rows]
         ax.plot(time_s, command[:, joint], lw=1.0, color="tab:orange", label="command")
@@ -105,22 +118,39 @@ def _joint_grid(
         axes[rows - 1][col].set_xlabel("time [s]")
     fig.suptitle(f"{title}\ncommand vs measured, joint 0 = head", fontsize=9)
     # Fixed margins: tight_layout draws the whole figure once more to measure it.
-    fig.subplots_adjust(left=0.09 / cols, right=0.98, bottom=0.6 / fig.get_figheight(),
-                        top=1 - 0.55 / fig.get_figheight(), hspace=0.25, wspace=0.18)
+    fig.subplots_adjust(
+        left=0.09 / cols,
+        right=0.98,
+        bottom=0.6 / fig.get_figheight(),
+        top=1 - 0.55 / fig.get_figheight(),
+        hspace=0.25,
+        wspace=0.18,
+    )
     return _save(plt, fig, path)
 
 
 def _per_joint(
-    plt: Any, time_s: np.ndarray, values: np.ndarray, label: str, title: str, path: Path,
-    *, rms: bool = False,
+    plt: Any,
+    time_s: np.ndarray,
+    values: np.ndarray,
+    label: str,
+    title: str,
+    path: Path,
+    *,
+    rms: bool = False,
 ) -> Path:
     fig, ax = plt.subplots(figsize=(9, 4.5))
     colors = plt.get_cmap("viridis")(np.linspace(0, 0.9, values.shape[1]))
     for joint in range(values.shape[1]):
         ax.plot(time_s, values[:, joint], lw=0.8, color=colors[joint], label=f"joint {joint}")
     if rms:
-        ax.plot(time_s, np.sqrt(np.mean(values**2, axis=1)), lw=2.0, color="black",
-                label="RMS over joints")
+        ax.plot(
+            time_s,
+            np.sqrt(np.mean(values**2, axis=1)),
+            lw=2.0,
+            color="black",
+            label="RMS over joints",
+        )
     ax.set_xlabel("time [s]")
     ax.set_ylabel(label)
     ax.grid(alpha=0.3)
@@ -143,8 +173,9 @@ def _com(plt: Any, com: np.ndarray, title: str, path: Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     distance = float(np.hypot(*(com[-1, :2] - com[0, :2])))
-    ax.set_title(f"{_wrap(title, 6)}\ncentre of mass from above: {distance:.3f} m start to end",
-                 fontsize=9)
+    ax.set_title(
+        f"{_wrap(title, 6)}\ncentre of mass from above: {distance:.3f} m start to end", fontsize=9
+    )
     return _save(plt, fig, path)
 
 
@@ -168,12 +199,11 @@ def _timing(
     window = max(round(1.0 / period) if period else 10, 1)  # a one-second moving rate
     if len(t) >= window:
         rate = window / np.convolve(periods_ms / 1e3, np.ones(window), mode="valid")
-        bottom.plot(t[window - 1:], rate, lw=1.0, color="tab:green")
+        bottom.plot(t[window - 1 :], rate, lw=1.0, color="tab:green")
     bottom.set_ylabel("rate over 1 s [Hz]")
     bottom.set_xlabel("time [s]")
     bottom.grid(alpha=0.3)
     achieved = (len(time_s) - 1) / (time_s[-1] - time_s[0]) if len(time_s) > 1 else float("nan")
-    top.set_title(f"{title}\nachieved {achieved:.1f} Hz, {int(late.sum())} late cycles",
-                  fontsize=9)
+    top.set_title(f"{title}\nachieved {achieved:.1f} Hz, {int(late.sum())} late cycles", fontsize=9)
     fig.subplots_adjust(**_MARGINS)
     return _save(plt, fig, path)

@@ -79,13 +79,15 @@ def frame_transforms(
     transforms = []
     positions, quats = np.round(positions_m, 6).tolist(), np.round(quats_wxyz, 6).tolist()
     for index, (p, q) in enumerate(zip(positions, quats, strict=True)):
-        transforms.append({
-            "timestamp": when,
-            "parent_frame_id": WORLD_FRAME,
-            "child_frame_id": link_name(index),
-            "translation": {"x": p[0], "y": p[1], "z": p[2]},
-            "rotation": {"x": q[1], "y": q[2], "z": q[3], "w": q[0]},
-        })
+        transforms.append(
+            {
+                "timestamp": when,
+                "parent_frame_id": WORLD_FRAME,
+                "child_frame_id": link_name(index),
+                "translation": {"x": p[0], "y": p[1], "z": p[2]},
+                "rotation": {"x": q[1], "y": q[2], "z": q[3], "w": q[0]},
+            }
+        )
     return {"transforms": transforms}
 
 
@@ -107,23 +109,30 @@ def scene_update(time_ns: int, link_count: int, length_m: float, radius_m: float
             return {"position": {"x": x, "y": 0.0, "z": 0.0}, "orientation": along_x}
 
         ends = (-radius_m, -(length_m - radius_m))
-        entities.append({
-            "timestamp": stamp(time_ns),
-            "frame_id": link_name(index),
-            "id": link_name(index),
-            "lifetime": {"sec": 0, "nsec": 0},
-            "frame_locked": True,
-            "cylinders": [{
-                "pose": at(-length_m / 2),
-                "size": {"x": diameter, "y": diameter, "z": straight},
-                "bottom_scale": 1.0,
-                "top_scale": 1.0,
-                "color": color,
-            }],
-            "spheres": [
-                {"pose": at(x), "size": {"x": diameter, "y": diameter, "z": diameter},
-                 "color": color}
-                for x in ends
-            ],
-        })
+        entities.append(
+            {
+                "timestamp": stamp(time_ns),
+                "frame_id": link_name(index),
+                "id": link_name(index),
+                "lifetime": {"sec": 0, "nsec": 0},
+                "frame_locked": True,
+                "cylinders": [
+                    {
+                        "pose": at(-length_m / 2),
+                        "size": {"x": diameter, "y": diameter, "z": straight},
+                        "bottom_scale": 1.0,
+                        "top_scale": 1.0,
+                        "color": color,
+                    }
+                ],
+                "spheres": [
+                    {
+                        "pose": at(x),
+                        "size": {"x": diameter, "y": diameter, "z": diameter},
+                        "color": color,
+                    }
+                    for x in ends
+                ],
+            }
+        )
     return {"deletions": [], "entities": entities}

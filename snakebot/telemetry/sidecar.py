@@ -68,9 +68,14 @@ def robot_facts(robot: Any) -> dict[str, Any]:
     if hasattr(robot, "joints") and hasattr(robot, "servo_ids"):
         facts["servo_ids"] = list(robot.servo_ids)
         facts["joints"] = [
-            {"servo_id": j.servo_id, "axis": j.axis, "direction": j.direction,
-             "zero_offset_rad": j.zero_offset_rad, "lower_rad": j.lower_rad,
-             "upper_rad": j.upper_rad}
+            {
+                "servo_id": j.servo_id,
+                "axis": j.axis,
+                "direction": j.direction,
+                "zero_offset_rad": j.zero_offset_rad,
+                "lower_rad": j.lower_rad,
+                "upper_rad": j.upper_rad,
+            }
             for j in robot.joints
         ]
     for key in ("link", "gains", "safety"):
@@ -99,8 +104,11 @@ def gait_facts(name: str, gait: object | None, params: Mapping[str, object]) -> 
     dataclass, else the ones given)."""
     values: Mapping[str, object] = params
     if dataclasses.is_dataclass(gait) and not isinstance(gait, type):
-        values = {f.name: getattr(gait, f.name) for f in dataclasses.fields(gait)
-                  if f.init and not f.name.startswith("_")}
+        values = {
+            f.name: getattr(gait, f.name)
+            for f in dataclasses.fields(gait)
+            if f.init and not f.name.startswith("_")
+        }
     return {"name": name, "params": _jsonable(dict(values))}
 
 
@@ -193,8 +201,10 @@ def _check_fields(path: Path, payload: dict[str, Any]) -> None:
             refuse(key, "a string without control or bidirectional characters", value)
 
     def number(key: str, value: Any, low: float, high: float) -> None:
-        if isinstance(value, bool) or not isinstance(value, int | float) or not (
-            low <= value <= high
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not (low <= value <= high)
         ):
             refuse(key, f"a number in [{low:g}, {high:g}]", value)
 
@@ -212,7 +222,8 @@ def _check_fields(path: Path, payload: dict[str, Any]) -> None:
         if key in robot:
             text(f"robot.{key}", robot[key])
     if "joint_count" in robot and (
-        isinstance(robot["joint_count"], bool) or not isinstance(robot["joint_count"], int)
+        isinstance(robot["joint_count"], bool)
+        or not isinstance(robot["joint_count"], int)
         or not 0 <= robot["joint_count"] <= 10_000
     ):
         refuse("robot.joint_count", "an integer in [0, 10000]", robot["joint_count"])

@@ -199,8 +199,12 @@ class WebSocketGate:
             return
         if self._clients >= self.max_clients:
             self.counts.refused_full += 1
-            await _refuse(writer, 503, "Service Unavailable",
-                          f"snakebot serves at most {self.max_clients} Foxglove clients")
+            await _refuse(
+                writer,
+                503,
+                "Service Unavailable",
+                f"snakebot serves at most {self.max_clients} Foxglove clients",
+            )
             return
         self._clients += 1
         try:
@@ -239,7 +243,9 @@ class WebSocketGate:
 
 
 async def _copy(
-    source: asyncio.StreamReader, sink: asyncio.StreamWriter, stall_s: float | None,
+    source: asyncio.StreamReader,
+    sink: asyncio.StreamWriter,
+    stall_s: float | None,
     coalesce_s: float,
 ) -> bool:
     """Copy until ``source`` ends, at most one write per ``coalesce_s``; True when ``sink``
@@ -276,7 +282,8 @@ async def _refuse(writer: asyncio.StreamWriter, status: int, reason: str, text: 
     body = (text + "\n").encode()
     writer.write(
         f"HTTP/1.1 {status} {reason}\r\nContent-Type: text/plain\r\n"
-        f"Content-Length: {len(body)}\r\nConnection: close\r\n\r\n".encode() + body
+        f"Content-Length: {len(body)}\r\nConnection: close\r\n\r\n".encode()
+        + body
     )
     with contextlib.suppress(ConnectionError, asyncio.TimeoutError):
         await asyncio.wait_for(writer.drain(), 1.0)

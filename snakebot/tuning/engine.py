@@ -146,7 +146,10 @@ class TwinBatch:
         dt = 1.0 / rate_hz
         steps = self.twin.steps_for(dt)  # a ConfigError saying which rates fit
         schedule = CycleSchedule(
-            rate_hz, duration_s, self.robot.safety.ramp_s, ramp_out=False,
+            rate_hz,
+            duration_s,
+            self.robot.safety.ramp_s,
+            ramp_out=False,
             timestep_s=float(self.model.opt.timestep),
         )
         times = schedule.cycle_times(commands.length)
@@ -240,7 +243,8 @@ class _Recorder:
         """Live runs that spent the whole last ``window`` cycles in flight or upside down."""
         span = slice(cycle + 1 - window, cycle + 1)
         airborne, flipped = envelope.hopeless(
-            self.arrays["com"][:, span], self.arrays["clearance"][:, span],
+            self.arrays["com"][:, span],
+            self.arrays["clearance"][:, span],
             self.arrays["quat"][:, span],
         )
         return {

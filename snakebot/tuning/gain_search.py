@@ -84,9 +84,11 @@ def search_gains(
     seven levels: set ``compliance_slope`` there)."""
     if robot.servo.gain_kind != "pid":
         raise ConfigError(
-            robot.source, "gains", f"the gain search tunes Position P/I/D Gain registers, which "
+            robot.source,
+            "gains",
+            f"the gain search tunes Position P/I/D Gain registers, which "
             f"{robot.servo.name} does not have; its stiffness is the Compliance Slope "
-            "(compliance_slope = 2, 4, 8, 16, 32, 64 or 128 in [gains])"
+            "(compliance_slope = 2, 4, 8, 16, 32, 64 or 128 in [gains])",
         )
     current = robot.gain_registers
     maxima = robot.servo.gain_max

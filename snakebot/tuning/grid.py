@@ -39,9 +39,7 @@ def grid_search(problem: SearchProblem, budget: int, chunk: int = 20) -> GridRes
     space = problem.space
     dims = len(space.dims)
     if dims > 4:
-        raise ConfigError(
-            "method", "grid", f"a grid over {dims} parameters is too big; use cmaes"
-        )
+        raise ConfigError("method", "grid", f"a grid over {dims} parameters is too big; use cmaes")
     count = points_per_dim(budget, dims)
     if count**dims > budget:
         raise ConfigError(

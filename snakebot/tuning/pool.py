@@ -51,7 +51,10 @@ def run_job(job: PoolJob) -> Trace:
     """Run one job with ``run_gait`` on a fresh TwinBackend and return its samples."""
     robot = job.robot
     gait = make_gait(
-        job.gait, robot.joint_count, job.params, lower_rad=robot.lower_rad,
+        job.gait,
+        robot.joint_count,
+        job.params,
+        lower_rad=robot.lower_rad,
         upper_rad=robot.upper_rad,
     )
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)

@@ -55,8 +55,9 @@ class SoftOutcome:
 def run_soft_job(job: SoftJob) -> SoftOutcome:
     """Run one candidate like `snakebot run --robot BODY --json` and assess it."""
     body = job.body
-    gait = make_gait(job.gait, body.joint_count, job.params, lower_rad=body.lower_rad,
-                     upper_rad=body.upper_rad)
+    gait = make_gait(
+        job.gait, body.joint_count, job.params, lower_rad=body.lower_rad, upper_rad=body.upper_rad
+    )
     metrics = RunMetrics(body.joint_count, body.body_length_m, body.total_mass_kg)
     plan = RunPlan(job.duration_s, job.rate_hz, ramp_out=False)
     backend = SoftBodyBackend(body, friction=job.friction)

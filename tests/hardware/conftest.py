@@ -22,8 +22,9 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     """Skip every test marked ``hardware`` unless SNAKEBOT_PORT is set."""
     if os.environ.get("SNAKEBOT_PORT"):
         return
-    skip = pytest.mark.skip(reason="needs a real Dynamixel bus: set SNAKEBOT_PORT (and "
-                            "SNAKEBOT_ROBOT) to run")
+    skip = pytest.mark.skip(
+        reason="needs a real Dynamixel bus: set SNAKEBOT_PORT (and SNAKEBOT_ROBOT) to run"
+    )
     for item in items:
         if "hardware" in item.keywords:
             item.add_marker(skip)

@@ -53,23 +53,35 @@ def test_the_servos_hold_the_settings_the_robot_file_asks_for(
     chain = load_settings(robot)
     with Link(port, chain.baud, model=robot.servo.name) as link:
         diff = survey(link, chain)
-    differences = [f"servo {d.servo_id} {d.key}: {d.current} (wanted {d.wanted})"
-                   for d in diff.differences]
-    assert not differences, ("settings differ; `snakebot config apply` writes them: "
-                             + "; ".join(differences))
+    differences = [
+        f"servo {d.servo_id} {d.key}: {d.current} (wanted {d.wanted})" for d in diff.differences
+    ]
+    assert not differences, "settings differ; `snakebot config apply` writes them: " + "; ".join(
+        differences
+    )
     assert not any(s.hardware_error for s in diff.servos.values()), diff.notes
 
 
 def test_a_small_wave_runs_for_two_seconds_and_is_tracked(port: str, robot: RobotConfig) -> None:
-    gait = make_gait("serpenoid", robot.joint_count, {"amplitude": WAVE_RAD},
-                     lower_rad=robot.lower_rad, upper_rad=robot.upper_rad)
+    gait = make_gait(
+        "serpenoid",
+        robot.joint_count,
+        {"amplitude": WAVE_RAD},
+        lower_rad=robot.lower_rad,
+        upper_rad=robot.upper_rad,
+    )
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     backend = DynamixelBackend(robot, port=port)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # settings advice was checked above
         with backend:
-            result = run_gait(backend, gait, SafetyLayer.for_robot(robot),
-                              RunPlan(duration_s=DURATION_S, rate_hz=100.0), metrics)
+            result = run_gait(
+                backend,
+                gait,
+                SafetyLayer.for_robot(robot),
+                RunPlan(duration_s=DURATION_S, rate_hz=100.0),
+                metrics,
+            )
     summary = result.summary
     assert not result.interrupted
     assert summary["duration_s"] == pytest.approx(DURATION_S, abs=0.05)
@@ -95,10 +107,12 @@ def test_the_stop_policy_is_left_applied(port: str, robot: RobotConfig) -> None:
         bus.close()
     hold = robot.safety.stop_policy == "hold"
     assert {i: v["torque_enable"] for i, v in torque.items()} == dict.fromkeys(
-        robot.servo_ids, int(hold))
+        robot.servo_ids, int(hold)
+    )
     assert {v["bus_watchdog"] for v in watchdog.values()} == {0}  # disarmed, never tripped
     if hold:
         converter = TickConverter.for_robot(robot)
-        safe = converter.goal_ticks(np.clip(np.zeros(robot.joint_count), robot.lower_rad,
-                                            robot.upper_rad))[0]
+        safe = converter.goal_ticks(
+            np.clip(np.zeros(robot.joint_count), robot.lower_rad, robot.upper_rad)
+        )[0]
         assert [goals[i]["goal_position"] for i in robot.servo_ids] == safe

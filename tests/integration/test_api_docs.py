@@ -47,9 +47,7 @@ def test_the_doc_has_the_examples_it_promises() -> None:
     assert sum(map(on_hardware, codes)) == 1
 
 
-@pytest.mark.parametrize(
-    "code", TWIN_BLOCKS, ids=[f"block{i}" for i in range(len(TWIN_BLOCKS))]
-)
+@pytest.mark.parametrize("code", TWIN_BLOCKS, ids=[f"block{i}" for i in range(len(TWIN_BLOCKS))])
 def test_each_twin_example_runs(code: str, tmp_path: Path) -> None:
     result = run_script(tmp_path, "example", code)
     assert result.returncode == 0, f"{code}\n---\n{result.stderr[-3000:]}"

@@ -28,12 +28,20 @@ def test_the_registry_tests_pass_with_a_third_party_gait_installed(tmp_path: Pat
     install_project(site)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), str(REPO)])}
     listed = subprocess.run(
-        [sys.executable, "-m", "snakebot", "gaits"], env=env, cwd=tmp_path,
-        capture_output=True, text=True, timeout=120,
+        [sys.executable, "-m", "snakebot", "gaits"],
+        env=env,
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert listed.returncode == 0 and "standing_wave" in listed.stdout  # the plugin is live
     result = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *LISTING_TESTS],
-        env=env, cwd=REPO, capture_output=True, text=True, timeout=600,
+        env=env,
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]

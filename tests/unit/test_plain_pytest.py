@@ -21,7 +21,11 @@ def test_the_pytest_script_imports_the_shared_helpers() -> None:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     done = subprocess.run(
         [str(PYTEST), "--collect-only", "-q", "-p", "no:cacheprovider", helper_user],
-        cwd=REPO, capture_output=True, text=True, timeout=300, env=env,
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "::test_cli_writes_the_new_gains_into_the_robot_file" in done.stdout

@@ -111,8 +111,12 @@ class DynamixelBackend(Backend):
         self.stop_policy = robot.safety.stop_policy
         self.ids = robot.servo_ids
         self.bus = DynamixelBus(
-            port or robot.bus.port, baud or robot.bus.baud, protocol=robot.bus.protocol,
-            model=robot.servo.name, port_handler_factory=port_handler_factory, retries=retries,
+            port or robot.bus.port,
+            baud or robot.bus.baud,
+            protocol=robot.bus.protocol,
+            model=robot.servo.name,
+            port_handler_factory=port_handler_factory,
+            retries=retries,
             clock=clock,
         )
         self.capabilities = self.bus.capabilities
@@ -155,8 +159,11 @@ class DynamixelBackend(Backend):
         self._outside: list[int] = []  # joints being brought inside their limits
         self._shutdown: dict[int, int] = {}  # Alarm Shutdown per servo (status-byte families)
         self._fault_turn = 0  # the next servo whose status byte the slow check reads
-        self._monitor = None if tracking is None else TrackingMonitor(
-            tracking, self.joint_count, self.converter.rad_per_tick)
+        self._monitor = (
+            None
+            if tracking is None
+            else TrackingMonitor(tracking, self.joint_count, self.converter.rad_per_tick)
+        )
         self._decoder = StateDecoder(robot, self.bus.table, self.converter, read_current)
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
         self._goal_plan = self.bus.sync_write_plan("goal_position", self.ids)
@@ -177,9 +184,16 @@ class DynamixelBackend(Backend):
         table = self.bus.table
         tail, assumed = usb_tail_s(self.port)
         return cycle_budget(
-            self.bus.family, self._state_plan.method, len(self.ids), self._state_plan.block.size,
-            table["goal_position"].size, self.bus.baud, wanted_return_delay_s(self.robot, table),
-            tail, usb_assumed=assumed, fastest_baud=fastest_baud(table),
+            self.bus.family,
+            self._state_plan.method,
+            len(self.ids),
+            self._state_plan.block.size,
+            table["goal_position"].size,
+            self.bus.baud,
+            wanted_return_delay_s(self.robot, table),
+            tail,
+            usb_assumed=assumed,
+            fastest_baud=fastest_baud(table),
         )
 
     def check_rate(self, rate_hz: float) -> None:
@@ -243,8 +257,12 @@ class DynamixelBackend(Backend):
         if report.ok and (not report.unexpected or self.allow_extra_servos):
             if report.unexpected:
                 extra = ", ".join(map(str, report.unexpected))
-                warnings.warn(f"{self.port}: servo ID(s) {extra} are on the bus but not in the "
-                              f"robot file; they are left alone", ExtraServosWarning, stacklevel=4)
+                warnings.warn(
+                    f"{self.port}: servo ID(s) {extra} are on the bus but not in the "
+                    f"robot file; they are left alone",
+                    ExtraServosWarning,
+                    stacklevel=4,
+                )
             return
         names = {}
         for name in supported_models():
@@ -272,8 +290,9 @@ class DynamixelBackend(Backend):
             for servo_id in turn:
                 self.bus.read(servo_id, "present_temperature")
         conditions = self.bus.conditions
-        faults = {i: conditions[i] & self._shutdown.get(i, 0xFF)
-                  for i in self.ids if i in conditions}
+        faults = {
+            i: conditions[i] & self._shutdown.get(i, 0xFF) for i in self.ids if i in conditions
+        }
         if any(faults.values()):
             raise self.fault_error({i: v for i, v in faults.items() if v})
 
@@ -286,12 +305,23 @@ class DynamixelBackend(Backend):
             return HardwareFaultError(self.port, faults)
         cause = "remove the cause (stalled or overloaded joint, supply voltage, heat)"
         if caps.hardware_error_status:
-            return HardwareFaultError(self.port, faults, remedy=(
-                f"Its torque is off until it restarts: {cause}, then power-cycle it "
-                f"({family.name} has no Reboot)"))
-        return HardwareFaultError(self.port, faults, decode=family.status_errors, remedy=(
-            f"Its torque is off where its Alarm Shutdown names the fault: {cause}, let it "
-            f"cool, then power-cycle it ({family.name} has no Reboot) and run again"))
+            return HardwareFaultError(
+                self.port,
+                faults,
+                remedy=(
+                    f"Its torque is off until it restarts: {cause}, then power-cycle it "
+                    f"({family.name} has no Reboot)"
+                ),
+            )
+        return HardwareFaultError(
+            self.port,
+            faults,
+            decode=family.status_errors,
+            remedy=(
+                f"Its torque is off where its Alarm Shutdown names the fault: {cause}, let it "
+                f"cool, then power-cycle it ({family.name} has no Reboot) and run again"
+            ),
+        )
 
     def _check_settings(self) -> None:
         settings = self.bus.sync_read(settings_keys(self.bus.table), self.ids)
@@ -301,8 +331,9 @@ class DynamixelBackend(Backend):
             for servo_id, values in self.bus.sync_read("shutdown", self.ids).items():
                 settings[servo_id].update(values)
                 self._shutdown[servo_id] = values["shutdown"]
-        errors, notes = check_settings(settings, self.ids, self.converter,
-                                       watchdog=self.capabilities.bus_watchdog)
+        errors, notes = check_settings(
+            settings, self.ids, self.converter, watchdog=self.capabilities.bus_watchdog
+        )
         self._position_limits = [
             (settings[i]["min_position_limit"], settings[i]["max_position_limit"]) for i in self.ids
         ]
@@ -323,8 +354,11 @@ class DynamixelBackend(Backend):
         self._state_plan.read_rows(fast=True)
         if self.bus.group_fallbacks > fallbacks:
             self.fast_read = False
-            log.warning("%s: Fast Sync Read got no valid reply (firmware too old?); using Sync "
-                        "Read, which costs one status packet per servo", self.port)
+            log.warning(
+                "%s: Fast Sync Read got no valid reply (firmware too old?); using Sync "
+                "Read, which costs one status packet per servo",
+                self.port,
+            )
 
     def _open_bounds(self, present: Sequence[int]) -> None:
         """Widen the goal bounds of joints found outside their limits to where they stand.
@@ -340,11 +374,17 @@ class DynamixelBackend(Backend):
         self.goal_terms = terms
         if self._outside:
             angles = self.converter.to_rad(np.array(present))
-            where = ", ".join(f"joint {j} at {angles[j]:.3f} rad (limits "
-                              f"{self.converter.lower_rad[j]:.3f}..{self.converter.upper_rad[j]:.3f}"
-                              ")" for j in self._outside)
-            log.warning("%s: %s outside the joint limits: brought inside at the joint speed limit",
-                        self.port, where)
+            where = ", ".join(
+                f"joint {j} at {angles[j]:.3f} rad (limits "
+                f"{self.converter.lower_rad[j]:.3f}..{self.converter.upper_rad[j]:.3f}"
+                ")"
+                for j in self._outside
+            )
+            log.warning(
+                "%s: %s outside the joint limits: brought inside at the joint speed limit",
+                self.port,
+                where,
+            )
 
     def _close_bounds(self, ticks: Sequence[int]) -> None:
         limits = self.converter.goal_terms
@@ -431,8 +471,11 @@ class DynamixelBackend(Backend):
         control_table_buswatchdog). The margin is one 20 ms watchdog unit short of the period.
         """
         now = self.clock()
-        if (self.torque_enabled and now - self._fed_s > self._watchdog_margin_s
-                and self.capabilities.bus_watchdog):
+        if (
+            self.torque_enabled
+            and now - self._fed_s > self._watchdog_margin_s
+            and self.capabilities.bus_watchdog
+        ):
             self.write_watchdog(0)
             self.write_watchdog(self.watchdog_ticks)
             self.stats.extra["watchdog_rearms"] = self.stats.extra.get("watchdog_rearms", 0) + 1
@@ -468,17 +511,22 @@ class DynamixelBackend(Backend):
         self.bus.sync_write(keys, dict.fromkeys(self.ids, tuple(writes[key] for key in keys)))
         if servo.gain_kind == "pid":
             self.gain_registers = GainRegisters(*(writes[key] for key in PID_GAIN_KEYS))
-        log.debug("%s: %s for kp %.4g N·m/rad, kd %.4g N·m·s/rad", self.port,
-                  ", ".join(f"{self.bus.table[k].name} {writes[k]}" for k in keys),
-                  gains.kp_nm_per_rad, gains.kd_nms_per_rad)
+        log.debug(
+            "%s: %s for kp %.4g N·m/rad, kd %.4g N·m·s/rad",
+            self.port,
+            ", ".join(f"{self.bus.table[k].name} {writes[k]}" for k in keys),
+            gains.kp_nm_per_rad,
+            gains.kd_nms_per_rad,
+        )
 
     def set_position_i_gain(self, position_i: int) -> None:
         """Write the Position I Gain register of every servo (a Dynamixel-only setting: the
         Backend contract's gains are PD); ValueError beyond the control table's range."""
         self._require_connected()
         if self.robot.servo.gain_kind != "pid":
-            raise ValueError(f"{self.robot.servo.name} has no Position I Gain (its loop is "
-                             "Compliance Slope)")
+            raise ValueError(
+                f"{self.robot.servo.name} has no Position I Gain (its loop is Compliance Slope)"
+            )
         maximum = self.robot.servo.gain_max.position_i
         if not 0 <= position_i <= maximum:
             raise ValueError(f"Position I Gain must be 0..{maximum}, got {position_i}")
@@ -521,10 +569,17 @@ class DynamixelBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         assert self._pacer is not None
-        if (dt_s > self._watchdog_margin_s and not self._warned_slow
-                and self.capabilities.bus_watchdog):
+        if (
+            dt_s > self._watchdog_margin_s
+            and not self._warned_slow
+            and self.capabilities.bus_watchdog
+        ):
             self._warned_slow = True
-            log.warning("%s: control period %.3f s exceeds the Bus Watchdog (%.2f s): the servos "
-                        "stop between cycles; raise watchdog_s", self.port, dt_s,
-                        self.watchdog_ticks * WATCHDOG_UNIT_S)
+            log.warning(
+                "%s: control period %.3f s exceeds the Bus Watchdog (%.2f s): the servos "
+                "stop between cycles; raise watchdog_s",
+                self.port,
+                dt_s,
+                self.watchdog_ticks * WATCHDOG_UNIT_S,
+            )
         self._pacer.wait(dt_s)

@@ -29,8 +29,9 @@ class Field:
 
     def decode(self, data: bytes) -> int:
         """The field's value from the block's bytes."""
-        raw = int.from_bytes(data[self.offset : self.offset + self.size], "little",
-                             signed=self.signed)
+        raw = int.from_bytes(
+            data[self.offset : self.offset + self.size], "little", signed=self.signed
+        )
         return raw if self.sign_bit is None else decode_magnitude(raw, self.sign_bit)
 
 
@@ -73,8 +74,7 @@ def resolve_block(table: ServoTable, keys: str | Sequence[str]) -> Block:
     ordered = sorted(registers.values(), key=lambda r: r.address)
     start = ordered[0].address
     end = max(r.address + r.size for r in ordered)
-    fields = tuple(Field(r.key, r.address - start, r.size, r.signed, r.sign_bit)
-                   for r in ordered)
+    fields = tuple(Field(r.key, r.address - start, r.size, r.signed, r.sign_bit) for r in ordered)
     return Block(start, end - start, fields)
 
 

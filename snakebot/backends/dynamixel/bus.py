@@ -126,13 +126,17 @@ class DynamixelBus:
             ok = self._link.open(self.baud)
         except sdk.PORT_ERRORS as exc:
             raise BusError(
-                self.port, [], f"cannot open the port: {exc}. Check the adapter is plugged in and "
-                "the name (ls /dev/ttyUSB* /dev/serial/by-id/; COMx on Windows)"
+                self.port,
+                [],
+                f"cannot open the port: {exc}. Check the adapter is plugged in and "
+                "the name (ls /dev/ttyUSB* /dev/serial/by-id/; COMx on Windows)",
             ) from exc
         if not ok:
             raise BusError(
-                self.port, [], f"dynamixel_sdk refuses {self.baud} bit/s (it supports up to "
-                "4 Mbps; 4.5 Mbps needs a custom port handler)"
+                self.port,
+                [],
+                f"dynamixel_sdk refuses {self.baud} bit/s (it supports up to "
+                "4 Mbps; 4.5 Mbps needs a custom port handler)",
             )
 
     def close(self) -> None:
@@ -149,7 +153,9 @@ class DynamixelBus:
         return self
 
     def __exit__(
-        self, exc_type: type[BaseException] | None, exc: BaseException | None,
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
         self.close()
@@ -157,9 +163,11 @@ class DynamixelBus:
     # -- single servos -------------------------------------------------------------------------
     def ping(self, servo_id: int) -> int:
         """The servo's model number; BusError if it does not answer after the retries."""
+
         def op() -> tuple[int, int, list[int]]:
             model, result, error = self._link.ping(servo_id)
             return result, error, [model]
+
         return self.transport.unicast(servo_id, "ping", op)[0]
 
     def ping_all(self, ids: Sequence[int]) -> dict[int, int]:
@@ -197,6 +205,7 @@ class DynamixelBus:
             if result == sdk.COMM_SUCCESS and len(data) != block.size:
                 result = sdk.COMM_RX_CORRUPT
             return result, error, data
+
         data = self.transport.unicast(servo_id, f"read {','.join(block.keys)}", op)
         return block.decode(data)
 
@@ -208,6 +217,7 @@ class DynamixelBus:
         def op() -> tuple[int, int, list[int]]:
             result, error = self._link.write(servo_id, register.address, data)
             return result, error, []
+
         if servo_id == sdk.BROADCAST_ID:
             self.transport.run([servo_id], f"write {register.key}", op)
             return
@@ -216,9 +226,11 @@ class DynamixelBus:
 
     def reboot(self, servo_id: int) -> None:
         """Reboot one servo (clears a latched hardware error; torque comes back off)."""
+
         def op() -> tuple[int, int, list[int]]:
             result, error = self._link.reboot(servo_id)
             return result, error, []
+
         self.transport.unicast(servo_id, "reboot", op, accept_alert=True)
         self.transport.alerts.discard(servo_id)
 
@@ -230,13 +242,16 @@ class DynamixelBus:
         """
         if keep not in self.capabilities.factory_reset_options:
             have = ", ".join(self.capabilities.factory_reset_options)
-            raise ValueError(f"{self.table.model} on {self.family.name} has no factory reset "
-                             f"{keep!r} (only {have}: it resets ID and baud rate too)")
+            raise ValueError(
+                f"{self.table.model} on {self.family.name} has no factory reset "
+                f"{keep!r} (only {have}: it resets ID and baud rate too)"
+            )
         option = FACTORY_RESET_OPTIONS[keep]
 
         def op() -> tuple[int, int, list[int]]:
             result, error = self._link.factory_reset(servo_id, option)
             return result, error, []
+
         self.transport.unicast(servo_id, f"factory reset ({keep})", op, accept_alert=True)
 
     # -- groups --------------------------------------------------------------------------------
@@ -277,6 +292,7 @@ class DynamixelBus:
                     return None
                 out[i] = b.decode(data)
             return out
+
         return self.transport.group_read(
             ids, attempt, lambda i: self.read_block(i, blocks[i]), "bulk read", dict
         )

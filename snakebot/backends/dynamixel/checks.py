@@ -74,26 +74,35 @@ EXTRA_SERVOS_HINT = (
 
 
 def chain_error(
-    port: str, baud: int, report: ChainReport, model_names: Mapping[int, str],
+    port: str,
+    baud: int,
+    report: ChainReport,
+    model_names: Mapping[int, str],
     extra_hint: str = EXTRA_SERVOS_HINT,
 ) -> ChainMismatchError:
     """The connect failure for a report that is not ok (or has extras); every line says what to
     check. ``extra_hint`` follows the list of unexpected IDs."""
+
     def name(number: int) -> str:
         return model_names.get(number, f"model {number}")
 
     lines = []
     if report.missing:
-        lines.append(f"missing servo ID(s) {', '.join(map(str, report.missing))}: no answer to "
-                     f"ping at {baud} bit/s (check power, cables, ID and baud rate)")
+        lines.append(
+            f"missing servo ID(s) {', '.join(map(str, report.missing))}: no answer to "
+            f"ping at {baud} bit/s (check power, cables, ID and baud rate)"
+        )
     for servo_id, (got, want) in sorted(report.mismatched.items()):
         lines.append(f"servo {servo_id} is a {name(got)}, the config expects a {name(want)}")
     if report.unexpected:
         extra = ", ".join(f"{i} ({name(m)})" for i, m in report.unexpected.items())
         lines.append(f"unexpected servo ID(s) on the bus: {extra} ({extra_hint})")
     return ChainMismatchError(
-        port, missing=report.missing, unexpected=tuple(report.unexpected),
-        mismatched=report.mismatched, message="; ".join(lines),
+        port,
+        missing=report.missing,
+        unexpected=tuple(report.unexpected),
+        mismatched=report.mismatched,
+        message="; ".join(lines),
     )
 
 
@@ -122,26 +131,36 @@ def check_settings(
         values = settings[servo_id]
         mode, drive = values.get("operating_mode", POSITION_MODE), values.get("drive_mode", 0)
         if mode != POSITION_MODE:
-            errors.append(f"servo {servo_id}: Operating Mode is {mode}, needs {POSITION_MODE} "
-                          "(position control)")
+            errors.append(
+                f"servo {servo_id}: Operating Mode is {mode}, needs {POSITION_MODE} "
+                "(position control)"
+            )
         shutdown = values.get("shutdown")
         if not watchdog and shutdown is not None and shutdown & SHUTDOWN_NEEDED != SHUTDOWN_NEEDED:
-            errors.append(f"servo {servo_id}: Alarm Shutdown is {shutdown}, needs bits 2 and 5 "
-                          f"(overheating, overload; {SHUTDOWN_NEEDED} or more): with no Bus "
-                          "Watchdog it is what turns torque off on a servo held against an "
-                          "obstacle after the host died")
+            errors.append(
+                f"servo {servo_id}: Alarm Shutdown is {shutdown}, needs bits 2 and 5 "
+                f"(overheating, overload; {SHUTDOWN_NEEDED} or more): with no Bus "
+                "Watchdog it is what turns torque off on a servo held against an "
+                "obstacle after the host died"
+            )
         if drive & _DRIVE_REVERSE:
-            errors.append(f"servo {servo_id}: Drive Mode has the reverse bit set; snakebot takes "
-                          "the direction from the config (joints[].direction), clear the bit")
+            errors.append(
+                f"servo {servo_id}: Drive Mode has the reverse bit set; snakebot takes "
+                "the direction from the config (joints[].direction), clear the bit"
+            )
         if drive & (_DRIVE_TIME_PROFILE | _DRIVE_TORQUE_ON_GOAL):
-            warnings.append(f"servo {servo_id}: Drive Mode {drive} sets the time-based-profile "
-                            "or torque-on-by-goal bit; snakebot expects 0")
+            warnings.append(
+                f"servo {servo_id}: Drive Mode {drive} sets the time-based-profile "
+                "or torque-on-by-goal bit; snakebot expects 0"
+            )
         low, high = values["min_position_limit"], values["max_position_limit"]
         want_low, want_high = converter.lower_ticks[joint], converter.upper_ticks[joint]
         if low == high == 0 and "operating_mode" not in values:
-            errors.append(f"servo {servo_id}: CW and CCW Angle Limit are both 0, which is wheel "
-                          f"mode; joint {joint} needs position control over "
-                          f"{want_low}..{want_high} ticks")
+            errors.append(
+                f"servo {servo_id}: CW and CCW Angle Limit are both 0, which is wheel "
+                f"mode; joint {joint} needs position control over "
+                f"{want_low}..{want_high} ticks"
+            )
         elif low > want_low or high < want_high:
             errors.append(
                 f"servo {servo_id}: Min/Max Position Limit {low}..{high} ticks do not cover "
@@ -185,13 +204,18 @@ def latency_warning(
     return (
         f"{port}: USB latency timer is {latency_ms} ms, which caps the control loop near "
         f"{cap_hz:.0f} Hz. Fix: echo 1 | sudo tee /sys/bus/usb-serial/devices/{device}/"
-        "latency_timer (persist with the udev rule ATTR{device/latency_timer}=\"1\")"
+        'latency_timer (persist with the udev rule ATTR{device/latency_timer}="1")'
     )
 
 
 def cycle_wire_time_s(
-    family: ServoFamily, method: str, servo_count: int, read_bytes: int, baud: int,
-    *, write_bytes: int = 4,
+    family: ServoFamily,
+    method: str,
+    servo_count: int,
+    read_bytes: int,
+    baud: int,
+    *,
+    write_bytes: int = 4,
 ) -> tuple[float, int]:
     """(bus seconds, reply turnarounds) of one control cycle at Return Delay Time 0: one Sync
     Write of ``write_bytes`` per servo (goal position) plus one read of ``read_bytes`` per servo

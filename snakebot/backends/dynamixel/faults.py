@@ -42,7 +42,10 @@ class HardwareFaultError(ServoFaultError):
     """
 
     def __init__(
-        self, port: str, faults: Mapping[int, int], *,
+        self,
+        port: str,
+        faults: Mapping[int, int],
+        *,
         decode: Callable[[int], tuple[str, ...]] = decode_hardware_error,
         remedy: str | None = None,
     ) -> None:
@@ -170,8 +173,9 @@ class TrackingError(BackendError):
             f"joint {j} (servo {i}) at {p:.3f} rad, goal {g:.3f} rad"
             for j, i, p, g in zip(joints, servo_ids, present_rad, goal_rad, strict=True)
         )
-        super().__init__(f"{port}: position feedback stopped following the goals: {where}. "
-                         f"{reason}")
+        super().__init__(
+            f"{port}: position feedback stopped following the goals: {where}. {reason}"
+        )
 
 
 class WatchdogTripError(BackendError):
@@ -180,8 +184,9 @@ class WatchdogTripError(BackendError):
     ``trips`` is how many trips came within ``window_s`` seconds.
     """
 
-    def __init__(self, port: str, servo_ids: Sequence[int], trips: int, window_s: float,
-                 watchdog_s: float) -> None:
+    def __init__(
+        self, port: str, servo_ids: Sequence[int], trips: int, window_s: float, watchdog_s: float
+    ) -> None:
         self.port = port
         self.servo_ids = tuple(servo_ids)
         self.trips = trips
@@ -200,8 +205,10 @@ class StopIncompleteError(BackendError):
     def __init__(self, port: str, servo_ids: Sequence[int], detail: str) -> None:
         self.port = port
         self.servo_ids = tuple(servo_ids)
-        super().__init__(f"{port}: servo(s) {', '.join(map(str, servo_ids))} did not take the "
-                         f"safe pose at stop: {detail}")
+        super().__init__(
+            f"{port}: servo(s) {', '.join(map(str, servo_ids))} did not take the "
+            f"safe pose at stop: {detail}"
+        )
 
 
 class DynamixelSettingsWarning(UserWarning):

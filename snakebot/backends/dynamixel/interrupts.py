@@ -49,7 +49,8 @@ class _Recorder:
         if self.waiting_since is None or not self.pending:
             self.waiting_since = now
         elif now - self.waiting_since >= UNANSWERED_S and not any(
-                holder.stopping for holder in self.holders):
+            holder.stopping for holder in self.holders
+        ):
             deliver_to(self.previous.get(signum), signum)  # nobody asks: a stuck loop
             return
         self.pending.append(signum)

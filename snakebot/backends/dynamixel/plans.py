@@ -24,8 +24,14 @@ from snakebot.servo_tables.table import decode_magnitude
 if TYPE_CHECKING:
     from snakebot.backends.dynamixel.transport import Transport
 
-_STRUCT_CODES = {(1, False): "B", (1, True): "b", (2, False): "H", (2, True): "h",
-                 (4, False): "I", (4, True): "i"}
+_STRUCT_CODES = {
+    (1, False): "B",
+    (1, True): "b",
+    (2, False): "H",
+    (2, True): "h",
+    (4, False): "I",
+    (4, True): "i",
+}
 
 Row = tuple[int, ...]
 
@@ -81,8 +87,9 @@ class SyncWritePlan:
         address, size = self.register.address, self.register.size
         # syncWriteTxOnly copies the parameters by slicing, which bytes support like a list.
         link = self._transport.link
-        result = self._transport.run(self.ids, self._what,
-                                     lambda: link.sync_write(address, size, param))
+        result = self._transport.run(
+            self.ids, self._what, lambda: link.sync_write(address, size, param)
+        )
         self._transport.check_sent(result, self.ids, self._what)
 
 
@@ -98,8 +105,13 @@ class ReadPlan:
     """
 
     def __init__(
-        self, transport: Transport, link: sdk.SdkLink, block: Block, ids: Sequence[int],
-        method: str, single: Callable[[int, Block], dict[str, int]],
+        self,
+        transport: Transport,
+        link: sdk.SdkLink,
+        block: Block,
+        ids: Sequence[int],
+        method: str,
+        single: Callable[[int, Block], dict[str, int]],
     ) -> None:
         if method not in READ_METHODS:
             known = ", ".join(READ_METHODS)
@@ -119,8 +131,9 @@ class ReadPlan:
             raise ValueError(f"servo IDs appear twice in one read: {list(self.ids)}")
         self._single_read = single
         self._unpacker = block_struct(block)
-        self._magnitude = [(k, f.sign_bit) for k, f in enumerate(block.fields)
-                           if f.sign_bit is not None]
+        self._magnitude = [
+            (k, f.sign_bit) for k, f in enumerate(block.fields) if f.sign_bit is not None
+        ]
         self._total = block.size * len(self.ids)
         name = "sync read" if method == "fast_sync_read" else method.replace("_", " ")
         self._what = f"{name} {','.join(block.keys)}"
@@ -172,8 +185,10 @@ class ReadPlan:
     def read(self, *, fast: bool = False) -> dict[int, dict[str, int]]:
         """``{id: {key: value}}``; SyncReadError names servos silent even when read alone."""
         keys = self.block.keys
-        return {i: dict(zip(keys, row, strict=True))
-                for i, row in zip(self.ids, self.read_rows(fast=fast), strict=True)}
+        return {
+            i: dict(zip(keys, row, strict=True))
+            for i, row in zip(self.ids, self.read_rows(fast=fast), strict=True)
+        }
 
     def read_rows(self, *, fast: bool = False) -> list[Row]:
         """One tuple of field values (address order) per servo, in ID order.
@@ -188,8 +203,14 @@ class ReadPlan:
         if rows is not None:  # the common case: first try, no retry machinery
             return rows
         transport.group_retries += transport.retries > 0
-        return transport.group_read(self.ids, lambda: self._transact(fast), self._single,
-                                    self._what, self._assemble, attempts=transport.retries)
+        return transport.group_read(
+            self.ids,
+            lambda: self._transact(fast),
+            self._single,
+            self._what,
+            self._assemble,
+            attempts=transport.retries,
+        )
 
     def _read_each(self) -> list[Row]:
         """One Read per servo; unpacked straight into rows while every servo answers, else

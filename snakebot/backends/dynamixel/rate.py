@@ -49,10 +49,14 @@ class RateTooHighError(ConfigError):
         self.rate_hz = rate_hz
         self.max_rate_hz = budget.max_rate_hz
         self.budget = budget
-        super().__init__("rate_hz", f"{rate_hz:g}", (
-            f"the servo bus cannot hold {rate_hz:g} Hz: at most {budget.max_rate_hz:.0f} Hz. "
-            f"{budget.describe()}. For more: {'; '.join(budget.remedies())}"
-        ))
+        super().__init__(
+            "rate_hz",
+            f"{rate_hz:g}",
+            (
+                f"the servo bus cannot hold {rate_hz:g} Hz: at most {budget.max_rate_hz:.0f} Hz. "
+                f"{budget.describe()}. For more: {'; '.join(budget.remedies())}"
+            ),
+        )
 
 
 @dataclass(frozen=True)
@@ -79,8 +83,11 @@ class CycleBudget:
     @property
     def cycle_s(self) -> float:
         """Wire time + return delays + USB tails of one cycle."""
-        return (self.wire_s + self.turnarounds * self.return_delay_s
-                + self.round_trips * self.usb_tail_s)
+        return (
+            self.wire_s
+            + self.turnarounds * self.return_delay_s
+            + self.round_trips * self.usb_tail_s
+        )
 
     @property
     def max_rate_hz(self) -> float:
@@ -91,23 +98,32 @@ class CycleBudget:
         """What would make the cycle shorter here, biggest lever first where it applies."""
         out = []
         if self.fastest_baud > self.baud:
-            out.append(f"a faster baud rate (up to {self.fastest_baud} bit/s for this model: "
-                       "[bus] baud, written to the servos by `snakebot config apply`)")
+            out.append(
+                f"a faster baud rate (up to {self.fastest_baud} bit/s for this model: "
+                "[bus] baud, written to the servos by `snakebot config apply`)"
+            )
         if self.return_delay_s > 0:
-            out.append("Return Delay Time 0 (return_delay_time_us = 0 in the robot's "
-                       "[settings], then `snakebot config apply`)")
+            out.append(
+                "Return Delay Time 0 (return_delay_time_us = 0 in the robot's "
+                "[settings], then `snakebot config apply`)"
+            )
         if self.usb_tail_s > ASSUMED_USB_TAIL_S or self.usb_assumed:
-            out.append("the USB adapter's latency timer at 1 ms (echo 1 | sudo tee "
-                       "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer)")
+            out.append(
+                "the USB adapter's latency timer at 1 ms (echo 1 | sudo tee "
+                "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer)"
+            )
         if self.round_trips > 1:
-            out.append("fewer servos per port (each Read waits for its own reply: split the "
-                       "chain over two adapters)")
+            out.append(
+                "fewer servos per port (each Read waits for its own reply: split the "
+                "chain over two adapters)"
+            )
         return out or ["a lower rate: this bus is at its fastest settings"]
 
     def describe(self) -> str:
         """One sentence: what a cycle costs and why."""
-        usb = (f"{self.round_trips} x {self.usb_tail_s * 1e3:.0f} ms USB latency"
-               + (" (assumed: an FTDI adapter at latency_timer 1)" if self.usb_assumed else ""))
+        usb = f"{self.round_trips} x {self.usb_tail_s * 1e3:.0f} ms USB latency" + (
+            " (assumed: an FTDI adapter at latency_timer 1)" if self.usb_assumed else ""
+        )
         return (
             f"{self.servo_count} servos on {self.family.name} at {self.baud} bit/s, read by "
             f"{METHOD_NAMES[self.method]}, take {self.cycle_s * 1e3:.2f} ms a cycle: "
@@ -134,8 +150,19 @@ def cycle_budget(
     what a remedy may suggest."""
     cost = family.read_cost(method, servo_count, read_bytes)
     wire = (cost.wire_bytes + family.sync_write_bytes(servo_count, write_bytes)) * 10.0 / baud
-    return CycleBudget(family, method, servo_count, baud, wire, cost.return_delays,
-                       return_delay_s, cost.round_trips, usb_tail_s, usb_assumed, fastest_baud)
+    return CycleBudget(
+        family,
+        method,
+        servo_count,
+        baud,
+        wire,
+        cost.return_delays,
+        return_delay_s,
+        cost.round_trips,
+        usb_tail_s,
+        usb_assumed,
+        fastest_baud,
+    )
 
 
 SDK_MAX_BAUD = 4_000_000

@@ -241,7 +241,9 @@ def port_handler_for(port: str) -> PortHandlerLike:
     factory = _URL_PORT_HANDLERS.get(scheme)
     if factory is None:
         raise BusError(
-            port, (), f"nothing in this program serves {scheme}:// ports: an emulator URL names "
+            port,
+            (),
+            f"nothing in this program serves {scheme}:// ports: an emulator URL names "
             "a chain started in the same process (from another process, run `snakebot emulate "
             "--pty` and use the device path it prints)",
         )

@@ -40,7 +40,8 @@ class StateDecoder:
         effort = converter.direction * per_unit
         # Plain floats per joint: (position gain, position bias, velocity gain, effort gain).
         self._terms = [
-            (pg, pb, vg, eg) for (pg, pb), vg, eg in zip(
+            (pg, pb, vg, eg)
+            for (pg, pb), vg, eg in zip(
                 converter.state_terms(), velocity.tolist(), effort.tolist(), strict=True
             )
         ]

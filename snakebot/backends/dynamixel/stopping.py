@@ -78,8 +78,9 @@ class StopSequence:
                     if b.torque_may_be_on:
                         error = self._policy(signals)
                         if error is not None:
-                            log.warning("%s: stop policy after the failed connect: %s", b.port,
-                                        error)
+                            log.warning(
+                                "%s: stop policy after the failed connect: %s", b.port, error
+                            )
                 finally:
                     b.bus.close()
         except KeyboardInterrupt:
@@ -124,8 +125,11 @@ class StopSequence:
             return policy_error
         if unreached and b.stop_policy == "hold":
             return StopIncompleteError(
-                b.port, unreached, "their Goal Position is not the safe pose after the ramp "
-                "(a Bus Watchdog that keeps tripping, or a servo refusing goals)")
+                b.port,
+                unreached,
+                "their Goal Position is not the safe pose after the ramp "
+                "(a Bus Watchdog that keeps tripping, or a servo refusing goals)",
+            )
         return None
 
     def _policy(self, signals: DeferredInterrupts) -> BusError | None:
@@ -142,16 +146,20 @@ class StopSequence:
         b = self.b
         if not b.capabilities.bus_watchdog:
             return BusError(
-                b.port, b.ids, f"the port vanished, so the stop policy ({b.stop_policy}) could "
+                b.port,
+                b.ids,
+                f"the port vanished, so the stop policy ({b.stop_policy}) could "
                 f"not be sent: {b.robot.servo.name} servos have no Bus Watchdog, so they hold "
                 "their last goal, torque on, until they are power-cycled or a new session "
-                "connects (their Alarm Shutdown turns torque off on overload or overheating)"
+                "connects (their Alarm Shutdown turns torque off on overload or overheating)",
             )
         return BusError(
-            b.port, b.ids, f"the port vanished, so the stop policy ({b.stop_policy}) could not be "
+            b.port,
+            b.ids,
+            f"the port vanished, so the stop policy ({b.stop_policy}) could not be "
             f"sent: the servos stopped when their Bus Watchdog tripped "
             f"({b.watchdog_ticks * 0.02:.2f} s) and hold where they are, torque on, until they "
-            "are power-cycled or a new session connects"
+            "are power-cycled or a new session connects",
         )
 
     def apply_policy(self) -> BusError | None:
@@ -211,8 +219,12 @@ class StopSequence:
     def _skipping(self, hurry: bool, signals: DeferredInterrupts) -> bool:
         if hurry + signals.count < 2:
             return False
-        log.warning("%s: interrupted again: skipping the rest of the stop ramp, applying the "
-                    "stop policy (%s)", self.b.port, self.b.stop_policy)
+        log.warning(
+            "%s: interrupted again: skipping the rest of the stop ramp, applying the "
+            "stop policy (%s)",
+            self.b.port,
+            self.b.stop_policy,
+        )
         return True
 
     def _ramp_out_once(self, hurry: bool, signals: DeferredInterrupts) -> list[int]:
@@ -228,12 +240,18 @@ class StopSequence:
             if not self._ramp(self._start_pose(), target, hurry, signals):
                 return []
             goals = self._read_answering("goal_position")
-            unreached = [i for j, i in enumerate(b.ids)
-                         if i in goals and goals[i]["goal_position"] != want[j]]
+            unreached = [
+                i
+                for j, i in enumerate(b.ids)
+                if i in goals and goals[i]["goal_position"] != want[j]
+            ]
             if not unreached or signals.count > before or attempt:
                 break
-            log.warning("%s: servo(s) %s did not take the stop ramp's goals; ramping again",
-                        b.port, ", ".join(map(str, unreached)))
+            log.warning(
+                "%s: servo(s) %s did not take the stop ramp's goals; ramping again",
+                b.port,
+                ", ".join(map(str, unreached)),
+            )
             hurry = True
         return unreached
 
@@ -260,8 +278,11 @@ class StopSequence:
             b.write_goals(b.converter.goal_ticks(target, b.goal_terms)[0])
             return True
         urgency = hurry + signals.count
-        duration = fastest_ramp_s(span, vmax) if urgency else ramp_duration_s(
-            span, vmax, b.robot.safety.ramp_s)
+        duration = (
+            fastest_ramp_s(span, vmax)
+            if urgency
+            else ramp_duration_s(span, vmax, b.robot.safety.ramp_s)
+        )
         poses, last = ramp_poses(start, target, duration), start
         t0, k = b.clock(), 0
         while k < len(poses):
@@ -269,8 +290,10 @@ class StopSequence:
                 if self._skipping(hurry, signals):
                     return False
                 urgency = hurry + signals.count
-                log.warning("%s: interrupted again: finishing the stop ramp at the joint speed "
-                            "limit", b.port)
+                log.warning(
+                    "%s: interrupted again: finishing the stop ramp at the joint speed limit",
+                    b.port,
+                )
                 span = float(np.max(np.abs(target - last)))
                 poses, t0, k = ramp_poses(last, target, fastest_ramp_s(span, vmax)), b.clock(), 0
             at_s, pose = poses[k]
@@ -286,11 +309,15 @@ class StopSequence:
     def _clear_tripped(self) -> None:
         if not self.b.capabilities.bus_watchdog:
             return
-        tripped = [i for i, v in self._read_answering("bus_watchdog").items()
-                   if v["bus_watchdog"] < 0]
+        tripped = [
+            i for i, v in self._read_answering("bus_watchdog").items() if v["bus_watchdog"] < 0
+        ]
         if tripped:
-            log.warning("%s: Bus Watchdog tripped on servo(s) %s; cleared before the stop ramp",
-                        self.b.port, ", ".join(map(str, tripped)))
+            log.warning(
+                "%s: Bus Watchdog tripped on servo(s) %s; cleared before the stop ramp",
+                self.b.port,
+                ", ".join(map(str, tripped)),
+            )
             self._rearm()
 
     def _rearm(self) -> None:
@@ -318,11 +345,15 @@ class StopSequence:
         count = self.trips.add(b.clock())
         b.stats.extra["watchdog_trips"] = self.trips.total
         if count > self.limits.max_watchdog_trips:
-            raise WatchdogTripError(b.port, tripped, count, self.limits.trip_window_s,
-                                    b.watchdog_ticks * 0.02)
-        log.warning("%s: Bus Watchdog tripped on servo(s) %s (the servos stopped): cleared, "
-                    "re-armed, catching up at the joint speed limit", b.port,
-                    ", ".join(map(str, tripped)))
+            raise WatchdogTripError(
+                b.port, tripped, count, self.limits.trip_window_s, b.watchdog_ticks * 0.02
+            )
+        log.warning(
+            "%s: Bus Watchdog tripped on servo(s) %s (the servos stopped): cleared, "
+            "re-armed, catching up at the joint speed limit",
+            b.port,
+            ", ".join(map(str, tripped)),
+        )
         self._rearm()
         present = b.read_present_ticks()
         b.catch_up = CatchUp(present, b.max_ticks_per_s, b.clock())
@@ -339,8 +370,11 @@ class StopSequence:
                 return
         if b.capabilities.hardware_error_status:
             status = b.bus.sync_read(("torque_enable", "hardware_error_status"), b.ids)
-            faults = {i: v["hardware_error_status"] for i, v in status.items()
-                      if v["hardware_error_status"]}
+            faults = {
+                i: v["hardware_error_status"]
+                for i, v in status.items()
+                if v["hardware_error_status"]
+            }
             if faults:
                 raise b.fault_error(faults)
         else:
@@ -350,12 +384,16 @@ class StopSequence:
         ids = [b.ids[j] for j in joints]
         off = [i for i in ids if not status[i]["torque_enable"]]
         if off:
-            reason = (f"Torque Enable reads 0 on servo(s) {', '.join(map(str, off))}: it rebooted "
-                      "(a supply dip or a loose cable?). Check power and wiring, then run again")
+            reason = (
+                f"Torque Enable reads 0 on servo(s) {', '.join(map(str, off))}: it rebooted "
+                "(a supply dip or a loose cable?). Check power and wiring, then run again"
+            )
         else:
-            reason = (f"Torque is on and no fault is latched, yet the reading stood still for "
-                      f"{max(s.still_for_s for s in stalls):.1f} s while the goal moved: the "
-                      "joint is blocked or jammed, or its horn slipped. Free it and run again")
+            reason = (
+                f"Torque is on and no fault is latched, yet the reading stood still for "
+                f"{max(s.still_for_s for s in stalls):.1f} s while the goal moved: the "
+                "joint is blocked or jammed, or its horn slipped. Free it and run again"
+            )
         gain = b.converter.state_terms()
         present = [s.present_ticks * gain[s.joint][0] + gain[s.joint][1] for s in stalls]
         goal = [s.goal_ticks * gain[s.joint][0] + gain[s.joint][1] for s in stalls]

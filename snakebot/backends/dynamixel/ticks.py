@@ -38,9 +38,7 @@ class TickConverter:
     _tick_bias: np.ndarray = field(init=False, repr=False, compare=False)
     _rad_gain: np.ndarray = field(init=False, repr=False, compare=False)
     _rad_bias: np.ndarray = field(init=False, repr=False, compare=False)
-    _goal_terms: list[tuple[float, float, int, int]] = field(
-        init=False, repr=False, compare=False
-    )
+    _goal_terms: list[tuple[float, float, int, int]] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         k = self.ticks.ticks_per_rad
@@ -53,8 +51,13 @@ class TickConverter:
         }
         for name, value in derived.items():
             object.__setattr__(self, name, np.asarray(value, dtype=float))
-        terms = zip(self._tick_gain.tolist(), self._tick_bias.tolist(),
-                    self.lower_ticks.tolist(), self.upper_ticks.tolist(), strict=True)
+        terms = zip(
+            self._tick_gain.tolist(),
+            self._tick_bias.tolist(),
+            self.lower_ticks.tolist(),
+            self.upper_ticks.tolist(),
+            strict=True,
+        )
         object.__setattr__(self, "_goal_terms", list(terms))
 
     @classmethod

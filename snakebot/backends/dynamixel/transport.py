@@ -29,7 +29,10 @@ class Transport:
     """Runs SDK calls on one port; owns the retry policy and the counters the bus exposes."""
 
     def __init__(
-        self, port: str, link: sdk.SdkLink, retries: int,
+        self,
+        port: str,
+        link: sdk.SdkLink,
+        retries: int,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         if retries < 0:
@@ -58,9 +61,11 @@ class Transport:
             return op()
         except sdk.PORT_ERRORS as exc:
             error = BusError(
-                self.port, ids, f"{what}: the serial port vanished or failed ({exc}): adapter "
+                self.port,
+                ids,
+                f"{what}: the serial port vanished or failed ({exc}): adapter "
                 "unplugged, cable pulled, or the emulator behind it stopped? Plug it back in and "
-                "check the port name (ls /dev/serial/by-id/)"
+                "check the port name (ls /dev/serial/by-id/)",
             )
             self.vanished = self.vanished or error
             raise error from exc
@@ -88,7 +93,12 @@ class Transport:
             raise self.fail(result, ids, what)
 
     def unicast(
-        self, servo_id: int, what: str, op: UnicastOp, *, eeprom: bool = False,
+        self,
+        servo_id: int,
+        what: str,
+        op: UnicastOp,
+        *,
+        eeprom: bool = False,
         accept_alert: bool = False,
     ) -> list[int]:
         """Run ``op`` with retries; the data, or ServoStatusError / BusError naming the servo."""
@@ -114,7 +124,9 @@ class Transport:
                 self.retry_counts[servo_id] += 1
         attempts = self.retries + 1
         raise BusError(
-            self.port, [servo_id], f"{what}: {self.link.result_text(result)} "
+            self.port,
+            [servo_id],
+            f"{what}: {self.link.result_text(result)} "
             f"(after {attempts} attempt{'s' if attempts > 1 else ''})",
         )
 
@@ -169,8 +181,11 @@ class Transport:
                 missing.append(servo_id)
         if missing:
             raise SyncReadError(
-                self.port, missing, f"{what}: no status packet from servo(s) "
+                self.port,
+                missing,
+                f"{what}: no status packet from servo(s) "
                 f"{', '.join(map(str, missing))} after {self.retries + 1} attempts; check their "
-                "power and cable, and that their ID and baud rate match the config", partial,
+                "power and cable, and that their ID and baud rate match the config",
+                partial,
             )
         return partial

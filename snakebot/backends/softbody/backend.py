@@ -212,7 +212,7 @@ class SoftBodyBackend(Backend):
         if int(warnings[_BAD_WARNINGS].sum()) != before or not np.isfinite(data.qpos).all():
             raise SimulationDivergedError(
                 divergence_time_s(time_before, steps, float(model.opt.timestep), float(data.time)),
-                "MuJoCo reported bad accelerations (state was reset)"
+                "MuJoCo reported bad accelerations (state was reset)",
             )
         self._track()
         if self._pacer is not None:

@@ -150,12 +150,18 @@ class TwinBackend(Backend):
         if self._health_limits is None:
             return
         servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
-        links = np.array([self.model.geom(f"{link_name(i)}_geom").id
-                          for i in range(self.robot.link_count)])
+        links = np.array(
+            [self.model.geom(f"{link_name(i)}_geom").id for i in range(self.robot.link_count)]
+        )
         self.physics_monitor = HealthMonitor(
-            self.model, links, self.robot.link.radius_m, self._dof_index, self._head_id,
+            self.model,
+            links,
+            self.robot.link.radius_m,
+            self._dof_index,
+            self._head_id,
             no_load_speed_rad_s=servo.no_load_speed_rad_s,
-            torque_limit_nm=servo.torque_limit_nm, limits=self._health_limits,
+            torque_limit_nm=servo.torque_limit_nm,
+            limits=self._health_limits,
         )
 
     def _close(self) -> None:
@@ -286,7 +292,8 @@ class TwinBackend(Backend):
         if trips.any() and self.raise_on_overload:
             joint = int(np.flatnonzero(trips)[0])
             raise ServoFaultError(
-                self.robot.joints[joint].servo_id, ["Overload"],
+                self.robot.joints[joint].servo_id,
+                ["Overload"],
                 f"the twin's overload protection tripped at t={float(self.data.time):.4f} s "
                 f"after {self.electrics.trip_s:g} s at the torque limit; torque is off",
             )

@@ -33,9 +33,7 @@ class Cliff:
         for item in fields(self):
             value = getattr(self, item.name)
             if not (math.isfinite(value) and value > 0):
-                raise ConfigError(
-                    "terrain", item.name, f"expected a positive number, got {value}"
-                )
+                raise ConfigError("terrain", item.name, f"expected a positive number, got {value}")
         if self.radius_m > self.height_m:
             raise ConfigError(
                 "terrain",

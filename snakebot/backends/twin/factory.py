@@ -50,7 +50,10 @@ def make_twin(
         if friction_model is not None:
             raise ConfigError("friction_model", "", "applies to the rigid twin only")
         return make_softbody(
-            robot, friction=friction, terrain=terrain, realtime=realtime,  # type: ignore[arg-type]
+            robot,
+            friction=friction,
+            terrain=terrain,  # type: ignore[arg-type]
+            realtime=realtime,
             directional=directional,
         )
     if not isinstance(robot, RobotConfig):

@@ -161,13 +161,17 @@ class HealthMonitor:
         worst = max(self.max_floor_penetration_m, self.max_self_penetration_m)
         if limits.hard and worst > depth_limit:
             raise PhysicsHealthError(
-                time_s, "penetration", f"{worst * 1e3:.1f} mm into the ground or another "
+                time_s,
+                "penetration",
+                f"{worst * 1e3:.1f} mm into the ground or another "
                 f"module (capsule radius {self._radius * 1e3:.1f} mm; limit "
                 f"{depth_limit * 1e3:.1f} mm)",
             )
         if limits.hard and self.max_speed_rad_s > limits.speed_error * self._no_load:
             raise PhysicsHealthError(
-                time_s, "joint speed", f"{self.max_speed_rad_s:.2f} rad/s, above "
+                time_s,
+                "joint speed",
+                f"{self.max_speed_rad_s:.2f} rad/s, above "
                 f"{limits.speed_error:g} x the servo's no-load speed {self._no_load:.2f} rad/s",
             )
         window_done = self._window_s >= limits.power_window_s - 1e-9
@@ -180,7 +184,9 @@ class HealthMonitor:
             self._window_s = 0.0
             if limits.hard and power_w > limits.power_error * self._peak_power_w:
                 raise PhysicsHealthError(
-                    time_s, "energy injected", f"a joint put in {power_w:.2f} W over "
+                    time_s,
+                    "energy injected",
+                    f"a joint put in {power_w:.2f} W over "
                     f"{limits.power_window_s:g} s; the servo's peak is {self._peak_power_w:.2f} W",
                 )
 
@@ -277,9 +283,6 @@ class HealthMonitor:
                 f"{self._peak_power_w:.2f} W peak"
             )
         if self.longest_stall_s > limits.stall_warn_s:
-            warnings.append(
-                f"a servo stalled at its torque limit for {self.longest_stall_s:.1f} s"
-            )
+            warnings.append(f"a servo stalled at its torque limit for {self.longest_stall_s:.1f} s")
         out["warnings"] = warnings
         return out
-

@@ -18,7 +18,11 @@ class TwinSensors:
     """The head IMU and the encoders of one twin (``head_id`` the head body)."""
 
     def __init__(
-        self, model: mujoco.MjModel, head_id: int, extras: ServoExtras, rad_per_tick: float,
+        self,
+        model: mujoco.MjModel,
+        head_id: int,
+        extras: ServoExtras,
+        rad_per_tick: float,
         seed: int = 0,
     ) -> None:
         self._model = model

@@ -28,7 +28,10 @@ class ServoElectrics:
     """
 
     def __init__(
-        self, physics: ServoPhysics, joint_count: int, torque_limit_nm: float,
+        self,
+        physics: ServoPhysics,
+        joint_count: int,
+        torque_limit_nm: float,
         no_load_speed_rad_s: float,
     ) -> None:
         extras = physics.extras
@@ -57,8 +60,9 @@ class ServoElectrics:
         """Supply voltage now over the nominal supply: what scales torque and gains."""
         return self.voltage_v / self.supply_voltage_v
 
-    def update(self, torque_nm: np.ndarray, drive_nm: np.ndarray, velocity_rad_s: np.ndarray,
-               dt_s: float) -> np.ndarray:
+    def update(
+        self, torque_nm: np.ndarray, drive_nm: np.ndarray, velocity_rad_s: np.ndarray, dt_s: float
+    ) -> np.ndarray:
         """Account one period; return the joints (N,) whose overload protection trips now.
 
         ``torque_nm`` is each servo's output torque, ``drive_nm`` the drive before back-EMF
@@ -108,7 +112,8 @@ class ServoElectrics:
                 peak_current_a=self.peak_current_a,
                 electrical_cost_of_transport=(
                     self.electrical_energy_j / (mass_kg * GRAVITY_M_S2 * distance_m)
-                    if distance_m > 1e-9 else None
+                    if distance_m > 1e-9
+                    else None
                 ),
             )
         if self.battery_resistance_ohm is not None:

@@ -84,12 +84,16 @@ class VideoWriter:
             found, _ = imageio_ffmpeg.count_frames_and_secs(str(self.path))
         except (OSError, RuntimeError) as exc:
             raise OutputError(
-                self.path, f"the encoder did not finish the video (a full disk?): ffmpeg cannot "
-                f"read it back ({_last_line(exc)}); {self.frames} frames were sent"
+                self.path,
+                f"the encoder did not finish the video (a full disk?): ffmpeg cannot "
+                f"read it back ({_last_line(exc)}); {self.frames} frames were sent",
             ) from exc
         if found != self.frames:
-            raise OutputError(self.path, f"the video holds {found} of the {self.frames} frames "
-                              "sent: the encoder did not finish it (a full disk?)")
+            raise OutputError(
+                self.path,
+                f"the video holds {found} of the {self.frames} frames "
+                "sent: the encoder did not finish it (a full disk?)",
+            )
 
     def __enter__(self) -> VideoWriter:
         return self

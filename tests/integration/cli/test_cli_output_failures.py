@@ -64,7 +64,10 @@ def read_all(port: str, address: int, size: int, ids: range) -> list[int]:
 
 def snakebot(*argv: str, limit: int | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "snakebot", *argv], capture_output=True, text=True, timeout=120,
+        [sys.executable, "-m", "snakebot", *argv],
+        capture_output=True,
+        text=True,
+        timeout=120,
         preexec_fn=None if limit is None else file_size_limit(limit),
         env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
     )
@@ -77,9 +80,23 @@ def test_a_log_outgrowing_the_file_size_limit_stops_the_robot_by_its_stop_policy
     robot = edit_robot(config_dir, "snake12", 'stop_policy = "hold"', f'stop_policy = "{policy}"')
     log = tmp_path / "run.csv"
     with emulator("--robot", str(robot)) as emu:
-        run = snakebot("run", "--backend", "dynamixel", "--port", emu.port, "--robot", str(robot),
-                       "--gait", "sidewinding", "--duration", "60", "--log", str(log), "--json",
-                       limit=LOG_LIMIT_BYTES)
+        run = snakebot(
+            "run",
+            "--backend",
+            "dynamixel",
+            "--port",
+            emu.port,
+            "--robot",
+            str(robot),
+            "--gait",
+            "sidewinding",
+            "--duration",
+            "60",
+            "--log",
+            str(log),
+            "--json",
+            limit=LOG_LIMIT_BYTES,
+        )
         torque = read_all(emu.port, 64, 1, range(1, 13))
         goals = read_all(emu.port, 116, 4, range(1, 13))
     assert run.returncode == 1, run.stderr
@@ -104,8 +121,9 @@ def test_calibrate_that_cannot_write_leaves_the_robot_file_as_it_was(config_dir:
     robot = config_dir / "robots" / "snake12.toml"
     before = robot.read_bytes()
     with emulator("--robot", str(robot)) as emu:
-        run = snakebot("calibrate", "--robot", str(robot), "--port", emu.port, "--yes",
-                       limit=len(before) // 2)
+        run = snakebot(
+            "calibrate", "--robot", str(robot), "--port", emu.port, "--yes", limit=len(before) // 2
+        )
     assert run.returncode == 1, run.stderr
     assert f"snakebot: error: {robot}: cannot write the offsets (File too large)" in run.stderr
     assert robot.read_bytes() == before

@@ -58,9 +58,17 @@ def gone(pid: int) -> bool:
 
 def start_parent(tmp_path: Path, mode: str) -> tuple[subprocess.Popen[str], dict[str, object]]:
     parent = subprocess.Popen(
-        [sys.executable, "-c", PARENT, str(tmp_path / "err.txt"), str(tmp_path / "servos.json"),
-         mode],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-c",
+            PARENT,
+            str(tmp_path / "err.txt"),
+            str(tmp_path / "servos.json"),
+            mode,
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
     )
     assert parent.stdout is not None
     line = parent.stdout.readline()  # start-up imports: slow on a loaded machine
@@ -86,7 +94,7 @@ def test_an_emulator_whose_parent_died_stops_and_saves_its_state(tmp_path: Path)
 
 
 def test_an_emulator_whose_stdin_closed_keeps_serving_while_its_parent_lives(
-    tmp_path: Path
+    tmp_path: Path,
 ) -> None:
     parent, child = start_parent(tmp_path, "close-stdin-and-live")
     try:

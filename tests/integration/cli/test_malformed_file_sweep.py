@@ -105,8 +105,19 @@ def number_variants(old: str, key: str, *, zero_ok: bool = False) -> list[Varian
     """``old`` (``name = value``) given every bad number the campaign tried (``1e-300`` too
     unless 0 is in the key's range: a 1e-300 s ramp is no ramp, a valid choice)."""
     name = old.split("=")[0].strip()
-    values = ["nan", "inf", "-inf", "1e308", "-1e308", "99999999999999999999",
-              '"0.5"', "[0.5]", "{ v = 0.5 }", "true", *([] if zero_ok else ["1e-300"])]
+    values = [
+        "nan",
+        "inf",
+        "-inf",
+        "1e308",
+        "-1e308",
+        "99999999999999999999",
+        '"0.5"',
+        "[0.5]",
+        "{ v = 0.5 }",
+        "true",
+        *([] if zero_ok else ["1e-300"]),
+    ]
     return [Variant(f"{key} = {value}", edit(old, f"{name} = {value}"), key) for value in values]
 
 
@@ -119,30 +130,43 @@ ROBOT = [
     Variant("length in mm", edit("length_m = 0.065", "length_m = 65"), "link.length_m"),
     Variant("timestep in ms", edit("timestep_s = 0.002", "timestep_s = 2"), "twin.timestep_s"),
     Variant("ramp with a unit", edit("ramp_s = 1.0", 'ramp_s = "1 s"'), "safety.ramp_s"),
-    Variant("huge servo ID", edit("[[joints]]\nservo_id = 1", "[[joints]]\nservo_id = "
-                                  + "9" * 30), "joints[0].servo_id"),
+    Variant(
+        "huge servo ID",
+        edit("[[joints]]\nservo_id = 1", "[[joints]]\nservo_id = " + "9" * 30),
+        "joints[0].servo_id",
+    ),
     Variant("unknown key", edit("[safety]", "[safety]\nramp_time = 2"), "safety.ramp_time"),
     Variant("unknown table", edit("[safety]", "[wheels]\nn = 4\n[safety]"), "wheels"),
     Variant("missing [link]", edit("[link]", "[linkage]"), "link"),
     Variant("missing servo", edit('servo = "XL430-W250"', ""), "servo"),
-    Variant("right-to-left override name", edit('name = "snake12"', 'name = "snake\u202e21"'),
-            "name"),
+    Variant(
+        "right-to-left override name", edit('name = "snake12"', 'name = "snake\u202e21"'), "name"
+    ),
     Variant("bell in the name", edit('name = "snake12"', 'name = "snake\\u0007"'), "name"),
     Variant("500 kB name", edit('name = "snake12"', 'name = "' + "a" * 500_000 + '"'), "name"),
-    Variant("bidirectional key", edit("[safety]", "[safety]\n\"r\u202eamp\" = 1"), "safety."),
+    Variant("bidirectional key", edit("[safety]", '[safety]\n"r\u202eamp" = 1'), "safety."),
 ]
 
 SERVO = [
     *TOML_LEVEL,
     *number_variants("supply_voltage_v = 11.1", "physics.supply_voltage_v"),
-    Variant("voltage with a unit", edit("supply_voltage_v = 11.1", 'supply_voltage_v = "12 V"'),
-            "physics.supply_voltage_v"),
-    Variant("voltage in mV", edit("supply_voltage_v = 11.1", "supply_voltage_v = 11100"),
-            "physics.supply_voltage_v"),
+    Variant(
+        "voltage with a unit",
+        edit("supply_voltage_v = 11.1", 'supply_voltage_v = "12 V"'),
+        "physics.supply_voltage_v",
+    ),
+    Variant(
+        "voltage in mV",
+        edit("supply_voltage_v = 11.1", "supply_voltage_v = 11100"),
+        "physics.supply_voltage_v",
+    ),
     Variant("unknown key", edit("[physics]", "[physics]\ngear_ratio = 258"), "physics.gear_ratio"),
     Variant("missing model", edit('model = "XL430-W250"', ""), "model"),
-    Variant("model with an override", edit('model = "XL430-W250"', 'model = "XL430\u202e-W250"'),
-            "model"),
+    Variant(
+        "model with an override",
+        edit('model = "XL430-W250"', 'model = "XL430\u202e-W250"'),
+        "model",
+    ),
 ]
 
 BODY = [
@@ -150,8 +174,9 @@ BODY = [
     *number_variants("ramp_s = 1.0", "safety.ramp_s", zero_ok=True),
     *number_variants("timestep_s = 0.001", "twin.timestep_s"),
     *number_variants("point_mass_kg = 0.01", "lattice.point_mass_kg"),
-    Variant("huge segment count", edit("segments = 6", "segments = " + "9" * 30),
-            "lattice.segments"),
+    Variant(
+        "huge segment count", edit("segments = 6", "segments = " + "9" * 30), "lattice.segments"
+    ),
     Variant("unknown key", edit("[ground]", "[ground]\nslope = 3"), "ground.slope"),
     Variant("missing [lattice]", edit("[lattice]", "[lattic]"), "lattice"),
     Variant("right-to-left override name", edit('name = "worm"', 'name = "w\u202eorm"'), "name"),
@@ -163,10 +188,16 @@ GAIT = [
     # is not TOML. "0.5" is a valid value: gait parameters may be expressions ("pi/4").
     *[v for v in TOML_LEVEL if v.name != "truncated"],
     Variant("truncated", lambda p, g: p.write_text(g[:12])),
-    *[v for v in number_variants("amplitude = 0.4", "params.amplitude", zero_ok=True)
-      if v.name != 'params.amplitude = "0.5"'],
-    Variant("amplitude a bad expression", edit("amplitude = 0.4", 'amplitude = "0.4 rad"'),
-            "params.amplitude"),
+    *[
+        v
+        for v in number_variants("amplitude = 0.4", "params.amplitude", zero_ok=True)
+        if v.name != 'params.amplitude = "0.5"'
+    ],
+    Variant(
+        "amplitude a bad expression",
+        edit("amplitude = 0.4", 'amplitude = "0.4 rad"'),
+        "params.amplitude",
+    ),
     Variant("unknown key", edit("[params]", "colour = 1\n[params]"), "colour"),
     Variant("unknown parameter", edit("[params]", "[params]\nwobble = 1"), "params.wobble"),
     Variant("right-to-left override gait", edit('"serpenoid"', '"serpe\u202enoid"'), "gait"),
@@ -201,12 +232,21 @@ CSV = [
     Variant("inf velocity", cell(5, "velocity_rad_s_1", "inf"), "line 5, column velocity_rad_s_1"),
     Variant("1e308 time", cell(5, "time_s", "1e308"), "line 5, column time_s"),
     Variant("text cell", cell(5, "command_rad_0", "abc"), "line 5, column command_rad_0"),
-    Variant("control character cell", cell(5, "command_rad_0", "0.1\x07"),
-            "line 5, column command_rad_0"),
-    Variant("duplicated column", lambda p, g: p.write_text(g.replace("cycle", "time_s", 1)),
-            "line 1, column time_s"),
-    Variant("bidirectional column", lambda p, g: p.write_text(g.replace("cycle", "cy\u202ecle", 1)),
-            "line 1, column 2"),
+    Variant(
+        "control character cell",
+        cell(5, "command_rad_0", "0.1\x07"),
+        "line 5, column command_rad_0",
+    ),
+    Variant(
+        "duplicated column",
+        lambda p, g: p.write_text(g.replace("cycle", "time_s", 1)),
+        "line 1, column time_s",
+    ),
+    Variant(
+        "bidirectional column",
+        lambda p, g: p.write_text(g.replace("cycle", "cy\u202ecle", 1)),
+        "line 1, column 2",
+    ),
     Variant("binary rows", lambda p, g: p.write_bytes(g.split("\n")[0].encode() + b"\n" + GARBAGE)),
 ]
 
@@ -244,16 +284,19 @@ SIDECAR = [
     Variant("negative rate", sidecar_field(_set("rate_hz", -100)), "rate_hz"),
     Variant("robot not an object", sidecar_field(_set("robot", "snake8")), "robot"),
     Variant("robot name an object", sidecar_field(_set("robot.name", {"a": 1})), "robot.name"),
-    Variant("right-to-left robot name", sidecar_field(_set("robot.name", "snake\u202e8")),
-            "robot.name"),
+    Variant(
+        "right-to-left robot name", sidecar_field(_set("robot.name", "snake\u202e8")), "robot.name"
+    ),
     Variant("5 MB robot name", sidecar_field(_set("robot.name", "s" * 5_000_000)), "robot.name"),
-    Variant("servo IDs as text", sidecar_field(_set("robot.servo_ids", ["a", "b"])),
-            "robot.servo_ids"),
+    Variant(
+        "servo IDs as text", sidecar_field(_set("robot.servo_ids", ["a", "b"])), "robot.servo_ids"
+    ),
     Variant("huge servo ID", sidecar_field(_set("robot.servo_ids", [10**30])), "robot.servo_ids"),
     Variant("link not an object", sidecar_field(_set("robot.link", 3)), "robot.link"),
     Variant("1e308 mass", sidecar_field(_set("robot.link.mass_kg", 1e308)), "robot.link.mass_kg"),
-    Variant("joint count as text", sidecar_field(_set("robot.joint_count", "8")),
-            "robot.joint_count"),
+    Variant(
+        "joint count as text", sidecar_field(_set("robot.joint_count", "8")), "robot.joint_count"
+    ),
     Variant("gait a number", sidecar_field(_set("gait", 3)), "gait"),
     Variant("gait name a list", sidecar_field(_set("gait", {"name": [1]})), "gait.name"),
     Variant("created a number", sidecar_field(_set("created_utc", 5)), "created_utc"),
@@ -266,8 +309,9 @@ def good_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A real log (snake8 serpenoid on the twin, 0.3 s) and its sidecar."""
     folder = tmp_path_factory.mktemp("good")
     log = folder / "run.csv"
-    code = main(["run", "--robot", "snake8", "--gait", "serpenoid", "--duration", "0.3",
-                 "--log", str(log)])
+    code = main(
+        ["run", "--robot", "snake8", "--gait", "serpenoid", "--duration", "0.3", "--log", str(log)]
+    )
     assert code == 0 and log.exists()
     assert '"rate_hz": 100.0' in (folder / "run.csv.json").read_text()
     return log
@@ -297,14 +341,19 @@ def _ids(variants: list[Variant]) -> list[str]:
 
 @pytest.mark.parametrize("variant", ROBOT, ids=_ids(ROBOT))
 def test_robot_files(
-    variant: Variant, config_dir: Path, tmp_path: Path, bus: str,
+    variant: Variant,
+    config_dir: Path,
+    tmp_path: Path,
+    bus: str,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     path = config_dir / "robots" / "snake12.toml"
     variant.make(path, path.read_text(encoding="utf-8"))
-    for argv in (["model", "--robot", str(path), "--out", str(tmp_path / "m.xml")],
-                 ["run", "--robot", str(path), "--duration", "0.1"],
-                 ["config", "diff", "--robot", str(path), "--port", bus]):
+    for argv in (
+        ["model", "--robot", str(path), "--out", str(tmp_path / "m.xml")],
+        ["run", "--robot", str(path), "--duration", "0.1"],
+        ["config", "diff", "--robot", str(path), "--port", bus],
+    ):
         check(capsys, argv, path, variant.key)
 
 
@@ -315,8 +364,10 @@ def test_servo_files(
     path = config_dir / "servos" / "xl430-w250.toml"
     variant.make(path, path.read_text(encoding="utf-8"))
     robot = config_dir / "robots" / "snake12.toml"
-    for argv in (["model", "--robot", str(robot), "--out", str(tmp_path / "m.xml")],
-                 ["run", "--robot", str(robot), "--duration", "0.1"]):
+    for argv in (
+        ["model", "--robot", str(robot), "--out", str(tmp_path / "m.xml")],
+        ["run", "--robot", str(robot), "--duration", "0.1"],
+    ):
         check(capsys, argv, path, variant.key)
 
 
@@ -326,26 +377,32 @@ def test_body_files(
 ) -> None:
     path = config_dir / "bodies" / "worm.toml"
     variant.make(path, path.read_text(encoding="utf-8"))
-    for argv in (["model", "--robot", str(path), "--out", str(tmp_path / "m.xml")],
-                 ["run", "--robot", str(path), "--duration", "0.1"]):
+    for argv in (
+        ["model", "--robot", str(path), "--out", str(tmp_path / "m.xml")],
+        ["run", "--robot", str(path), "--duration", "0.1"],
+    ):
         check(capsys, argv, path, variant.key)
 
 
 @pytest.mark.parametrize("variant", GAIT, ids=_ids(GAIT))
-def test_gait_files(
-    variant: Variant, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_gait_files(variant: Variant, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "wave.toml"
     path.write_text(GAIT_FILE)
     variant.make(path, GAIT_FILE)
-    check(capsys, ["run", "--robot", "snake8", "--gait-file", str(path), "--duration", "0.1"],
-          path, variant.key)
+    check(
+        capsys,
+        ["run", "--robot", "snake8", "--gait-file", str(path), "--duration", "0.1"],
+        path,
+        variant.key,
+    )
 
 
 def _log_commands(log: Path, tmp_path: Path) -> list[list[str]]:
-    return [["log", "info", str(log)],
-            ["log", "plot", str(log), "--out", str(tmp_path / "plots")],
-            ["log", "export", str(log), "--format", "mcap", "--out", str(tmp_path / "x.mcap")]]
+    return [
+        ["log", "info", str(log)],
+        ["log", "plot", str(log), "--out", str(tmp_path / "plots")],
+        ["log", "export", str(log), "--format", "mcap", "--out", str(tmp_path / "x.mcap")],
+    ]
 
 
 @pytest.mark.parametrize("variant", CSV, ids=_ids(CSV))

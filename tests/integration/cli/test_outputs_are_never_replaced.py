@@ -48,12 +48,24 @@ class Case:
     needs_learning: bool = False
 
 
-LEARNING_MISSING = any(importlib.util.find_spec(module) is None
-                       for module in ("gymnasium", "stable_baselines3", "torch"))
+LEARNING_MISSING = any(
+    importlib.util.find_spec(module) is None
+    for module in ("gymnasium", "stable_baselines3", "torch")
+)
 RUN = ("run", "--duration", "0.2")
 # Small and quick, should the rule ever not hold (the rl commands would then train and replace).
-RL_FAST = ("--n-envs", "1", "--vec", "dummy", "--set", "action_hz=25", "--set", "control_hz=25",
-           "--set", "episode_s=2")
+RL_FAST = (
+    "--n-envs",
+    "1",
+    "--vec",
+    "dummy",
+    "--set",
+    "action_hz=25",
+    "--set",
+    "control_hz=25",
+    "--set",
+    "episode_s=2",
+)
 DRIVE = ("drive", "--script", "{script}")
 CASES = {
     ("run", "--log"): Case((*RUN, "--log", "{out}"), "run.csv", force_is_cheap=True),
@@ -63,40 +75,63 @@ CASES = {
     ("drive", "--record"): Case((*DRIVE, "--record", "{out}"), "keys.txt", force_is_cheap=True),
     ("drive", "--mcap"): Case((*DRIVE, "--mcap", "{out}"), "drive.mcap"),
     ("model", "--out"): Case(("model", "--out", "{out}"), "snake.xml", force_is_cheap=True),
-    ("calibrate", "--out"): Case(("calibrate", "--robot", "snake12", "--out", "{out}"),
-                                 "snake12.toml"),
+    ("calibrate", "--out"): Case(
+        ("calibrate", "--robot", "snake12", "--out", "{out}"), "snake12.toml"
+    ),
     ("tune gait", "--out"): Case(("tune", "gait", "--budget", "2", "--out", "{out}"), "gait.toml"),
-    ("tune gait", "--report"): Case(("tune", "gait", "--budget", "2", "--report", "{out}"),
-                                    "report", holds=("summary.json",)),
+    ("tune gait", "--report"): Case(
+        ("tune", "gait", "--budget", "2", "--report", "{out}"), "report", holds=("summary.json",)
+    ),
     ("tune gains", "--out"): Case(("tune", "gains", "--out", "{out}"), "robot.toml"),
-    ("tune gains", "--report"): Case(("tune", "gains", "--report", "{out}"), "report",
-                                     holds=("summary.json", "steps.png")),
+    ("tune gains", "--report"): Case(
+        ("tune", "gains", "--report", "{out}"), "report", holds=("summary.json", "steps.png")
+    ),
     ("sysid", "--out"): Case(("sysid", "{log}", "--out", "{out}"), "robot.toml"),
-    ("sysid", "--report"): Case(("sysid", "{log}", "--report", "{out}"), "report",
-                                holds=("summary.json",)),
-    ("sysid", "--record"): Case(("sysid", "--record", "{out}", "--duration", "0.3"), "chirp.csv",
-                                force_is_cheap=True),
-    ("log plot", "--out"): Case(("log", "plot", "{log}", "--out", "{out}"), "plots",
-                                holds=("joints.png",), force_is_cheap=True),
-    ("log export", "--out"): Case(("log", "export", "{log}", "--format", "mcap", "--out", "{out}"),
-                                  "export.mcap", force_is_cheap=True),
-    ("rl train", "--out"): Case(("rl", "train", "--steps", "64", "--rollout", "64", *RL_FAST,
-                                 "--out", "{out}"), "policy", holds=("policy.json", "actor.npz"),
-                                needs_learning=True),
-    ("rl eval", "--video"): Case(("rl", "eval", "{policy}", "--episodes", "1", "--baselines",
-                                  "off", "--video", "{out}"), "eval.mp4", needs_learning=True),
-    ("rl compare", "--out"): Case(("rl", "compare", "--encodings", "simple", "--steps", "64",
-                                   *RL_FAST, "--out", "{out}"), "compare",
-                                  holds=("summary.json", "compare.png"), needs_learning=True),
+    ("sysid", "--report"): Case(
+        ("sysid", "{log}", "--report", "{out}"), "report", holds=("summary.json",)
+    ),
+    ("sysid", "--record"): Case(
+        ("sysid", "--record", "{out}", "--duration", "0.3"), "chirp.csv", force_is_cheap=True
+    ),
+    ("log plot", "--out"): Case(
+        ("log", "plot", "{log}", "--out", "{out}"),
+        "plots",
+        holds=("joints.png",),
+        force_is_cheap=True,
+    ),
+    ("log export", "--out"): Case(
+        ("log", "export", "{log}", "--format", "mcap", "--out", "{out}"),
+        "export.mcap",
+        force_is_cheap=True,
+    ),
+    ("rl train", "--out"): Case(
+        ("rl", "train", "--steps", "64", "--rollout", "64", *RL_FAST, "--out", "{out}"),
+        "policy",
+        holds=("policy.json", "actor.npz"),
+        needs_learning=True,
+    ),
+    ("rl eval", "--video"): Case(
+        ("rl", "eval", "{policy}", "--episodes", "1", "--baselines", "off", "--video", "{out}"),
+        "eval.mp4",
+        needs_learning=True,
+    ),
+    ("rl compare", "--out"): Case(
+        ("rl", "compare", "--encodings", "simple", "--steps", "64", *RL_FAST, "--out", "{out}"),
+        "compare",
+        holds=("summary.json", "compare.png"),
+        needs_learning=True,
+    ),
 }
 
 
 def params(cases: list[tuple[str, str]]) -> list[object]:
     return [
         pytest.param(
-            key, id=" ".join(key),
+            key,
+            id=" ".join(key),
             marks=[pytest.mark.skipif(LEARNING_MISSING, reason="needs the rl-train extra")]
-            if CASES[key].needs_learning else [],
+            if CASES[key].needs_learning
+            else [],
         )
         for key in cases
     ]
@@ -115,8 +150,16 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     from snakebot.rl import GOAL_ENV_ID
     from tests.integration.rl.policies import constant_policy
 
-    policy = constant_policy(folder / "policy", GOAL_ENV_ID, [0, 0, 0, 0], 2 * 8 + 2 + 2,
-                             encoding="sinusoid", action_hz=25, control_hz=25, episode_s=2)
+    policy = constant_policy(
+        folder / "policy",
+        GOAL_ENV_ID,
+        [0, 0, 0, 0],
+        2 * 8 + 2 + 2,
+        encoding="sinusoid",
+        action_hz=25,
+        control_hz=25,
+        episode_s=2,
+    )
     return {"log": log, "script": script, "policy": policy}
 
 
@@ -135,8 +178,10 @@ def prepare(case: Case, tmp_path: Path) -> tuple[Path, Path]:
 
 
 def snapshot(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() if p.is_file() else b"<dir>"
-            for p in sorted(folder.rglob("*"))}
+    return {
+        str(p.relative_to(folder)): p.read_bytes() if p.is_file() else b"<dir>"
+        for p in sorted(folder.rglob("*"))
+    }
 
 
 def argv(case: Case, target: Path, inputs: dict[str, Path]) -> list[str]:
@@ -156,7 +201,10 @@ def test_the_sweep_covers_every_output_option() -> None:
 @pytest.mark.parametrize("dry_run", [False, True], ids=["run", "dry-run"])
 @pytest.mark.parametrize("key", params(WRITERS))
 def test_an_existing_output_is_refused_and_left_as_it_was(
-    key: tuple[str, str], dry_run: bool, inputs: dict[str, Path], tmp_path: Path,
+    key: tuple[str, str],
+    dry_run: bool,
+    inputs: dict[str, Path],
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     case = CASES[key]
@@ -170,11 +218,11 @@ def test_an_existing_output_is_refused_and_left_as_it_was(
     assert snapshot(folder) == before
 
 
-@pytest.mark.parametrize(
-    "key", params([k for k in WRITERS if CASES[k].force_is_cheap])
-)
+@pytest.mark.parametrize("key", params([k for k in WRITERS if CASES[k].force_is_cheap]))
 def test_force_replaces_the_output(
-    key: tuple[str, str], inputs: dict[str, Path], tmp_path: Path,
+    key: tuple[str, str],
+    inputs: dict[str, Path],
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     case = CASES[key]

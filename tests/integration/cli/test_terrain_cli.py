@@ -18,8 +18,10 @@ from snakebot.cli.main import main
         (["--terrain", "slope:tilt=5"], ("tilt", "angle_deg (0..45 deg)", "direction_deg")),
         (["--terrain", "lava"], ("lava", "flat, slope, pegs, rough, step, pipe, pole, cliff")),
         (["--terrain", "pipe:inner_diameter_m=0.03"], ("inner_diameter_m", "link radii")),
-        (["--friction-model", "scale", "--backend", "dynamixel", "--robot", "snake8"],
-         ("--friction-model does nothing with the dynamixel backend",)),
+        (
+            ["--friction-model", "scale", "--backend", "dynamixel", "--robot", "snake8"],
+            ("--friction-model does nothing with the dynamixel backend",),
+        ),
         (["--friction-model", "scale", "--robot", "worm"], ("rigid twin only",)),
     ],
 )

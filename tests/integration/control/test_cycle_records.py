@@ -29,8 +29,14 @@ def test_every_cycle_is_recorded_with_its_command_state_error_and_timing() -> No
     records: list[CycleRecord] = []
     safety = SafetyLayer.for_robot(robot)
     with TwinBackend(robot) as twin:
-        result = run_gait(twin, make_gait("serpenoid", 8), safety, RunPlan(2.0), metrics_for(robot),
-                          observers=[records.append])
+        result = run_gait(
+            twin,
+            make_gait("serpenoid", 8),
+            safety,
+            RunPlan(2.0),
+            metrics_for(robot),
+            observers=[records.append],
+        )
     scored = [r for r in records if r.scored]
     assert len(scored) == result.summary["control_cycles"] == 200
     assert [r.cycle for r in records] == list(range(1, len(records) + 1))
@@ -54,8 +60,15 @@ def test_an_open_ended_run_goes_on_until_its_stop_check_says_why() -> None:
         return "far enough" if len(seen) >= 120 else None
 
     with TwinBackend(robot) as twin:
-        result = run_gait(twin, make_gait("serpenoid", 8), SafetyLayer.for_robot(robot),
-                          RunPlan(None), metrics_for(robot), observers=[seen.append], stop=enough)
+        result = run_gait(
+            twin,
+            make_gait("serpenoid", 8),
+            SafetyLayer.for_robot(robot),
+            RunPlan(None),
+            metrics_for(robot),
+            observers=[seen.append],
+            stop=enough,
+        )
     assert result.stopped_by == "far enough" and not result.interrupted
     assert result.summary["control_cycles"] == 120
     assert result.summary["duration_s"] == 1.2
@@ -78,11 +91,23 @@ def test_a_late_cycle_is_flagged_and_the_next_step_gets_the_time_that_passed() -
 
     fast = make_gait("serpenoid", 12, {"omega": 12.0, "amplitude": 1.4})  # slew-limited
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with backend:
-            run_gait(backend, fast, SafetyLayer.for_robot(robot), RunPlan(1.0),
-                     metrics_for(robot), on_cycle=stall, observers=[records.append])
+            run_gait(
+                backend,
+                fast,
+                SafetyLayer.for_robot(robot),
+                RunPlan(1.0),
+                metrics_for(robot),
+                on_cycle=stall,
+                observers=[records.append],
+            )
     late = records[40]  # cycle 41
     assert late.overrun and late.period_s > 0.015
     assert [r.cycle for r in records if r.overrun] == [41]

@@ -46,8 +46,11 @@ def run_with_fault(
         base, safety=dataclasses.replace(base.safety, ramp_s=0.3, stop_policy=policy)
     )
     backend = DynamixelBackend(
-        robot, port=url, port_handler_factory=EmulatedPortHandler,
-        clock=lambda: chain.now_s, sleep=chain.advance,
+        robot,
+        port=url,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: chain.now_s,
+        sleep=chain.advance,
     )
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
 
@@ -57,8 +60,13 @@ def run_with_fault(
 
     with CsvTelemetryWriter(log_path, robot.joint_count) as log, backend:
         return run_gait(
-            backend, make_gait("sidewinding", 12), SafetyLayer.for_robot(robot),
-            RunPlan(duration_s=1.0), metrics, log=log, on_cycle=inject,
+            backend,
+            make_gait("sidewinding", 12),
+            SafetyLayer.for_robot(robot),
+            RunPlan(duration_s=1.0),
+            metrics,
+            log=log,
+            on_cycle=inject,
         )
 
 

@@ -59,10 +59,27 @@ def test_sigint_ramps_out_and_leaves_torque_as_configured(
     log = tmp_path / "run.csv"
     with emulator("--robot", str(robot)) as emu:
         run = subprocess.Popen(
-            [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", str(robot), "--gait", "sidewinding", "--duration", "60",
-             "--log", str(log), "--json"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "run",
+                "--backend",
+                "dynamixel",
+                "--port",
+                emu.port,
+                "--robot",
+                str(robot),
+                "--gait",
+                "sidewinding",
+                "--duration",
+                "60",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
         )
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline:
@@ -84,10 +101,27 @@ def test_sigint_ramps_out_and_leaves_torque_as_configured(
 
 def start_run(robot: Path, port: str, log: Path) -> subprocess.Popen[bytes]:
     return subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
-         "--robot", str(robot), "--gait", "sidewinding", "--duration", "60", "--log", str(log),
-         "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--backend",
+            "dynamixel",
+            "--port",
+            port,
+            "--robot",
+            str(robot),
+            "--gait",
+            "sidewinding",
+            "--duration",
+            "60",
+            "--log",
+            str(log),
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
     )
 
 
@@ -172,8 +206,7 @@ def registers_at_the_end(port: str) -> dict[str, list[int]]:
 def assert_ended_per_policy(registers: dict[str, list[int]], policy: str) -> None:
     assert registers["torque"] == [1 if policy == "hold" else 0] * 12
     assert registers["watchdog"] == [0] * 12  # disarmed, not tripped (-1)
-    for goal, low, high in zip(registers["goal"], registers["min"], registers["max"],
-                               strict=True):
+    for goal, low, high in zip(registers["goal"], registers["min"], registers["max"], strict=True):
         assert low <= goal <= high
 
 
@@ -234,10 +267,25 @@ def test_three_ctrl_c_stop_a_drive_over_the_bus_and_leave_it_limp(
     log = tmp_path / "drive.csv"
     with emulator("--robot", str(robot)) as emu:
         drive = subprocess.Popen(
-            [sys.executable, "-m", "snakebot", "drive", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", str(robot), "--script", str(script), "--log", str(log),
-             "--json"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "drive",
+                "--backend",
+                "dynamixel",
+                "--port",
+                emu.port,
+                "--robot",
+                str(robot),
+                "--script",
+                str(script),
+                "--log",
+                str(log),
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
         )
         wait_for_rows(log, 150, drive)
         for pause_s in (0.5, 0.1, 0.0):

@@ -35,14 +35,23 @@ def test_a_joint_resting_outside_its_limits_is_brought_in_never_stepped() -> Non
     servo.poke("goal_position", 2048)  # a stale goal it must not jump to either
     goals: list[int] = []
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with backend:
             goals.append(servo.peek("goal_position"))  # Goal = Present at torque on
-            run_gait(backend, make_gait("serpenoid", 12), SafetyLayer.for_robot(robot),
-                     RunPlan(duration_s=1.0), RunMetrics(12, robot.body_length_m,
-                                                         robot.total_mass_kg),
-                     on_cycle=lambda cycle, t: goals.append(servo.peek("goal_position")))
+            run_gait(
+                backend,
+                make_gait("serpenoid", 12),
+                SafetyLayer.for_robot(robot),
+                RunPlan(duration_s=1.0),
+                RunMetrics(12, robot.body_length_m, robot.total_mass_kg),
+                on_cycle=lambda cycle, t: goals.append(servo.peek("goal_position")),
+            )
     angles = (np.array(goals) - 2048) * RAD_PER_TICK
     assert abs(angles[0] - 2.5) < 2 * RAD_PER_TICK
     step_limit = robot.max_speed_rad_s * 0.01 + RAD_PER_TICK  # one 100 Hz cycle, one tick

@@ -56,16 +56,25 @@ def chain() -> Iterator[tuple[EmulatedChain, str]]:
 
 def robot(policy: str = "hold") -> RobotConfig:
     base = load_robot("snake12")
-    return dataclasses.replace(base, safety=dataclasses.replace(base.safety, ramp_s=0.3,
-                                                                stop_policy=policy))
+    return dataclasses.replace(
+        base, safety=dataclasses.replace(base.safety, ramp_s=0.3, stop_policy=policy)
+    )
 
 
-def run(chain: EmulatedChain, url: str, hook: Hook, *, duration_s: float = 2.0,
-        policy: str = "hold", presents: list[np.ndarray] | None = None) -> RunResult:
+def run(
+    chain: EmulatedChain,
+    url: str,
+    hook: Hook,
+    *,
+    duration_s: float = 2.0,
+    policy: str = "hold",
+    presents: list[np.ndarray] | None = None,
+) -> RunResult:
     clock = SkewedClock(chain)
     config = robot(policy)
-    backend = DynamixelBackend(config, port=url, port_handler_factory=EmulatedPortHandler,
-                               clock=clock, sleep=chain.advance)
+    backend = DynamixelBackend(
+        config, port=url, port_handler_factory=EmulatedPortHandler, clock=clock, sleep=chain.advance
+    )
 
     def on_cycle(cycle: int, gait_time_s: float) -> None:
         hook(cycle, chain, clock)
@@ -73,10 +82,14 @@ def run(chain: EmulatedChain, url: str, hook: Hook, *, duration_s: float = 2.0,
             presents.append(np.array([s.peek("present_position") for s in chain.servos]))
 
     with backend:
-        return run_gait(backend, make_gait("sidewinding", 12), SafetyLayer.for_robot(config),
-                        RunPlan(duration_s=duration_s), RunMetrics(12, config.body_length_m,
-                                                                   config.total_mass_kg),
-                        on_cycle=on_cycle)
+        return run_gait(
+            backend,
+            make_gait("sidewinding", 12),
+            SafetyLayer.for_robot(config),
+            RunPlan(duration_s=duration_s),
+            RunMetrics(12, config.body_length_m, config.total_mass_kg),
+            on_cycle=on_cycle,
+        )
 
 
 def assert_straight_and_holding(chain: EmulatedChain) -> None:
@@ -198,8 +211,9 @@ def test_a_trip_during_the_stop_ramp_is_cleared_and_the_ramp_done_again(
             clock.stall_unseen(0.15)
         emulated.advance(dt)
 
-    backend = DynamixelBackend(config, port=url, port_handler_factory=EmulatedPortHandler,
-                               clock=clock, sleep=sleep)
+    backend = DynamixelBackend(
+        config, port=url, port_handler_factory=EmulatedPortHandler, clock=clock, sleep=sleep
+    )
     with backend:
         for _ in range(100):
             backend.send_command(JointCommand(np.full(12, 0.6)))

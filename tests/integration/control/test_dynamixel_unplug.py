@@ -33,17 +33,37 @@ def test_the_port_vanishing_mid_run_is_a_bus_error_naming_it(
     robot = edit_robot(config_dir, "snake12", 'stop_policy = "hold"', f'stop_policy = "{policy}"')
     emulator = subprocess.Popen(
         [sys.executable, "-m", "snakebot", "emulate", "--pty", "--json", "--robot", str(robot)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     log = tmp_path / "run.csv"
     try:
         assert emulator.stdout is not None
         port = json.loads(emulator.stdout.readline())["port"]
         run = subprocess.Popen(
-            [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
-             "--robot", str(robot), "--gait", "sidewinding", "--duration", "60", "--log",
-             str(log), "--json"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "run",
+                "--backend",
+                "dynamixel",
+                "--port",
+                port,
+                "--robot",
+                str(robot),
+                "--gait",
+                "sidewinding",
+                "--duration",
+                "60",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
         )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and run.poll() is None:

@@ -22,9 +22,25 @@ pytestmark = [
 
 def run(port: str, *extra: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--port", port,
-         "--robot", "snake8", "--duration", "0.5", "--json", *extra],
-        capture_output=True, text=True, timeout=60,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--backend",
+            "dynamixel",
+            "--port",
+            port,
+            "--robot",
+            "snake8",
+            "--duration",
+            "0.5",
+            "--json",
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
 
 
@@ -34,7 +50,8 @@ def test_a_robot_file_naming_fewer_servos_than_the_bus_holds_is_refused() -> Non
         allowed = run(emu.port, "--allow-extra-servos")
     assert refused.returncode == 1, refused.stderr
     assert "unexpected servo ID(s) on the bus: 9 (XL430-W250), 10 (XL430-W250), 11" in (
-        refused.stderr)
+        refused.stderr
+    )
     assert "--allow-extra-servos" in refused.stderr
     assert "Traceback" not in refused.stderr
     assert allowed.returncode == 0, allowed.stderr

@@ -47,8 +47,14 @@ def test_the_goal_audit_reads_protocol_1_goals_of_an_ax_robot() -> None:
     audit = GoalAudit(robot, table_for_model("AX-12A"))
     low, high = audit.limits[robot.servo_ids[0]]
     assert 0 < low < 512 < high < 1023  # ten-bit ticks around the AX centre
-    params = bytes([30, 2, 1]) + (512).to_bytes(2, "little") + bytes([2]) + high.to_bytes(
-        2, "little") + bytes([3]) + (high + 1).to_bytes(2, "little")
+    params = (
+        bytes([30, 2, 1])
+        + (512).to_bytes(2, "little")
+        + bytes([2])
+        + high.to_bytes(2, "little")
+        + bytes([3])
+        + (high + 1).to_bytes(2, "little")
+    )
     audit.feed(protocol1.build_instruction(0xFE, protocol1.Instruction.SYNC_WRITE, params))
     audit.feed(protocol1.build_instruction(4, protocol1.Instruction.WRITE, bytes([30, 0, 0])))
     assert audit.goals == 4
@@ -62,4 +68,6 @@ def test_the_final_state_check_sees_a_servo_left_wrong() -> None:
     chain.servo(4).poke("torque_enable", 1)
     chain.servo(4).poke("bus_watchdog", 5)
     assert final_mismatches(chain, "limp", none) == [
-        "servo 4: torque on with limp", "servo 4: Bus Watchdog left armed"]
+        "servo 4: torque on with limp",
+        "servo 4: Bus Watchdog left armed",
+    ]

@@ -30,7 +30,11 @@ def hardware_suite(port: str | None) -> subprocess.CompletedProcess[str]:
         env.update(SNAKEBOT_PORT=port, SNAKEBOT_ROBOT="snake12")
     return subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/hardware"],
-        cwd=REPO, env=env, capture_output=True, text=True, timeout=300,
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
 
 
@@ -44,8 +48,21 @@ def test_the_hardware_suite_passes_on_an_emulated_bus_after_config_apply() -> No
     with emulator("--robot", "snake12") as emu:
         factory = hardware_suite(emu.port)
         applied = subprocess.run(
-            [sys.executable, "-m", "snakebot", "config", "apply", "--robot", "snake12",
-             "--port", emu.port, "--yes"], capture_output=True, text=True, timeout=120,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "config",
+                "apply",
+                "--robot",
+                "snake12",
+                "--port",
+                emu.port,
+                "--yes",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
         )
         assert applied.returncode == 0, applied.stderr
         result = hardware_suite(emu.port)

@@ -16,9 +16,20 @@ from snakebot.telemetry import read_log
 
 def _start(log: Path) -> subprocess.Popen[bytes]:
     return subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "run", "--realtime", "--duration", "60",
-         "--log", str(log), "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--realtime",
+            "--duration",
+            "60",
+            "--log",
+            str(log),
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
     )
 
 

@@ -59,15 +59,28 @@ def snake12() -> RobotConfig:
     return dataclasses.replace(base, safety=dataclasses.replace(base.safety, ramp_s=0.5))
 
 
-def run(chain: EmulatedChain, url: str, gait: Gait, log_path: Path,
-        on_cycle: CycleHook | None = None) -> RunResult:
+def run(
+    chain: EmulatedChain, url: str, gait: Gait, log_path: Path, on_cycle: CycleHook | None = None
+) -> RunResult:
     robot = snake12()
-    backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                               clock=lambda: chain.now_s, sleep=chain.advance)
+    backend = DynamixelBackend(
+        robot,
+        port=url,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: chain.now_s,
+        sleep=chain.advance,
+    )
     metrics = RunMetrics(12, robot.body_length_m, robot.total_mass_kg)
     with CsvTelemetryWriter(log_path, 12) as log, backend:
-        return run_gait(backend, gait, SafetyLayer.for_robot(robot), RunPlan(duration_s=3.0),
-                        metrics, log=log, on_cycle=on_cycle)
+        return run_gait(
+            backend,
+            gait,
+            SafetyLayer.for_robot(robot),
+            RunPlan(duration_s=3.0),
+            metrics,
+            log=log,
+            on_cycle=on_cycle,
+        )
 
 
 def assert_ramped_out_after(log_path: Path, fail_s: float) -> None:
@@ -148,14 +161,24 @@ def test_a_ramp_out_on_a_late_host_still_ends_on_the_rest_pose(
             emulated.advance(0.06)
 
     robot = snake12()
-    backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                               clock=lambda: emulated.now_s, sleep=emulated.advance)
+    backend = DynamixelBackend(
+        robot,
+        port=url,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: emulated.now_s,
+        sleep=emulated.advance,
+    )
     log_path = tmp_path / "run.csv"
     with CsvTelemetryWriter(log_path, 12) as log, backend:
-        result = run_gait(backend, make_gait("sidewinding", 12), SafetyLayer.for_robot(robot),
-                          RunPlan(duration_s=1.6), RunMetrics(12, robot.body_length_m,
-                                                              robot.total_mass_kg),
-                          log=log, on_cycle=hook)
+        result = run_gait(
+            backend,
+            make_gait("sidewinding", 12),
+            SafetyLayer.for_robot(robot),
+            RunPlan(duration_s=1.6),
+            RunMetrics(12, robot.body_length_m, robot.total_mass_kg),
+            log=log,
+            on_cycle=hook,
+        )
     assert result.summary["overruns"] > 5
     commands = read_log(log_path).joints("command_rad")
     np.testing.assert_array_equal(commands[-1], np.zeros(12))

@@ -18,8 +18,13 @@ def test_an_ax_overload_shows_by_name_before_the_slow_check_stops_the_run() -> N
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with backend:
             _, alerts = backend_readings(backend)
             assert alerts() == ()

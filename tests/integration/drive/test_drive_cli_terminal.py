@@ -50,8 +50,8 @@ class Terminal:
             ready, _, _ = select.select([self.master], [], [], min(remaining, 0.5))
             if not ready:
                 exited = self.proc.poll()
-                assert exited is None, (
-                    f"drive exited {exited}: " + self.screen[-2000:].decode(errors="replace")
+                assert exited is None, f"drive exited {exited}: " + self.screen[-2000:].decode(
+                    errors="replace"
                 )
                 continue
             try:
@@ -129,9 +129,22 @@ def test_sigterm_stops_a_scripted_drive_through_the_rest_pose(tmp_path: Path) ->
     script.write_text("0 w\n0 w\n0 w\n0 w\n600 q\n")
     log = tmp_path / "drive.csv"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "drive", "--robot", "snake8", "--realtime",
-         "--script", str(script), "--log", str(log), "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "drive",
+            "--robot",
+            "snake8",
+            "--realtime",
+            "--script",
+            str(script),
+            "--log",
+            str(log),
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
     )
     deadline = time.monotonic() + 30
     while not (log.exists() and log.read_text().count("\n") > 200):
@@ -149,7 +162,10 @@ def test_sigterm_stops_a_scripted_drive_through_the_rest_pose(tmp_path: Path) ->
 def test_without_a_terminal_it_asks_for_a_script() -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "snakebot", "drive"],
-        stdin=subprocess.DEVNULL, capture_output=True, text=True, start_new_session=True,
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        start_new_session=True,
         timeout=60,
     )
     assert proc.returncode == 2  # usage: without a terminal, drive needs --script
@@ -179,7 +195,9 @@ def test_a_terminal_closed_mid_drive_stops_the_snake_and_exits_1_not_3(
     with err.open("wb") as stderr:
         proc = subprocess.Popen(
             [sys.executable, "-m", "snakebot", "drive", "--robot", "snake8", "--log", str(log)],
-            stdin=slave, stdout=slave, stderr=stderr if to_file else slave,
+            stdin=slave,
+            stdout=slave,
+            stderr=stderr if to_file else slave,
             preexec_fn=own_the_terminal if controlling else None,
             start_new_session=not controlling,
         )
@@ -217,9 +235,22 @@ def test_a_summary_reader_that_quit_is_exit_1_saying_so(tmp_path: Path) -> None:
     script, log = tmp_path / "short.txt", tmp_path / "drive.csv"
     script.write_text("0 w\n0 w\n3 q\n")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "drive", "--robot", "snake8", "--realtime",
-         "--script", str(script), "--log", str(log), "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "drive",
+            "--robot",
+            "snake8",
+            "--realtime",
+            "--script",
+            str(script),
+            "--log",
+            str(log),
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
     )
     assert proc.stdout is not None and proc.stderr is not None
     deadline = time.monotonic() + 60

@@ -49,10 +49,28 @@ def test_the_scripted_tour_drives_the_twin_through_the_bus_and_ends_holding(
     log = tmp_path / "drive.csv"
     with emulator("--robot", str(robot), "--physics") as emu:
         drive = subprocess.run(
-            [sys.executable, "-m", "snakebot", "drive", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", str(robot), "--gaits", "sidewinding,rolling", "--script",
-             str(TOUR), "--log", str(log), "--json"],
-            capture_output=True, text=True, timeout=120,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "drive",
+                "--backend",
+                "dynamixel",
+                "--port",
+                emu.port,
+                "--robot",
+                str(robot),
+                "--gaits",
+                "sidewinding,rolling",
+                "--script",
+                str(TOUR),
+                "--log",
+                str(log),
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
         )
         assert drive.returncode == 0, drive.stderr
         torque = registers(emu.port, "torque_enable")
@@ -82,10 +100,27 @@ def test_closing_the_terminal_stops_the_robot_and_leaves_it_limp(
     with emulator("--robot", str(robot), "--physics") as emu:
         master, slave = pty.openpty()
         drive = subprocess.Popen(
-            [sys.executable, "-m", "snakebot", "drive", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", str(robot), "--gaits", "sidewinding", "--log", str(log),
-             "--json"],
-            stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "drive",
+                "--backend",
+                "dynamixel",
+                "--port",
+                emu.port,
+                "--robot",
+                str(robot),
+                "--gaits",
+                "sidewinding",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            stdin=slave,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            start_new_session=True,
         )
         os.close(slave)
         deadline = time.monotonic() + 30

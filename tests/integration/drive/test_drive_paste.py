@@ -76,7 +76,12 @@ def test_a_paste_of_thousands_of_keys_neither_stalls_the_loop_nor_moves_the_snak
     try:
         with TwinBackend(robot) as twin, TerminalSource(slave) as source:
             result = run_drive(
-                twin, live, SafetyLayer.for_robot(robot), controller, source, rate_hz=RATE_HZ,
+                twin,
+                live,
+                SafetyLayer.for_robot(robot),
+                controller,
+                source,
+                rate_hz=RATE_HZ,
                 metrics=RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
                 observers=[paste],
             )
@@ -102,7 +107,12 @@ def test_a_script_with_many_keys_at_one_time_plays_them_all(ending: str) -> None
     script = ScriptSource(parse_script("0 w\n0 s\n" * 40 + "0 w\n" + ending))
     with TwinBackend(robot) as twin:
         result = run_drive(
-            twin, live, SafetyLayer.for_robot(robot), controller, script, rate_hz=RATE_HZ,
+            twin,
+            live,
+            SafetyLayer.for_robot(robot),
+            controller,
+            script,
+            rate_hz=RATE_HZ,
             metrics=RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
         )
     assert result.summary["keys"] == 81 + len(ending.split()) // 2

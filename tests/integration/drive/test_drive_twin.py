@@ -38,8 +38,9 @@ class Trace:
         w, x, y, z = cycle.body.head_quat
         roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
         com = cycle.body.com_m
-        self.rows.append((cycle.drive_time_s, com[0], com[1], head_yaw_rad(cycle.body.head_quat),
-                          roll))
+        self.rows.append(
+            (cycle.drive_time_s, com[0], com[1], head_yaw_rad(cycle.body.head_quat), roll)
+        )
         self.targets.append(cycle.target_rad)
         self.commands.append(cycle.command_rad)
         self.gaits.append(cycle.status.gait)
@@ -148,9 +149,29 @@ def test_the_replay_line_a_recording_prints_reproduces_the_drive(
     script = tmp_path / "tour.txt"
     script.write_text("0 1\n0 w\n0 w\n0 w\n0 w\n4 a\n4 a\n6 2\n9 q\n")
     record = tmp_path / "my drive.rec"  # a space: the line must quote it
-    assert main(["drive", "--robot", "snake12", "--gaits", "rolling,sidewinding", "--rate", "50",
-                 "--smoothing", "0.3", "--set", "sidewinding.amplitude_even=0.5",
-                 "--script", str(script), "--record", str(record), "--json"]) == 0
+    assert (
+        main(
+            [
+                "drive",
+                "--robot",
+                "snake12",
+                "--gaits",
+                "rolling,sidewinding",
+                "--rate",
+                "50",
+                "--smoothing",
+                "0.3",
+                "--set",
+                "sidewinding.amplitude_even=0.5",
+                "--script",
+                str(script),
+                "--record",
+                str(record),
+                "--json",
+            ]
+        )
+        == 0
+    )
     first = json.loads(capsys.readouterr().out)
     lines = [line for line in record.read_text().splitlines() if line.startswith("# replay: ")]
     assert len(lines) == 1

@@ -26,9 +26,13 @@ EMULATE = [sys.executable, "-m", "snakebot", "emulate", "--pty", "--json", "--ro
 
 def test_a_full_disk_while_serving_is_exit_1_and_keeps_the_previous_state(tmp_path: Path) -> None:
     state = tmp_path / "servos.json"
-    proc = subprocess.Popen([*EMULATE, "--fresh", "2", "--state-file", str(state)],
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    proc = subprocess.Popen(
+        [*EMULATE, "--fresh", "2", "--state-file", str(state)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         emu = Emulator(proc)
         assert emu.first["waiting"] == 2
@@ -61,8 +65,13 @@ def test_a_state_file_that_cannot_be_written_is_exit_1_naming_it(
         "under a file": tmp_path / "plain" / "servos.json",
         "device": Path("/dev/full"),
     }[where]
-    result = subprocess.run([*EMULATE, "--state-file", str(path)], capture_output=True,
-                            text=True, timeout=120, stdin=subprocess.DEVNULL)
+    result = subprocess.run(
+        [*EMULATE, "--state-file", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        stdin=subprocess.DEVNULL,
+    )
     assert result.returncode == 1, result.stderr
     assert str(path) in result.stderr and "internal error" not in result.stderr
     if where == "device":

@@ -18,19 +18,49 @@ pytestmark = pytest.mark.fuzz
 
 
 FAMILIES = {
-    "2": {"random", "field", "bitflip", "truncated", "length", "stuffing", "crc", "splice",
-          "stream"},
-    "1": {"random", "field", "bitflip", "truncated", "length", "checksum", "splice", "stream",
-          "protocol2"},
+    "2": {
+        "random",
+        "field",
+        "bitflip",
+        "truncated",
+        "length",
+        "stuffing",
+        "crc",
+        "splice",
+        "stream",
+    },
+    "1": {
+        "random",
+        "field",
+        "bitflip",
+        "truncated",
+        "length",
+        "checksum",
+        "splice",
+        "stream",
+        "protocol2",
+    },
 }
 
 
 @pytest.mark.parametrize("protocol", ["2", "1"])
 def test_ten_thousand_fuzzed_inputs_no_crash_hang_or_corruption(protocol: str) -> None:
     transport = "both" if os.name == "posix" else "inproc"
-    command = [sys.executable, str(TOOLS / "fuzz_emulator.py"), "--packets", "10000",
-               "--pty-packets", "500", "--seed", "20261130", "--transport", transport,
-               "--protocol", protocol, "--json"]
+    command = [
+        sys.executable,
+        str(TOOLS / "fuzz_emulator.py"),
+        "--packets",
+        "10000",
+        "--pty-packets",
+        "500",
+        "--seed",
+        "20261130",
+        "--transport",
+        transport,
+        "--protocol",
+        protocol,
+        "--json",
+    ]
     done = subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=TOOLS)
     assert done.stderr == "" or done.returncode == 0, done.stderr
     reports = json.loads(done.stdout)["reports"]

@@ -29,15 +29,28 @@ pytestmark = [
 
 def test_a_minute_of_hardware_in_the_loop_under_load_loses_nothing() -> None:
     duration = float(os.environ.get("SNAKEBOT_SOAK_S", "60"))
-    command = [sys.executable, str(TOOL), "--duration", str(duration), "--rate", "50",
-               "--load", "2", "--json"]
+    command = [
+        sys.executable,
+        str(TOOL),
+        "--duration",
+        str(duration),
+        "--rate",
+        "50",
+        "--load",
+        "2",
+        "--json",
+    ]
     done = subprocess.run(command, capture_output=True, text=True, timeout=duration * 5 + 300)
     report = json.loads(done.stdout)
-    starved = (f"; the machine kept the run or the emulator from a CPU for "
-               f"{report['longest_cpu_wait_s']:.2f} s (more than two CPU-bound processes can)"
-               if report["longest_cpu_wait_s"] >= STARVED_S else "")
+    starved = (
+        f"; the machine kept the run or the emulator from a CPU for "
+        f"{report['longest_cpu_wait_s']:.2f} s (more than two CPU-bound processes can)"
+        if report["longest_cpu_wait_s"] >= STARVED_S
+        else ""
+    )
     assert report["ok"], f"{report['log_rows']} rows in {duration:g} s{starved}: " + json.dumps(
-        report, indent=1)
+        report, indent=1
+    )
     assert report["log_rows"] >= 0.9 * 50 * duration
     assert report["emulator_bus"]["watchdog_trips"] == 0
     assert done.returncode == 0

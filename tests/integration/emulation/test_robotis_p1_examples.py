@@ -50,8 +50,14 @@ X_SERIES = Table(64, 116, 132, 122, 8, 4, 1, 3)
 class Example:
     """One example's SDK calls on an open port; every call must succeed without an error."""
 
-    def __init__(self, port: Any, table: Table, settle: Callable[[], None], *,
-                 ask: Callable[[Callable[[], Any]], Any] = lambda f: f()) -> None:
+    def __init__(
+        self,
+        port: Any,
+        table: Table,
+        settle: Callable[[], None],
+        *,
+        ask: Callable[[Callable[[], Any]], Any] = lambda f: f(),
+    ) -> None:
         self.port, self.t, self.settle, self.ask = port, table, settle, ask
         self.ph = dxl.PacketHandler(1.0)
 

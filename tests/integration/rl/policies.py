@@ -11,8 +11,9 @@ from snakebot.rl.policy_file import NumpyActor, save_actor, write_settings
 from snakebot.rl.settings import GoalSettings, VelocitySettings, settings_dict, split_kwargs
 
 
-def constant_policy(folder: Path, env_id: str, action: list[float], obs_dim: int,
-                    **kwargs: Any) -> Path:
+def constant_policy(
+    folder: Path, env_id: str, action: list[float], obs_dim: int, **kwargs: Any
+) -> Path:
     """A policy that always answers ``action`` (zero weights, the action as bias; a tanh
     hidden layer so the folder has the shape SB3's MlpPolicy exports)."""
     task = GoalSettings if "Goal" in env_id else VelocitySettings
@@ -28,8 +29,9 @@ def constant_policy(folder: Path, env_id: str, action: list[float], obs_dim: int
     return folder
 
 
-def random_policy(folder: Path, env_id: str, action_dim: int, obs_dim: int, seed: int,
-                  **kwargs: Any) -> Path:
+def random_policy(
+    folder: Path, env_id: str, action_dim: int, obs_dim: int, seed: int, **kwargs: Any
+) -> Path:
     """A policy with random weights: its actions depend on what it observes."""
     task = GoalSettings if "Goal" in env_id else VelocitySettings
     full = settings_dict(*split_kwargs(dict(kwargs), task))

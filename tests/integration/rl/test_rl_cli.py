@@ -22,15 +22,30 @@ FAST = ["--set", "action_hz=25", "--set", "control_hz=25", "--set", "episode_s=8
 
 
 def cli(*args: str, timeout: float = 900) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "snakebot", *args], capture_output=True,
-                          text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "snakebot", *args], capture_output=True, text=True, timeout=timeout
+    )
 
 
 def test_ppo_smoke_trains_two_rollouts_saves_the_policy_and_evaluates_it(tmp_path: Path) -> None:
     out = tmp_path / "policy"
-    done = cli("rl", "train", "--env", "snakebot/SnakeGoal-v0", "--encoding", "dft_shift",
-                    "--steps", "4096", "--n-envs", "2", "--vec", "dummy", "--out", str(out),
-                    *FAST)
+    done = cli(
+        "rl",
+        "train",
+        "--env",
+        "snakebot/SnakeGoal-v0",
+        "--encoding",
+        "dft_shift",
+        "--steps",
+        "4096",
+        "--n-envs",
+        "2",
+        "--vec",
+        "dummy",
+        "--out",
+        str(out),
+        *FAST,
+    )
     assert done.returncode == 0, done.stderr
     assert "2048/4096 steps" in done.stderr and "4096/4096 steps" in done.stderr  # progress
     with (out / "learning_curve.csv").open() as f:
@@ -65,12 +80,18 @@ def test_ppo_smoke_trains_two_rollouts_saves_the_policy_and_evaluates_it(tmp_pat
 def test_eval_counts_goals_reached_against_zero_and_random(tmp_path: Path) -> None:
     # A policy that always swims ahead, on goals straight ahead: it reaches them all; a zero
     # dft_shift action holds the snake straight and still.
-    folder = constant_policy(tmp_path / "ahead", snakebot.rl.GOAL_ENV_ID, [0, 1, 0, 0, 0],
-                             2 * 8 + 2 + 2, encoding="dft_shift", episode_s=12,
-                             goal_bearing_rad=(0.0, 0.0), goal_distance_bl=(2.0, 2.5))
+    folder = constant_policy(
+        tmp_path / "ahead",
+        snakebot.rl.GOAL_ENV_ID,
+        [0, 1, 0, 0, 0],
+        2 * 8 + 2 + 2,
+        encoding="dft_shift",
+        episode_s=12,
+        goal_bearing_rad=(0.0, 0.0),
+        goal_distance_bl=(2.0, 2.5),
+    )
     video = tmp_path / "first.mp4"
-    done = cli("rl", "eval", str(folder), "--episodes", "3", "--json", "--video",
-                    str(video))
+    done = cli("rl", "eval", str(folder), "--episodes", "3", "--json", "--video", str(video))
     assert done.returncode == 0, done.stderr
     results = json.loads(done.stdout)
     assert results["policy"]["success_rate"] == 1.0
@@ -82,8 +103,22 @@ def test_eval_counts_goals_reached_against_zero_and_random(tmp_path: Path) -> No
 
 def test_compare_draws_every_encoding_side_by_side(tmp_path: Path) -> None:
     out = tmp_path / "compare"
-    done = cli("rl", "compare", "--encodings", "sinusoid,dft", "--steps", "2048",
-                    "--n-envs", "1", "--vec", "dummy", "--out", str(out), "--json", *FAST)
+    done = cli(
+        "rl",
+        "compare",
+        "--encodings",
+        "sinusoid,dft",
+        "--steps",
+        "2048",
+        "--n-envs",
+        "1",
+        "--vec",
+        "dummy",
+        "--out",
+        str(out),
+        "--json",
+        *FAST,
+    )
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert set(summary["runs"]) == {"sinusoid", "dft"}
@@ -105,8 +140,9 @@ def test_dry_runs_check_the_settings_and_write_nothing(tmp_path: Path) -> None:
     assert train.returncode == 0, train.stderr
     plan = json.loads(train.stdout)
     assert plan["dry_run"] is True and plan["env_kwargs"]["action_hz"] == 25
-    compare = cli("rl", "compare", "--encodings", "sinusoid,dft", "--out", str(out), "--dry-run",
-                  "--json")
+    compare = cli(
+        "rl", "compare", "--encodings", "sinusoid,dft", "--out", str(out), "--dry-run", "--json"
+    )
     assert compare.returncode == 0, compare.stderr
     assert json.loads(compare.stdout)["encodings"] == ["sinusoid", "dft"]
     bad = cli("rl", "train", "--set", "goal_radius=1", "--dry-run", "--out", str(out))

@@ -29,8 +29,14 @@ def test_each_example_runs_as_written(code: str, tmp_path: Path) -> None:
     constant_policy(tmp_path / "goal", GOAL_ENV_ID, [0, 1, 0, 0, 0], 2 * 8 + 2 + 2)
     script = tmp_path / "example.py"
     script.write_text(code, encoding="utf-8")
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
-                          text=True, timeout=600, check=False)
+    done = subprocess.run(
+        [sys.executable, str(script)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert done.returncode == 0, f"{code}\n---\n{done.stderr[-3000:]}"
     assert "Traceback" not in done.stderr
     if "Mocap" in code:

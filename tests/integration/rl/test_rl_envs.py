@@ -162,8 +162,7 @@ def test_the_safety_layer_limits_what_reaches_the_twin() -> None:
 @pytest.mark.parametrize("mode", ["sync", "async"])
 def test_make_vec_runs_both_envs(mode: str) -> None:
     for env_id in snakebot.rl.ENV_IDS:
-        envs = gymnasium.make_vec(env_id, num_envs=2, vectorization_mode=mode,
-                                  encoding="dft_shift")
+        envs = gymnasium.make_vec(env_id, num_envs=2, vectorization_mode=mode, encoding="dft_shift")
         obs, _ = envs.reset(seed=3)
         assert obs.shape[0] == 2 and not np.array_equal(obs[0], obs[1])
         for _ in range(3):

@@ -26,8 +26,10 @@ def test_compare_refuses_to_replace_a_comparison_or_a_policy_in_it(
     (out / "compare.json").unlink()
     constant_policy(out / "dft", GOAL_ENV_ID, [0, 0, 0, 0, 0], 20)
     assert main(argv) == 1
-    assert f"{out / 'dft'}: holds the trained policy files actor.npz, policy.json, which" in \
-        capsys.readouterr().err
+    assert (
+        f"{out / 'dft'}: holds the trained policy files actor.npz, policy.json, which"
+        in capsys.readouterr().err
+    )
     assert main([*argv, "--force"]) == 0
     assert sorted(p.name for p in (out / "dft").iterdir()) == ["actor.npz", "policy.json"]
 
@@ -39,10 +41,11 @@ def test_eval_refuses_to_replace_a_video(
     video = tmp_path / "first.mp4"
     video.write_bytes(b"a video the user made")
     for extra in (["--dry-run"], []):
-        code = main(["rl", "eval", str(folder), "--episodes", "1", "--video", str(video),
-                     *extra])
+        code = main(["rl", "eval", str(folder), "--episodes", "1", "--video", str(video), *extra])
         assert code == 1
-        assert f"{video}: the video exists and would be replaced: pass --force" in \
-            capsys.readouterr().err
+        assert (
+            f"{video}: the video exists and would be replaced: pass --force"
+            in capsys.readouterr().err
+        )
         assert video.read_bytes() == b"a video the user made"
     assert main(["rl", "eval", str(folder), "--video", str(video), "--dry-run", "--force"]) == 0

@@ -40,6 +40,7 @@ def edit_json(change: Callable[[dict[str, Any]], None]) -> Callable[[Path], None
         payload = json.loads(path.read_text())
         change(payload)
         path.write_text(json.dumps(payload))  # NaN and Infinity as Python's json writes them
+
     return edit
 
 
@@ -58,6 +59,7 @@ def write(name: str, data: bytes) -> Callable[[Path], None]:
 def actor(**arrays: Any) -> Callable[[Path], None]:
     def edit(folder: Path) -> None:
         np.savez(folder / "actor.npz", **arrays)
+
     return edit
 
 
@@ -65,6 +67,7 @@ def nested(depth: int) -> Callable[[Path], None]:
     def edit(folder: Path) -> None:
         text = (folder / "policy.json").read_text().rstrip().rstrip("}")
         (folder / "policy.json").write_text(f'{text}, "versions": {"[" * depth}{"]" * depth}}}')
+
     return edit
 
 
@@ -75,10 +78,13 @@ CASES: list[tuple[str, Callable[[Path], None], str, str]] = [
     ("not UTF-8", write("policy.json", b"\xff\xfe{\x00}"), "policy.json", "JSON"),
     ("a JSON list", write("policy.json", b"[1, 2]"), "policy.json", "object"),
     ("wrong format", top("format", 2), "policy.json", "format"),
-    ("env id of a module", top("env_id", "payloadpkg.evil:SnakeGoal-v0"), "policy.json",
-     "env_id"),
-    ("env id of an unknown module", top("env_id", "nosuchmodule:SnakeGoal-v0"), "policy.json",
-     "env_id"),
+    ("env id of a module", top("env_id", "payloadpkg.evil:SnakeGoal-v0"), "policy.json", "env_id"),
+    (
+        "env id of an unknown module",
+        top("env_id", "nosuchmodule:SnakeGoal-v0"),
+        "policy.json",
+        "env_id",
+    ),
     ("a gymnasium env, not ours", top("env_id", "CartPole-v1"), "policy.json", "env_id"),
     ("env id a number", top("env_id", 7), "policy.json", "env_id"),
     ("env_kwargs a list", top("env_kwargs", [1]), "policy.json", "env_kwargs"),
@@ -93,11 +99,14 @@ CASES: list[tuple[str, Callable[[Path], None], str, str]] = [
     ("robot unknown", setting("robot", "no-such-robot"), "policy.json", "env_kwargs.robot"),
     ("encoding a list", setting("encoding", ["dft"]), "policy.json", "env_kwargs.encoding"),
     ("dft_bins 2.5", setting("dft_bins", 2.5), "policy.json", "env_kwargs.dft_bins"),
-    ("timestep_s 1e-300", setting("timestep_s", 1e-300), "policy.json",
-     "env_kwargs.timestep_s"),
+    ("timestep_s 1e-300", setting("timestep_s", 1e-300), "policy.json", "env_kwargs.timestep_s"),
     ("goal_bonus Infinity", setting("goal_bonus", float("inf")), "policy.json", "goal_bonus"),
-    ("goal_distance_bl text", setting("goal_distance_bl", ["a", "b"]), "policy.json",
-     "env_kwargs.goal_distance_bl"),
+    (
+        "goal_distance_bl text",
+        setting("goal_distance_bl", ["a", "b"]),
+        "policy.json",
+        "env_kwargs.goal_distance_bl",
+    ),
     ("an unknown key", top("trainer", "me"), "policy.json", "trainer"),
     ("steps text", top("steps", "many"), "policy.json", "steps"),
     ("steps NaN", top("steps", float("nan")), "policy.json", "steps"),
@@ -106,30 +115,73 @@ CASES: list[tuple[str, Callable[[Path], None], str, str]] = [
     ("no actor.npz", lambda f: (f / "actor.npz").unlink(), "actor.npz", "missing"),
     ("actor.npz text", write("actor.npz", b"weights"), "actor.npz", "not a policy actor"),
     ("actor.npz empty", write("actor.npz", b""), "actor.npz", "not a policy actor"),
-    ("actor.npz a broken zip", write("actor.npz", b"PK\x03\x04broken"), "actor.npz",
-     "not a policy actor"),
-    ("actor.npz layers that do not chain",
-     actor(w0=np.zeros((4, 20)), b0=np.zeros(4), w1=np.zeros((5, 3)), b1=np.zeros(5),
-           activation=np.array("tanh")), "actor.npz", "layer 1"),
-    ("actor.npz a scalar layer", actor(w0=np.array(1.0), b0=np.zeros(1),
-                                       activation=np.array("tanh")), "actor.npz", "layer 0"),
-    ("actor.npz NaN weights",
-     actor(w0=np.full((4, 20), np.nan), b0=np.zeros(4), w1=np.zeros((5, 4)), b1=np.zeros(5),
-           activation=np.array("tanh")), "actor.npz", "finite"),
-    ("actor.npz an unknown activation",
-     actor(w0=np.zeros((4, 20)), b0=np.zeros(4), w1=np.zeros((5, 4)), b1=np.zeros(5),
-           activation=np.array("sigmoid")), "actor.npz", "activation"),
-    ("actor.npz pickled objects",
-     actor(w0=np.array([object()], dtype=object), b0=np.zeros(1),
-           activation=np.array("tanh")), "actor.npz", "not a policy actor"),
+    (
+        "actor.npz a broken zip",
+        write("actor.npz", b"PK\x03\x04broken"),
+        "actor.npz",
+        "not a policy actor",
+    ),
+    (
+        "actor.npz layers that do not chain",
+        actor(
+            w0=np.zeros((4, 20)),
+            b0=np.zeros(4),
+            w1=np.zeros((5, 3)),
+            b1=np.zeros(5),
+            activation=np.array("tanh"),
+        ),
+        "actor.npz",
+        "layer 1",
+    ),
+    (
+        "actor.npz a scalar layer",
+        actor(w0=np.array(1.0), b0=np.zeros(1), activation=np.array("tanh")),
+        "actor.npz",
+        "layer 0",
+    ),
+    (
+        "actor.npz NaN weights",
+        actor(
+            w0=np.full((4, 20), np.nan),
+            b0=np.zeros(4),
+            w1=np.zeros((5, 4)),
+            b1=np.zeros(5),
+            activation=np.array("tanh"),
+        ),
+        "actor.npz",
+        "finite",
+    ),
+    (
+        "actor.npz an unknown activation",
+        actor(
+            w0=np.zeros((4, 20)),
+            b0=np.zeros(4),
+            w1=np.zeros((5, 4)),
+            b1=np.zeros(5),
+            activation=np.array("sigmoid"),
+        ),
+        "actor.npz",
+        "activation",
+    ),
+    (
+        "actor.npz pickled objects",
+        actor(w0=np.array([object()], dtype=object), b0=np.zeros(1), activation=np.array("tanh")),
+        "actor.npz",
+        "not a policy actor",
+    ),
 ]
 
 
 @pytest.mark.parametrize("command", list(COMMANDS))
 @pytest.mark.parametrize(("what", "edit", "file", "key"), CASES, ids=[c[0] for c in CASES])
 def test_a_malformed_policy_folder_is_exit_1_naming_the_file_and_key(
-    what: str, edit: Callable[[Path], None], file: str, key: str, command: str,
-    tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    what: str,
+    edit: Callable[[Path], None],
+    file: str,
+    key: str,
+    command: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     folder = good_policy(tmp_path / "policy")
     edit(folder)
@@ -171,10 +223,17 @@ def test_nothing_named_in_a_policy_folder_is_imported(tmp_path: Path) -> None:
     package.mkdir()
     (package / "__init__.py").write_text("")
     (package / "evil.py").write_text(PAYLOAD.format(marker=str(marker)))
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(tmp_path), os.environ.get("PYTHONPATH", "")])}
-    proof = subprocess.run([sys.executable, "-c", "import payloadpkg.evil"], cwd=tmp_path,
-                           env=env, timeout=60, check=False)
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]),
+    }
+    proof = subprocess.run(
+        [sys.executable, "-c", "import payloadpkg.evil"],
+        cwd=tmp_path,
+        env=env,
+        timeout=60,
+        check=False,
+    )
     assert proof.returncode == 0 and marker.exists()
     marker.unlink()
 
@@ -183,16 +242,26 @@ def test_nothing_named_in_a_policy_folder_is_imported(tmp_path: Path) -> None:
     for name, argv in COMMANDS.items():
         done = subprocess.run(
             [sys.executable, "-m", "snakebot", *(a.replace("{dir}", "shared") for a in argv)],
-            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300, check=False,
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=300,
+            check=False,
         )
         assert done.returncode == 1, (name, done.stderr)
         assert "shared/policy.json: env_id: expected one of snakebot/SnakeGoal-v0" in done.stderr
         assert not marker.exists(), f"{name} imported the payload"
 
 
-@pytest.mark.parametrize(("item", "key"), [("episode_s=1e308", "episode_s"),
-                                           ("timestep_s=1e-300", "timestep_s"),
-                                           ("action_hz=1e9", "action_hz")])
+@pytest.mark.parametrize(
+    ("item", "key"),
+    [
+        ("episode_s=1e308", "episode_s"),
+        ("timestep_s=1e-300", "timestep_s"),
+        ("action_hz=1e9", "action_hz"),
+    ],
+)
 def test_the_same_ranges_hold_for_a_new_training_run(
     item: str, key: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -33,8 +33,9 @@ def test_the_runner_plays_a_velocity_policy_exactly_as_the_env_stepped_it(
 ) -> None:
     # Random weights: every action depends on what the policy observes, so any difference in
     # observation, phase or timing between env and runner would show in the joints.
-    folder = random_policy(tmp_path / "p", VELOCITY, 5, 3 * 8 + 2 + 2, seed=4,
-                           encoding="dft_shift", control_hz=50)
+    folder = random_policy(
+        tmp_path / "p", VELOCITY, 5, 3 * 8 + 2 + 2, seed=4, encoding="dft_shift", control_hz=50
+    )
     policy = load_policy(folder)
     env = gymnasium.make(VELOCITY, **policy.env_kwargs)
     env.reset(seed=0, options={"command": (0.1, 0.2)})
@@ -50,8 +51,13 @@ def test_the_runner_plays_a_velocity_policy_exactly_as_the_env_stepped_it(
     with TwinBackend(robot) as backend:
         name, gait = policy_gait_for_backend(str(folder), robot, backend, (0.1, 0.2), 50.0)
         assert name == "policy:velocity:dft_shift"
-        run_gait(backend, gait, SafetyLayer.for_robot(robot), RunPlan(2.0, 50.0, ramp_out=False),
-                 RunMetrics(8, robot.body_length_m, robot.total_mass_kg))
+        run_gait(
+            backend,
+            gait,
+            SafetyLayer.for_robot(robot),
+            RunPlan(2.0, 50.0, ramp_out=False),
+            RunMetrics(8, robot.body_length_m, robot.total_mass_kg),
+        )
         run_joints = backend.read_state().position_rad
         assert gait.decisions == 20
     np.testing.assert_allclose(run_joints, env_joints, atol=1e-6)
@@ -60,8 +66,9 @@ def test_the_runner_plays_a_velocity_policy_exactly_as_the_env_stepped_it(
 def test_a_goal_policy_on_the_bus_is_refused_naming_the_missing_pose_source(
     tmp_path: Path,
 ) -> None:
-    folder = constant_policy(tmp_path / "goal", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2,
-                             encoding="sinusoid")
+    folder = constant_policy(
+        tmp_path / "goal", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2, encoding="sinusoid"
+    )
     robot = load_robot("snake8")
     bus = DynamixelBackend(robot, port="/dev/null")  # never connected
     with pytest.raises(ConfigError, match="no pose source"):
@@ -81,8 +88,9 @@ class OverheadCamera:
 
 
 def test_a_goal_policy_runs_with_a_plugged_in_pose_source(tmp_path: Path) -> None:
-    folder = constant_policy(tmp_path / "goal", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2,
-                             encoding="sinusoid")
+    folder = constant_policy(
+        tmp_path / "goal", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2, encoding="sinusoid"
+    )
     robot = load_robot("snake8")
     with TwinBackend(robot) as twin:
         camera = OverheadCamera(twin)
@@ -95,8 +103,9 @@ def test_a_goal_policy_runs_with_a_plugged_in_pose_source(tmp_path: Path) -> Non
 
 
 def test_policy_and_robot_must_fit(tmp_path: Path) -> None:
-    folder = constant_policy(tmp_path / "v", VELOCITY, [0, 0, 0, 0], 3 * 8 + 2 + 2,
-                             encoding="sinusoid")
+    folder = constant_policy(
+        tmp_path / "v", VELOCITY, [0, 0, 0, 0], 3 * 8 + 2 + 2, encoding="sinusoid"
+    )
     snake12 = load_robot("snake12")
     with pytest.raises(ConfigError, match="trained on 'snake8'"):
         PolicyGait(load_policy(folder), snake12, lambda: None, (0.1, 0.0))  # type: ignore[arg-type,return-value]
@@ -106,16 +115,28 @@ def test_policy_and_robot_must_fit(tmp_path: Path) -> None:
 
 
 def snakebot(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "snakebot", *args], capture_output=True,
-                          text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "snakebot", *args], capture_output=True, text=True, timeout=timeout
+    )
 
 
 def test_run_policy_on_the_twin_moves_and_reports(tmp_path: Path) -> None:
-    folder = constant_policy(tmp_path / "v", VELOCITY, [0, 0, 0, 0], 3 * 8 + 2 + 2,
-                             encoding="sinusoid")
+    folder = constant_policy(
+        tmp_path / "v", VELOCITY, [0, 0, 0, 0], 3 * 8 + 2 + 2, encoding="sinusoid"
+    )
     log = tmp_path / "run.csv"
-    done = snakebot("run", "--policy", str(folder), "--command", "0.2,0", "--duration", "4",
-                    "--log", str(log), "--json")
+    done = snakebot(
+        "run",
+        "--policy",
+        str(folder),
+        "--command",
+        "0.2,0",
+        "--duration",
+        "4",
+        "--log",
+        str(log),
+        "--json",
+    )
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert summary["gait"] == "policy:velocity:sinusoid"
@@ -124,15 +145,27 @@ def test_run_policy_on_the_twin_moves_and_reports(tmp_path: Path) -> None:
 
 
 def test_run_policy_usage_and_config_errors(tmp_path: Path) -> None:
-    goal = constant_policy(tmp_path / "g", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2,
-                           encoding="sinusoid")
-    refused = snakebot("run", "--backend", "dynamixel", "--robot", "snake8", "--port",
-                       "/dev/ttyUSB9", "--policy", str(goal), "--command", "1,0")
+    goal = constant_policy(tmp_path / "g", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2, encoding="sinusoid")
+    refused = snakebot(
+        "run",
+        "--backend",
+        "dynamixel",
+        "--robot",
+        "snake8",
+        "--port",
+        "/dev/ttyUSB9",
+        "--policy",
+        str(goal),
+        "--command",
+        "1,0",
+    )
     assert refused.returncode == 1
     assert "no pose source" in refused.stderr
     assert snakebot("run", "--command", "1,0").returncode == 2
-    assert snakebot("run", "--policy", str(goal), "--gait", "serpenoid", "--command",
-                    "1,0").returncode == 2
+    assert (
+        snakebot("run", "--policy", str(goal), "--gait", "serpenoid", "--command", "1,0").returncode
+        == 2
+    )
     missing = snakebot("run", "--policy", str(goal))  # a missing option: usage
     assert missing.returncode == 2 and "--command" in missing.stderr
     body = snakebot("run", "--robot", "worm", "--policy", str(goal), "--command", "1,0")

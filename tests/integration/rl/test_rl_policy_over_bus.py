@@ -22,15 +22,40 @@ pytestmark = [
 
 
 def test_a_velocity_policy_drives_the_twin_behind_the_bus(tmp_path: Path) -> None:
-    folder = constant_policy(tmp_path / "v", snakebot.rl.VELOCITY_ENV_ID, [0, -0.5, 0, 0],
-                             3 * 8 + 2 + 2, encoding="sinusoid")
+    folder = constant_policy(
+        tmp_path / "v",
+        snakebot.rl.VELOCITY_ENV_ID,
+        [0, -0.5, 0, 0],
+        3 * 8 + 2 + 2,
+        encoding="sinusoid",
+    )
     log = tmp_path / "run.csv"
     with emulator("--robot", "snake8", "--physics") as emu:
         run = subprocess.run(
-            [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", "snake8", "--policy", str(folder), "--command", "0.1,0",
-             "--duration", "4", "--log", str(log), "--json"],
-            capture_output=True, text=True, timeout=180,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "run",
+                "--backend",
+                "dynamixel",
+                "--port",
+                emu.port,
+                "--robot",
+                "snake8",
+                "--policy",
+                str(folder),
+                "--command",
+                "0.1,0",
+                "--duration",
+                "4",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=180,
         )
         assert run.returncode == 0, run.stderr
         twin = emu.stop()[-1]

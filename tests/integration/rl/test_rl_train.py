@@ -27,8 +27,14 @@ TINY = ["--rollout", "128", "--n-envs", "1", "--vec", "dummy", "--ppo", "batch_s
 
 
 def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "snakebot", *args], capture_output=True,
-                          text=True, timeout=900, cwd=cwd, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "snakebot", *args],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        cwd=cwd,
+        check=False,
+    )
 
 
 def trained(folder: Path, steps: int = 256) -> Path:
@@ -53,9 +59,11 @@ def test_a_trained_policy_is_replaced_only_with_force(tmp_path: Path) -> None:
     for extra in ([], ["--dry-run"]):
         again = cli("rl", "train", "--out", str(out), "--steps", "128", *TINY, *FAST, *extra)
         assert again.returncode == 1, again.stderr
-        assert f"{out}: holds the trained policy files actor.npz, learning_curve.csv, " \
-               "learning_curve.png, policy.json, policy.zip, which would be replaced: pass " \
-               "--force" in again.stderr
+        assert (
+            f"{out}: holds the trained policy files actor.npz, learning_curve.csv, "
+            "learning_curve.png, policy.json, policy.zip, which would be replaced: pass "
+            "--force" in again.stderr
+        )
         assert {name: (out / name).read_bytes() for name in TRAIN_FILES} == before
     forced = cli("rl", "train", "--out", str(out), "--steps", "128", *TINY, *FAST, "--force")
     assert forced.returncode == 0, forced.stderr
@@ -72,22 +80,38 @@ def test_resume_goes_on_from_the_saved_weights_and_counts_on(tmp_path: Path) -> 
     # Learning rate 0 leaves the weights as they are: the resumed actor is the saved one, not
     # a fresh network (another seed would start from other weights).
     frozen = tmp_path / "frozen"
-    done = cli("rl", "train", "--resume", str(first), "--out", str(frozen), "--steps", "128",
-               "--ppo", "learning_rate=0", "--seed", "7", "--n-envs", "1", "--vec", "dummy")
+    done = cli(
+        "rl",
+        "train",
+        "--resume",
+        str(first),
+        "--out",
+        str(frozen),
+        "--steps",
+        "128",
+        "--ppo",
+        "learning_rate=0",
+        "--seed",
+        "7",
+        "--n-envs",
+        "1",
+        "--vec",
+        "dummy",
+    )
     assert done.returncode == 0, done.stderr
     assert f"from 256 steps in {first} for 128 more" in done.stdout
     for key, value in weights(first).items():
         np.testing.assert_array_equal(weights(frozen)[key], value)
     record = json.loads((frozen / "policy.json").read_text())
-    assert record["steps"] == 384 and record["resumed_from"] == {"folder": str(first),
-                                                                "steps": 256}
+    assert record["steps"] == 384 and record["resumed_from"] == {"folder": str(first), "steps": 256}
     assert record["ppo"] == {**saved["ppo"], "learning_rate": 0}  # recorded, one changed
     assert record["env_kwargs"] == saved["env_kwargs"]
     assert curve_steps(frozen) == [128, 256, 384]
 
     # In place (no --out): the user asked to go on, so no --force; training really goes on.
-    again = cli("rl", "train", "--resume", str(first), "--steps", "128", "--n-envs", "1",
-                "--vec", "dummy")
+    again = cli(
+        "rl", "train", "--resume", str(first), "--steps", "128", "--n-envs", "1", "--vec", "dummy"
+    )
     assert again.returncode == 0, again.stderr
     assert json.loads((first / "policy.json").read_text())["steps"] == 384
     assert curve_steps(first) == [128, 256, 384]
@@ -101,8 +125,19 @@ def test_resume_refuses_what_it_cannot_train_on(tmp_path: Path) -> None:
     good = model.read_bytes()
 
     def refused(*extra: str) -> str:
-        done = cli("rl", "train", "--resume", str(first), "--steps", "128", "--n-envs", "1",
-                   "--vec", "dummy", *extra)
+        done = cli(
+            "rl",
+            "train",
+            "--resume",
+            str(first),
+            "--steps",
+            "128",
+            "--n-envs",
+            "1",
+            "--vec",
+            "dummy",
+            *extra,
+        )
         assert done.returncode == 1, done.stderr
         assert "Traceback" not in done.stderr
         return done.stderr
@@ -142,10 +177,16 @@ def test_subproc_training_records_the_workers_cpu_and_no_return_before_an_episod
     tmp_path: Path,
 ) -> None:
     # 8 s episodes (200 steps) and 64 steps per env: no episode ends in the one rollout.
-    kwargs = {"robot": "snake8", "encoding": "dft_shift", "action_hz": 25, "control_hz": 25,
-              "episode_s": 8}
-    settings = TrainSettings(GOAL_ENV_ID, kwargs, 128, 2, "subproc", rollout_steps=128,
-                             ppo={"batch_size": 64})
+    kwargs = {
+        "robot": "snake8",
+        "encoding": "dft_shift",
+        "action_hz": 25,
+        "control_hz": 25,
+        "episode_s": 8,
+    }
+    settings = TrainSettings(
+        GOAL_ENV_ID, kwargs, 128, 2, "subproc", rollout_steps=128, ppo={"batch_size": 64}
+    )
     progress = io.StringIO()
     own = resource.getrusage(resource.RUSAGE_SELF)
     result = train(settings, tmp_path / "sub", progress=progress, plot=False)

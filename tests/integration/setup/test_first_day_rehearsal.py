@@ -36,8 +36,8 @@ EMULATOR = "snakebot emulate --robot snake12 --pty --fresh 12 --state-file servo
 def rehearsal_block() -> list[str]:
     text = GUIDE.read_text(encoding="utf-8")
     assert text.count(MARKER) == 1, f"{GUIDE}: expected one {MARKER} block"
-    after = text[text.index(MARKER):]
-    assert EMULATOR in " ".join(text[:text.index(MARKER)].split()[-40:]), "emulator line moved"
+    after = text[text.index(MARKER) :]
+    assert EMULATOR in " ".join(text[: text.index(MARKER)].split()[-40:]), "emulator line moved"
     return after.split("```sh\n", 1)[1].split("\n```", 1)[0].splitlines()
 
 

@@ -18,16 +18,28 @@ from snakebot.setup import Link, Step, apply, load_settings, plan_apply, survey
 from tests.conftest import edit_robot
 from tests.integration.setup.conftest import ROBOT_BAUD, Bus, Cli
 
-SETTINGS_KEYS = ("return_delay_time", "drive_mode", "operating_mode", "min_position_limit",
-                 "max_position_limit", "shutdown", "status_return_level", "position_p_gain")
+SETTINGS_KEYS = (
+    "return_delay_time",
+    "drive_mode",
+    "operating_mode",
+    "min_position_limit",
+    "max_position_limit",
+    "shutdown",
+    "status_return_level",
+    "position_p_gain",
+)
 
 
 def connect_backend(bus: Bus) -> list[str]:
     """Connect and close DynamixelBackend on the bus; the settings warnings it gave."""
     chain = bus.chain
     backend = DynamixelBackend(
-        load_robot("snake12"), port=bus.url, baud=ROBOT_BAUD,
-        port_handler_factory=EmulatedPortHandler, clock=lambda: chain.now_s, sleep=chain.advance,
+        load_robot("snake12"),
+        port=bus.url,
+        baud=ROBOT_BAUD,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: chain.now_s,
+        sleep=chain.advance,
     )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DynamixelSettingsWarning)
@@ -48,11 +60,16 @@ def test_apply_on_a_scrambled_chain_leaves_diff_empty_and_run_accepts_it(
     assert "the final diff is empty" in out
     assert "torque goes off on servo(s) 12" in err  # scramble left 12 holding torque
     code, out, _ = cli("config", "diff", "--robot", "snake12", "--port", snake.url)
-    assert (code, out.strip()) == (0, f"snake12 on {snake.url}: all 12 servos hold the "
-                                      "configured settings")
+    assert (code, out.strip()) == (
+        0,
+        f"snake12 on {snake.url}: all 12 servos hold the configured settings",
+    )
     for servo in snake.chain.servos:
         assert (servo.peek("return_delay_time"), servo.baud, servo.torque_enabled) == (
-            0, ROBOT_BAUD, False)
+            0,
+            ROBOT_BAUD,
+            False,
+        )
     assert connect_backend(snake) == []
 
 
@@ -74,7 +91,9 @@ def test_baud_change_mid_chain_is_found_and_fixed_last(snake: Bus, cli: Cli) -> 
     assert code == 0
     steps = [line for line in out.splitlines() if line.startswith("  [")]
     assert [s.split("] ")[1] for s in steps[-2:]] == [
-        "servo 5: baud rate 57600 -> 1000000 bit/s", "servo 9: baud rate 115200 -> 1000000 bit/s"]
+        "servo 5: baud rate 57600 -> 1000000 bit/s",
+        "servo 9: baud rate 115200 -> 1000000 bit/s",
+    ]
     assert {s.baud for s in snake.chain.servos} == {ROBOT_BAUD}
 
 
@@ -133,8 +152,12 @@ def test_a_quiet_servo_status_return_level_1_is_still_written(snake: Bus, cli: C
 
 
 def test_per_joint_override_reaches_one_servo(snake: Bus, cli: Cli, config_dir: Path) -> None:
-    path = edit_robot(config_dir, "snake12", "servo_id = 4\n",
-                      "servo_id = 4\nsettings = { return_delay_time_us = 20 }\n")
+    path = edit_robot(
+        config_dir,
+        "snake12",
+        "servo_id = 4\n",
+        "servo_id = 4\nsettings = { return_delay_time_us = 20 }\n",
+    )
     code, _, err = cli("config", "apply", "--robot", str(path), "--port", snake.url, "--yes")
     assert code == 0, err
     delays = {s.servo_id: s.peek("return_delay_time") for s in snake.chain.servos}

@@ -77,8 +77,18 @@ def test_twelve_fresh_servos_become_the_snake12_chain(tmp_path: Path, cli: Cli) 
     with registered(chain) as url:
         for servo_id in range(12, 0, -1):  # the tail first, so ID 1 is only ever the new one
             bench.plug()
-            code, _, err = cli("config", "assign-id", "--port", url, "--from", "1",
-                               "--to", str(servo_id), "--robot", "snake12")
+            code, _, err = cli(
+                "config",
+                "assign-id",
+                "--port",
+                url,
+                "--from",
+                "1",
+                "--to",
+                str(servo_id),
+                "--robot",
+                "snake12",
+            )
             assert code == 0, err
         code, out, _ = cli("scan", "--port", url, "--json")
         assert code == 0

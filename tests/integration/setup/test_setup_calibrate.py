@@ -31,7 +31,7 @@ def lay_straight(bus: Bus) -> None:
 
 
 def comments(path: Path) -> list[str]:
-    return [line[line.index("#"):] for line in path.read_text().splitlines() if "#" in line]
+    return [line[line.index("#") :] for line in path.read_text().splitlines() if "#" in line]
 
 
 def test_offsets_are_correct_and_written_back_keeping_comments(
@@ -61,8 +61,16 @@ def test_a_reversed_joint_gets_the_sign_of_its_direction(
     snake: Bus, cli: Cli, robot_file: Path
 ) -> None:
     snake.servo(3).state = replace(snake.servo(3).state, position_rad=0.45)
-    code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", snake.url, "--yes",
-                       "--max-offset-deg", "30")
+    code, _, err = cli(
+        "calibrate",
+        "--robot",
+        str(robot_file),
+        "--port",
+        snake.url,
+        "--yes",
+        "--max-offset-deg",
+        "30",
+    )
     assert code == 1  # -1.5 rad would need 112 deg, beyond the +-110 deg Position Limits
     assert "servo 3: Min/Max Position Limit" in err and "widen the Position Limits" in err
     snake.servo(3).state = replace(snake.servo(3).state, position_rad=0.1)
@@ -135,8 +143,9 @@ def test_a_robot_named_by_name_is_never_written_out_writes_a_copy(
     assert "--robot FILE.toml" in err and "--out FILE" in err
     copy = tmp_path / "mine" / "snake12.toml"
     copy.parent.mkdir()  # a file's folder must exist (cli.md: outputs)
-    code, out, err = cli("calibrate", "--robot", "snake12", "--port", snake.url, "--yes",
-                         "--out", str(copy))
+    code, out, err = cli(
+        "calibrate", "--robot", "snake12", "--port", snake.url, "--yes", "--out", str(copy)
+    )
     assert code == 0, err
     assert f"wrote 12 zero offsets into {copy}" in out
     assert shipped.read_bytes() == original

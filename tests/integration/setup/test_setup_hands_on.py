@@ -42,11 +42,11 @@ def test_jog_moves_one_joint_slowly_then_holds_it(snake: Bus, cli: Cli) -> None:
 
 
 def test_jog_speed_sets_how_long_the_move_takes(snake: Bus, cli: Cli) -> None:
-    slow = json.loads(cli("servo", "jog", *SNAKE12, "--port", snake.url, "2", "20", "--speed",
-                          "10", "--json")[1])
+    slow = json.loads(
+        cli("servo", "jog", *SNAKE12, "--port", snake.url, "2", "20", "--speed", "10", "--json")[1]
+    )
     assert slow["seconds"] >= 20 / 10 * 0.9
-    code, _, err = cli("servo", "jog", *SNAKE12, "--port", snake.url, "2", "0", "--speed",
-                       "2000")
+    code, _, err = cli("servo", "jog", *SNAKE12, "--port", snake.url, "2", "0", "--speed", "2000")
     assert code == 1 and "beyond snake12's joint speed limit" in err
 
 
@@ -57,17 +57,21 @@ def test_a_reversed_joint_turns_its_shaft_the_other_way(
     code, _, err = cli("servo", "jog", "--robot", str(robot), "--port", snake.url, "5", "10")
     assert code == 0, err
     assert abs(snake.servo(5).peek("present_position") - ticks(10, direction=-1)) <= 6
-    code, out, err = cli("servo", "jog", "--robot", str(robot), "--port", snake.url, "5",
-                         "--", "-0.1rad")
+    code, out, err = cli(
+        "servo", "jog", "--robot", str(robot), "--port", snake.url, "5", "--", "-0.1rad"
+    )
     assert code == 0, err
     assert abs(snake.servo(5).peek("present_position") - ticks(math.degrees(-0.1), -1)) <= 6
     assert out.startswith("servo 5 (joint 4): +10.0 -> -5.") and "holds there" in out
 
 
-@pytest.mark.parametrize(("angle", "message"), [
-    ("100", "joint 3 (servo 4): +100.0 deg is outside its limits -85.9..+85.9 deg"),
-    ("-1.6rad", "-91.7 deg is outside its limits"),
-])
+@pytest.mark.parametrize(
+    ("angle", "message"),
+    [
+        ("100", "joint 3 (servo 4): +100.0 deg is outside its limits -85.9..+85.9 deg"),
+        ("-1.6rad", "-91.7 deg is outside its limits"),
+    ],
+)
 def test_an_angle_beyond_the_joint_limits_is_refused_and_nothing_moves(
     snake: Bus, cli: Cli, angle: str, message: str
 ) -> None:
@@ -94,8 +98,9 @@ def test_jog_refuses_a_servo_whose_settings_are_not_applied(snake: Bus, cli: Cli
 
 
 def test_jog_dry_run_moves_nothing(snake: Bus, cli: Cli) -> None:
-    code, out, err = cli("servo", "jog", *SNAKE12, "--port", snake.url, "4", "15", "--dry-run",
-                         "--json")
+    code, out, err = cli(
+        "servo", "jog", *SNAKE12, "--port", snake.url, "4", "15", "--dry-run", "--json"
+    )
     assert code == 0, err
     plan = json.loads(out)
     assert plan["dry_run"] is True and plan["target_deg"] == 15.0
@@ -123,12 +128,14 @@ def test_torque_off_asks_first_then_goes_limp(snake: Bus, cli: Cli) -> None:
     code, _, err = cli("servo", "torque", "off", *SNAKE12, "--port", snake.url)
     assert code == 1 and "go limp" in err and "pass --yes" in err
     assert all(s.torque_enabled for s in snake.chain.servos)
-    code, out, _ = cli("servo", "torque", "off", *SNAKE12, "--port", snake.url, "--id", "4",
-                       "--yes")
+    code, out, _ = cli(
+        "servo", "torque", "off", *SNAKE12, "--port", snake.url, "--id", "4", "--yes"
+    )
     assert (code, out) == (0, "servo 4: torque off; is limp\n")
     assert [s.torque_enabled for s in snake.chain.servos].count(False) == 1
-    code, out, _ = cli("servo", "torque", "off", *SNAKE12, "--port", snake.url, "--all", "--yes",
-                       "--json")
+    code, out, _ = cli(
+        "servo", "torque", "off", *SNAKE12, "--port", snake.url, "--all", "--yes", "--json"
+    )
     assert code == 0 and json.loads(out)["ids"] == list(range(1, 13))
     assert not any(s.torque_enabled for s in snake.chain.servos)
 
@@ -149,8 +156,9 @@ def test_torque_on_is_refused_for_a_latched_error_and_a_servo_outside_its_limits
 
 def test_torque_dry_run_and_a_missing_servo(snake: Bus, cli: Cli) -> None:
     snake.servo(4).poke("torque_enable", 1)
-    code, out, _ = cli("servo", "torque", "off", *SNAKE12, "--port", snake.url, "--dry-run",
-                       "--json")
+    code, out, _ = cli(
+        "servo", "torque", "off", *SNAKE12, "--port", snake.url, "--dry-run", "--json"
+    )
     assert code == 0 and json.loads(out)["holding_torque"] == [4]
     assert snake.servo(4).torque_enabled
     snake.chain.remove(snake.servo(11))
@@ -172,8 +180,9 @@ def test_a_jog_rides_out_replies_lost_while_it_watches_the_move(snake: Bus, cli:
     watcher = threading.Thread(target=lose_replies_once_moving)
     watcher.start()
     try:
-        code, _, err = cli("servo", "jog", *SNAKE12, "--port", snake.url, "4", "15", "--speed",
-                           "10")  # 1.5 s of bus time: thousands of polls to lose replies in
+        code, _, err = cli(
+            "servo", "jog", *SNAKE12, "--port", snake.url, "4", "15", "--speed", "10"
+        )  # 1.5 s of bus time: thousands of polls to lose replies in
     finally:
         watcher.join()
     assert code == 0, err

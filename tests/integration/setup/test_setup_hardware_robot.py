@@ -15,8 +15,10 @@ from tests.integration.setup.conftest import Bus, Cli
 HARDWARE = [
     ("run --backend dynamixel", ["run", "--backend", "dynamixel", "--duration", "1"]),
     ("tune gains --backend dynamixel", ["tune", "gains", "--backend", "dynamixel"]),
-    ("sysid --record --backend dynamixel",
-     ["sysid", "--record", "{tmp}/chirp.csv", "--backend", "dynamixel"]),
+    (
+        "sysid --record --backend dynamixel",
+        ["sysid", "--record", "{tmp}/chirp.csv", "--backend", "dynamixel"],
+    ),
     ("config diff", ["config", "diff"]),
     ("config apply", ["config", "apply", "--yes"]),
     ("config assign-id", ["config", "assign-id", "--to", "3"]),

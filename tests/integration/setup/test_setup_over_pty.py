@@ -26,8 +26,20 @@ def test_apply_then_diff_then_run_on_a_scrambled_chain(cli: Cli) -> None:
         code, _, err = cli("config", "apply", "--robot", "snake12", "--port", port, "--yes")
         assert code == 0, err
         assert cli("config", "diff", "--robot", "snake12", "--port", port)[0] == 0
-        code, out, err = cli("run", "--robot", "snake12", "--backend", "dynamixel", "--port",
-                             port, "--gait", "sidewinding", "--duration", "1", "--json")
+        code, out, err = cli(
+            "run",
+            "--robot",
+            "snake12",
+            "--backend",
+            "dynamixel",
+            "--port",
+            port,
+            "--gait",
+            "sidewinding",
+            "--duration",
+            "1",
+            "--json",
+        )
         assert code == 0, err
         assert json.loads(out)["control_cycles"] > 50
 
@@ -36,15 +48,40 @@ def test_fresh_servos_plugged_in_one_at_a_time_keep_their_eeprom(tmp_path: Path,
     state = str(tmp_path / "servos.json")
     with emulator("--robot", "snake12", "--fresh", "2", "--state-file", state) as emu:
         assert (emu.first["servo_ids"], emu.first["waiting"]) == ([], 2)
-        assert emu.command("plug") == {"event": "plugged", "serial": 1, "id": 1, "baud": 57600,
-                                       "waiting": 1}
-        code, _, err = cli("config", "assign-id", "--port", emu.port, "--from", "1", "--to", "2",
-                           "--robot", "snake12")
+        assert emu.command("plug") == {
+            "event": "plugged",
+            "serial": 1,
+            "id": 1,
+            "baud": 57600,
+            "waiting": 1,
+        }
+        code, _, err = cli(
+            "config",
+            "assign-id",
+            "--port",
+            emu.port,
+            "--from",
+            "1",
+            "--to",
+            "2",
+            "--robot",
+            "snake12",
+        )
         assert code == 0, err
         emu.proc.send_signal(signal.SIGUSR1)
         assert emu.event()["serial"] == 2
-        code, out, _ = cli("config", "assign-id", "--port", emu.port, "--from", "1", "--to", "1",
-                           "--robot", "snake12")
+        code, out, _ = cli(
+            "config",
+            "assign-id",
+            "--port",
+            emu.port,
+            "--from",
+            "1",
+            "--to",
+            "1",
+            "--robot",
+            "snake12",
+        )
         assert code == 0
         assert out.strip() == "servo ID 1 at 57600 baud is now ID 1 at 1000000 baud"
     with emulator("--robot", "snake12", "--fresh", "2", "--state-file", state) as emu:
@@ -52,7 +89,9 @@ def test_fresh_servos_plugged_in_one_at_a_time_keep_their_eeprom(tmp_path: Path,
         code, out, _ = cli("scan", "--port", emu.port, "--protocol", "2", "--json")
         assert code == 0
         assert [(s["id"], s["baud"]) for s in json.loads(out)["servos"]] == [
-            (1, 1_000_000), (2, 1_000_000)]
+            (1, 1_000_000),
+            (2, 1_000_000),
+        ]
 
 
 def test_two_attached_fresh_servos_collide_in_scan(cli: Cli) -> None:

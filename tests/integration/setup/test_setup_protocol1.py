@@ -36,8 +36,9 @@ def in_protocol_1(servos: list[VirtualServo]) -> list[VirtualServo]:
 
 @pytest.fixture
 def p1_snake() -> Iterator[Bus]:
-    chain = EmulatedChain(in_protocol_1(robot_servos(MODEL, range(1, 13), ROBOT_BAUD)),
-                          baud=ROBOT_BAUD)
+    chain = EmulatedChain(
+        in_protocol_1(robot_servos(MODEL, range(1, 13), ROBOT_BAUD)), baud=ROBOT_BAUD
+    )
     with registered(chain) as url:
         yield Bus(chain, url)
 
@@ -58,27 +59,33 @@ def test_scan_finds_a_mixed_chain_and_says_each_servos_protocol(cli: Cli) -> Non
     assert code == 0 and text_code == 0, err
     report = json.loads(out)
     found = [(s["id"], s["protocol"], s["model"], s["firmware"]) for s in report["servos"]]
-    assert found == [(20, 2.0, MODEL, 46), (21, 2.0, MODEL, 46),
-                     *((i, 1.0, MODEL, 46) for i in range(1, 5))]
+    assert found == [
+        (20, 2.0, MODEL, 46),
+        (21, 2.0, MODEL, 46),
+        *((i, 1.0, MODEL, 46) for i in range(1, 5)),
+    ]
     assert report["mixed"] is True and report["protocols"] == [2.0, 1.0]
-    assert "servos of two protocols share this port (Protocol 2.0: ID(s) 20, 21; Protocol " \
+    assert (
+        "servos of two protocols share this port (Protocol 2.0: ID(s) 20, 21; Protocol "
         "1.0: ID(s) 1, 2, 3, 4)" in err
+    )
     assert "Protocol Type (address 13" in err
     assert "did not answer" not in err  # 5..19 lie between two chains, not inside one
     assert "ID   1  XL430-W250   firmware 46  Protocol 1.0 at 1000000 baud" in text
 
 
-def test_a_protocol_1_sweep_says_what_it_costs_and_ids_bounds_it(
-    p1_snake: Bus, cli: Cli
-) -> None:
+def test_a_protocol_1_sweep_says_what_it_costs_and_ids_bounds_it(p1_snake: Bus, cli: Cli) -> None:
     p1_snake.chain.add(in_protocol_1([VirtualServo(MODEL, 40, baud=ROBOT_BAUD)])[0])
     code, out, err = cli("scan", "--port", p1_snake.url, "--protocol", "1", "--json")
     assert code == 0, err
     assert [s["id"] for s in json.loads(out)["servos"]] == [*range(1, 13), 40]
-    assert ("Protocol 1.0 has no broadcast ping: pinging IDs 0..253 one by one at 1000000 baud "
-            "(about 8.7 s on a real port") in err
-    code, out, err = cli("scan", "--port", p1_snake.url, "--protocol", "1", "--ids", "1-12",
-                         "--json")
+    assert (
+        "Protocol 1.0 has no broadcast ping: pinging IDs 0..253 one by one at 1000000 baud "
+        "(about 8.7 s on a real port"
+    ) in err
+    code, out, err = cli(
+        "scan", "--port", p1_snake.url, "--protocol", "1", "--ids", "1-12", "--json"
+    )
     assert code == 0, err
     assert [s["id"] for s in json.loads(out)["servos"]] == list(range(1, 13))
     assert "pinging IDs 1..12 one by one at 1000000 baud (about 0.4 s" in err
@@ -93,12 +100,13 @@ def test_scan_protocol_1_only_does_not_list_protocol_2_servos(cli: Cli) -> None:
 
 
 @pytest.mark.parametrize("protocol", [1.0, 2.0])
-def test_a_model_number_snakebot_does_not_know_is_shown_as_such(
-    protocol: float, cli: Cli
-) -> None:
+def test_a_model_number_snakebot_does_not_know_is_shown_as_such(protocol: float, cli: Cli) -> None:
     table = table_for_model(MODEL)  # a servo of a model snakebot has no data for, number 4242
-    unknown = replace(table, model_number=4242, registers={
-        **table.registers, "model_number": replace(table["model_number"], default=4242)})
+    unknown = replace(
+        table,
+        model_number=4242,
+        registers={**table.registers, "model_number": replace(table["model_number"], default=4242)},
+    )
     servo = VirtualServo(unknown, 7, baud=ROBOT_BAUD)
     servo.poke("protocol_type", 1 if protocol == 1.0 else 2)
     chain = EmulatedChain([servo], baud=ROBOT_BAUD)
@@ -115,8 +123,9 @@ def test_reboot_on_protocol_1_is_refused_with_a_power_cycle_hint(
     p1_snake: Bus, p1_robot: Path, cli: Cli
 ) -> None:
     for which in (("--id", "3"), ("--all",)):
-        code, _, err = cli("servo", "reboot", "--robot", str(p1_robot), "--port", p1_snake.url,
-                           *which, "--yes")
+        code, _, err = cli(
+            "servo", "reboot", "--robot", str(p1_robot), "--port", p1_snake.url, *which, "--yes"
+        )
         assert code == 1
         assert "XL430-W250 on Protocol 1.0) ha" in err
         assert "no Reboot instruction: power-cycle" in err
@@ -147,13 +156,15 @@ def test_config_diff_and_apply_bring_a_protocol_1_chain_to_its_settings(
 ) -> None:
     p1_snake.servo(5).poke("temperature_limit", 60)
     p1_snake.servo(9).poke("torque_enable", 1)  # EEPROM needs it off
-    code, out, err = cli("config", "diff", "--robot", str(p1_robot), "--port", p1_snake.url,
-                         "--json")
+    code, out, err = cli(
+        "config", "diff", "--robot", str(p1_robot), "--port", p1_snake.url, "--json"
+    )
     assert code == 1, err
     diff = json.loads(out)
     assert {d["id"] for d in diff["differences"]} == set(range(1, 13))
-    code, out, err = cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url,
-                         "--yes")
+    code, out, err = cli(
+        "config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url, "--yes"
+    )
     assert code == 0, err
     assert "torque goes off on servo(s) 9" in err
     code, out, err = cli("config", "diff", "--robot", str(p1_robot), "--port", p1_snake.url)
@@ -166,28 +177,28 @@ def test_a_latched_error_on_protocol_1_asks_for_a_power_cycle(
     p1_snake: Bus, p1_robot: Path, cli: Cli
 ) -> None:
     p1_snake.servo(4).latch_error(0x04)  # overheating
-    code, _, err = cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url,
-                       "--yes")
+    code, _, err = cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url, "--yes")
     assert code == 1
-    assert ("servo 4 has a latched hardware error and Protocol 1.0 has no Reboot: power-cycle "
-            "it") in err
+    assert (
+        "servo 4 has a latched hardware error and Protocol 1.0 has no Reboot: power-cycle it"
+    ) in err
 
 
-def test_assign_id_on_protocol_1_finds_a_new_servo_id_by_id(
-    p1_robot: Path, cli: Cli
-) -> None:
+def test_assign_id_on_protocol_1_finds_a_new_servo_id_by_id(p1_robot: Path, cli: Cli) -> None:
     new = in_protocol_1([VirtualServo(MODEL, 1, baud=57600)])[0]
     chain = EmulatedChain([new], baud=57600)
     with registered(chain) as url:
-        code, out, err = cli("config", "assign-id", "--robot", str(p1_robot), "--port", url,
-                             "--to", "5")
+        code, out, err = cli(
+            "config", "assign-id", "--robot", str(p1_robot), "--port", url, "--to", "5"
+        )
         assert code == 0, err
         assert out.strip() == "servo ID 1 at 57600 baud is now ID 5 at 1000000 baud"
         assert "Protocol 1.0 has no broadcast ping: every ID is pinged on its own" in err
         assert (new.servo_id, new.baud, new.protocol) == (5, ROBOT_BAUD, 1.0)
         chain.add(in_protocol_1([VirtualServo(MODEL, 1, baud=57600)])[0])
-        code, _, err = cli("config", "assign-id", "--robot", str(p1_robot), "--port", url,
-                           "--to", "6")
+        code, _, err = cli(
+            "config", "assign-id", "--robot", str(p1_robot), "--port", url, "--to", "6"
+        )
         assert code == 1
         assert "2 servos answer (ID 1 at 57600 baud, ID 5 at 1000000 baud)" in err
 
@@ -195,10 +206,10 @@ def test_assign_id_on_protocol_1_finds_a_new_servo_id_by_id(
 def test_calibrate_on_protocol_1_reads_each_servo_without_sync_read(
     p1_snake: Bus, p1_robot: Path, cli: Cli
 ) -> None:
-    assert cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url,
-               "--yes")[0] == 0
-    for servo, shaft in zip(p1_snake.chain.servos, [0.05 * (i % 3) for i in range(12)],
-                            strict=True):
+    assert cli("config", "apply", "--robot", str(p1_robot), "--port", p1_snake.url, "--yes")[0] == 0
+    for servo, shaft in zip(
+        p1_snake.chain.servos, [0.05 * (i % 3) for i in range(12)], strict=True
+    ):
         servo.state = replace(servo.state, position_rad=shaft)
     code, _, err = cli("calibrate", "--robot", str(p1_robot), "--port", p1_snake.url, "--yes")
     assert code == 0, err
@@ -229,8 +240,9 @@ def ax_robot(config_dir: Path) -> Path:
 def mx_robot(config_dir: Path) -> Path:
     """snake12-ax12a built from MX-28 (Protocol 1.0 firmware) with its P/I/D gains."""
     path = edit_robot(config_dir, "snake12-ax12a", 'servo = "AX-12A"', 'servo = "MX-28"')
-    text = path.read_text().replace("compliance_slope = 32",
-                                    "position_p = 48\nposition_i = 0\nposition_d = 4")
+    text = path.read_text().replace(
+        "compliance_slope = 32", "position_p = 48\nposition_i = 0\nposition_d = 4"
+    )
     path.write_text(text)
     return path
 
@@ -243,24 +255,31 @@ def test_scan_reads_ax_and_mx_firmware_where_their_tables_keep_it(cli: Cli) -> N
     with registered(chain) as url:
         code, out, err = cli("scan", "--port", url, "--ids", "0-10", "--json")
     assert code == 0, err
-    found = [(s["id"], s["protocol"], s["model"], s["model_number"], s["firmware"])
-             for s in json.loads(out)["servos"]]
+    found = [
+        (s["id"], s["protocol"], s["model"], s["model_number"], s["firmware"])
+        for s in json.loads(out)["servos"]
+    ]
     # Firmware Version sits at address 2 on an AX or MX (6 on the X series).
-    assert found == [(1, 1.0, "AX-12A", 12, 24), (2, 1.0, "AX-12A", 12, servos[1].peek(
-        "firmware_version")), (3, 1.0, "MX-28", 29, 41)]
+    assert found == [
+        (1, 1.0, "AX-12A", 12, 24),
+        (2, 1.0, "AX-12A", 12, servos[1].peek("firmware_version")),
+        (3, 1.0, "MX-28", 29, 41),
+    ]
     assert json.loads(out)["mixed"] is False
 
 
 def test_config_apply_writes_an_ax_chains_compliance_and_angle_limits(
     ax_snake: Bus, cli: Cli
 ) -> None:
-    code, out, err = cli("config", "diff", "--robot", "snake12-ax12a", "--port", ax_snake.url,
-                         "--json")
+    code, out, err = cli(
+        "config", "diff", "--robot", "snake12-ax12a", "--port", ax_snake.url, "--json"
+    )
     assert code == 1, err
     wanted = {d["setting"] for d in json.loads(out)["differences"]}
     assert {"min_position_limit", "max_position_limit", "return_delay_time"} <= wanted
-    code, _, err = cli("config", "apply", "--robot", "snake12-ax12a", "--port", ax_snake.url,
-                       "--yes")
+    code, _, err = cli(
+        "config", "apply", "--robot", "snake12-ax12a", "--port", ax_snake.url, "--yes"
+    )
     assert code == 0, err
     assert cli("config", "diff", "--robot", "snake12-ax12a", "--port", ax_snake.url)[0] == 0
     six = ax_snake.servo(6)
@@ -270,8 +289,9 @@ def test_config_apply_writes_an_ax_chains_compliance_and_angle_limits(
 
 def test_a_locked_ax_eeprom_is_refused_with_a_power_cycle_hint(ax_snake: Bus, cli: Cli) -> None:
     ax_snake.servo(6).poke("lock", 1)
-    code, _, err = cli("config", "apply", "--robot", "snake12-ax12a", "--port", ax_snake.url,
-                       "--yes")
+    code, _, err = cli(
+        "config", "apply", "--robot", "snake12-ax12a", "--port", ax_snake.url, "--yes"
+    )
     assert code == 1
     assert "servo 6 has its EEPROM locked (Lock = 1)" in err and "power-cycle it" in err
     assert ax_snake.servo(1).peek("return_delay_time") == 250  # nothing was written
@@ -280,12 +300,10 @@ def test_a_locked_ax_eeprom_is_refused_with_a_power_cycle_hint(ax_snake: Bus, cl
 def test_calibrate_an_ax_chain_with_its_1024_ticks_over_300_degrees(
     ax_snake: Bus, ax_robot: Path, cli: Cli
 ) -> None:
-    assert cli("config", "apply", "--robot", str(ax_robot), "--port", ax_snake.url,
-               "--yes")[0] == 0
+    assert cli("config", "apply", "--robot", str(ax_robot), "--port", ax_snake.url, "--yes")[0] == 0
     for servo, shaft in zip(ax_snake.chain.servos, AX_SHAFTS, strict=True):
         servo.state = replace(servo.state, position_rad=shaft)
-    code, out, err = cli("calibrate", "--robot", str(ax_robot), "--port", ax_snake.url,
-                         "--yes")
+    code, out, err = cli("calibrate", "--robot", str(ax_robot), "--port", ax_snake.url, "--yes")
     assert code == 0, err
     ticks = [s.peek("present_position") for s in ax_snake.chain.servos]
     assert ticks[3] == 512 + round(0.2 / (math.radians(300) / 1024))  # 552: 0.293 deg a tick
@@ -316,8 +334,9 @@ def test_factory_reset_of_an_ax_and_an_mx_lands_at_their_own_factory_rates(
     mx = VirtualServo("MX-28", 9, baud=ROBOT_BAUD)
     chain = EmulatedChain([mx], baud=ROBOT_BAUD)
     with registered(chain) as url:
-        code, out, err = cli("servo", "reset", "--robot", str(mx_robot), "--port", url,
-                             "--id", "9", "--yes")
+        code, out, err = cli(
+            "servo", "reset", "--robot", str(mx_robot), "--port", url, "--id", "9", "--yes"
+        )
     assert code == 0, err
     assert out.strip() == "servo 9: factory reset; it now answers as ID 1 at 57600 baud"
     assert (mx.servo_id, mx.baud) == (1, 57600)
@@ -361,8 +380,18 @@ def test_assign_id_gives_a_new_ax_its_id_at_its_factory_1_mbps(cli: Cli) -> None
     new = chain.add(VirtualServo("AX-12A", 1, baud=ROBOT_BAUD))  # from the box: ID 1, 1 Mbps
     chain.servo(12).poke("id", 13)  # make room: the chain is 2..11 and 13
     with registered(chain) as url:
-        code, out, err = cli("config", "assign-id", "--robot", "snake12-ax12a", "--port", url,
-                             "--from", "1", "--to", "12")
+        code, out, err = cli(
+            "config",
+            "assign-id",
+            "--robot",
+            "snake12-ax12a",
+            "--port",
+            url,
+            "--from",
+            "1",
+            "--to",
+            "12",
+        )
     assert code == 0, err
     assert out.strip() == "servo ID 1 at 1000000 baud is now ID 12 at 1000000 baud"
     assert "no broadcast ping" not in err  # --from 1 pings only ID 1

@@ -42,15 +42,26 @@ def test_reboot_asks_before_dropping_a_joint_that_holds_torque(snake: Bus, cli: 
 def test_reset_needs_yes_and_a_consistent_keep(snake: Bus, cli: Cli) -> None:
     code, _, err = cli("servo", "reset", *SNAKE12, "--port", snake.url, "--id", "4")
     assert code == 1 and "erases every setting of servo 4: add --yes" in err
-    code, _, err = cli("servo", "reset", *SNAKE12, "--port", snake.url, "--id", "4", "--keep-baud",
-                       "--yes")
+    code, _, err = cli(
+        "servo", "reset", *SNAKE12, "--port", snake.url, "--id", "4", "--keep-baud", "--yes"
+    )
     assert code == 2 and "add --keep-id" in err  # bad usage: refused before the port opens
 
 
 def test_reset_keeping_id_and_baud_restores_factory_settings(snake: Bus, cli: Cli) -> None:
     snake.servo(4).poke("return_delay_time", 0)
-    code, out, _ = cli("servo", "reset", *SNAKE12, "--port", snake.url, "--id", "4", "--keep-id",
-                       "--keep-baud", "--yes")
+    code, out, _ = cli(
+        "servo",
+        "reset",
+        *SNAKE12,
+        "--port",
+        snake.url,
+        "--id",
+        "4",
+        "--keep-id",
+        "--keep-baud",
+        "--yes",
+    )
     assert code == 0
     assert "now answers as ID 4 at 1000000 baud" in out
     assert snake.servo(4).peek("return_delay_time") == 250

@@ -147,8 +147,13 @@ def test_mujoco_draws_the_skin_on_the_b_spline_surface_of_the_moving_lattice() -
         mujoco.mj_forward(model, data)  # body poses of the current state
         scene = mujoco.MjvScene(model, maxgeom=100)
         mujoco.mjv_updateScene(
-            model, data, mujoco.MjvOption(), None, mujoco.MjvCamera(),
-            mujoco.mjtCatBit.mjCAT_ALL, scene,
+            model,
+            data,
+            mujoco.MjvOption(),
+            None,
+            mujoco.MjvCamera(),
+            mujoco.mjtCatBit.mjCAT_ALL,
+            scene,
         )
         drawn = np.array(scene.skinvert).reshape(-1, 3)
         positions = backend.positions()

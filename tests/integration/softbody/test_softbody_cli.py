@@ -43,7 +43,14 @@ def test_run_logs_channels_and_the_com(tmp_path: Path, capsys: pytest.CaptureFix
 def test_video_shows_the_skin(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     video = tmp_path / "snake.mp4"
     summary = run_json(
-        capsys, "--robot", "snake", "--gait", "undulation", "--duration", "0.4", "--video",
+        capsys,
+        "--robot",
+        "snake",
+        "--gait",
+        "undulation",
+        "--duration",
+        "0.4",
+        "--video",
         str(video),
     )
     assert summary["video"] == str(video)
@@ -80,8 +87,11 @@ def test_model_exports_a_body_with_its_skin(
         (["--robot", "worm", "--terrain", "cliff:height_m=x"], 2, "height_m"),
         (["--robot", "worm", "--terrain", "cliff:edge_m=0.01"], 2, "flat top"),
         (["--robot", "snake8", "--gait", "rectilinear"], 1, "not whole segments"),
-        (["--robot", "snake_yawpitch", "--gait", "rectilinear", "--set", "channels=yaw,pitch"],
-         1, "axial channel"),
+        (
+            ["--robot", "snake_yawpitch", "--gait", "rectilinear", "--set", "channels=yaw,pitch"],
+            1,
+            "axial channel",
+        ),
     ],
 )
 def test_bad_options_exit_1_or_2_with_a_clear_message(
@@ -97,8 +107,17 @@ def test_the_worm_flows_over_the_rounded_cliff(
 ) -> None:
     log = tmp_path / "cliff.csv"
     summary = run_json(
-        capsys, "--robot", "worm", "--gait", "rectilinear", "--terrain",
-        "cliff:edge_m=0.05,height_m=0.04,radius_m=0.02", "--duration", "6", "--log", str(log),
+        capsys,
+        "--robot",
+        "worm",
+        "--gait",
+        "rectilinear",
+        "--terrain",
+        "cliff:edge_m=0.05,height_m=0.04,radius_m=0.02",
+        "--duration",
+        "6",
+        "--log",
+        str(log),
     )
     telemetry = read_log(log)
     z = telemetry.column("com_z_m")

@@ -16,9 +16,24 @@ def test_tuned_rectilinear_gait_beats_the_default_and_replays(
 ) -> None:
     gait_file = tmp_path / "worm.toml"
     argv = [
-        "tune", "gait", "--robot", "worm", "--gait", "rectilinear", "--method", "grid",
-        "--params", "amplitude,waves", "--budget", "4", "--duration", "3", "--quiet", "--json",
-        "--out", str(gait_file),
+        "tune",
+        "gait",
+        "--robot",
+        "worm",
+        "--gait",
+        "rectilinear",
+        "--method",
+        "grid",
+        "--params",
+        "amplitude,waves",
+        "--budget",
+        "4",
+        "--duration",
+        "3",
+        "--quiet",
+        "--json",
+        "--out",
+        str(gait_file),
     ]
     assert main(argv) == 0
     summary = json.loads(capsys.readouterr().out)
@@ -27,8 +42,10 @@ def test_tuned_rectilinear_gait_beats_the_default_and_replays(
     best = summary["best"]
     assert best["value"] >= summary["baseline"]["value"]
     assert {"travel_angle_deg", "contact_fraction"} <= set(best["metrics"])
-    assert main(["run", "--json", "--robot", "worm", "--gait-file", str(gait_file),
-                 "--duration", "3"]) == 0
+    assert (
+        main(["run", "--json", "--robot", "worm", "--gait-file", str(gait_file), "--duration", "3"])
+        == 0
+    )
     replay = json.loads(capsys.readouterr().out)
     assert replay["distance_m"] == pytest.approx(best["metrics"]["distance_m"], rel=1e-9)
 
@@ -37,9 +54,26 @@ def test_a_body_gait_faster_than_the_muscles_is_not_playable(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     argv = [
-        "tune", "gait", "--robot", "worm", "--gait", "rectilinear", "--method", "grid",
-        "--params", "omega,waves", "--bounds", "omega=60:80", "--set", "amplitude=0.4",
-        "--budget", "4", "--duration", "1", "--quiet", "--json",
+        "tune",
+        "gait",
+        "--robot",
+        "worm",
+        "--gait",
+        "rectilinear",
+        "--method",
+        "grid",
+        "--params",
+        "omega,waves",
+        "--bounds",
+        "omega=60:80",
+        "--set",
+        "amplitude=0.4",
+        "--budget",
+        "4",
+        "--duration",
+        "1",
+        "--quiet",
+        "--json",
     ]
     assert main(argv) == 1  # 0.4 strain at 60-80 rad/s asks the muscles for 24-32 /s, not 20
     summary = json.loads(capsys.readouterr().out)

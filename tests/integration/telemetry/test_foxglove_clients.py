@@ -59,8 +59,9 @@ def status_of(sink: FoxgloveTelemetry, origin: str | None) -> int:
     """101 when a client sending ``origin`` gets the upgrade, else the HTTP status it got."""
     headers = {} if origin is None else {"Origin": origin}
     try:
-        with connect(url(sink), subprotocols=SUBPROTOCOLS, additional_headers=headers,
-                     open_timeout=20) as ws:
+        with connect(
+            url(sink), subprotocols=SUBPROTOCOLS, additional_headers=headers, open_timeout=20
+        ) as ws:
             assert json.loads(ws.recv(timeout=20))["op"] == "serverInfo"
             return 101
     except InvalidStatus as exc:
@@ -85,9 +86,12 @@ def never_reading_client(sink: FoxgloveTelemetry) -> socket.socket:
         message = json.loads(text)
         if message["op"] == "advertise":
             channels = [channel["id"] for channel in message["channels"]]
-    subscribe = {"op": "subscribe", "subscriptions": [
-        {"id": number, "channelId": channel} for number, channel in enumerate(channels, 1)
-    ]}
+    subscribe = {
+        "op": "subscribe",
+        "subscriptions": [
+            {"id": number, "channelId": channel} for number, channel in enumerate(channels, 1)
+        ],
+    }
     sock.sendall(_masked_text(json.dumps(subscribe).encode()))
     return sock
 
@@ -102,6 +106,7 @@ def _read_until(sock: socket.socket, data: bytes, end: bytes) -> tuple[bytes, by
 
 def _server_frame(sock: socket.socket, data: bytes) -> tuple[bytes, bytes]:
     """One unmasked frame's payload from ``data`` plus what ``sock`` gives; and what follows."""
+
     def need(count: int) -> None:
         nonlocal data
         while len(data) < count:
@@ -118,14 +123,16 @@ def _server_frame(sock: socket.socket, data: bytes) -> tuple[bytes, bytes]:
         need(10)
         length, start = int.from_bytes(data[2:10], "big"), 10
     need(start + length)
-    return data[start:start + length], data[start + length:]
+    return data[start : start + length], data[start + length :]
 
 
 def _masked_text(payload: bytes) -> bytes:
     mask = os.urandom(4)
     assert len(payload) < 65536
-    length = bytes([0x80 | len(payload)]) if len(payload) < 126 else (
-        bytes([0x80 | 126]) + len(payload).to_bytes(2, "big")
+    length = (
+        bytes([0x80 | len(payload)])
+        if len(payload) < 126
+        else (bytes([0x80 | 126]) + len(payload).to_bytes(2, "big"))
     )
     return b"\x81" + length + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
 
@@ -136,8 +143,13 @@ def test_a_page_from_another_site_is_refused_and_local_and_foxglove_pages_are_se
     assert status_of(server, "https://evil.example") == 403
     assert status_of(server, "http://127.0.0.1.evil.example") == 403
     assert status_of(server, "null") == 403  # a sandboxed frame of any site
-    for origin in (None, "https://app.foxglove.dev", "http://localhost:8080",
-                   "http://127.0.0.1:3000", "http://[::1]"):
+    for origin in (
+        None,
+        "https://app.foxglove.dev",
+        "http://localhost:8080",
+        "http://127.0.0.1:3000",
+        "http://[::1]",
+    ):
         assert status_of(server, origin) == 101, origin
     assert server.client_counts()["refused_origin"] == 3
 

@@ -24,7 +24,9 @@ def test_a_client_receives_the_joint_and_scene_channels_from_a_run() -> None:
     started = time.monotonic()
     proc = subprocess.Popen(
         [sys.executable, "-m", "snakebot", "run", "--duration", "6", "--foxglove=0", "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         assert proc.stderr is not None
@@ -59,7 +61,8 @@ def test_a_client_receives_the_joint_and_scene_channels_from_a_run() -> None:
             assert len(message[key]) == robot.joint_count
         assert np.allclose(
             np.subtract(message["command_rad"], message["position_rad"]),
-            message["tracking_error_rad"], atol=2e-6,
+            message["tracking_error_rad"],
+            atol=2e-6,
         )
     assert max(abs(v) for m in messages for v in m["command_rad"]) > 0.05  # the gait moves
     times = [t for t, _ in client.messages["/joints"]]
@@ -88,7 +91,9 @@ def test_a_port_in_use_is_exit_1_naming_the_option_before_the_run_starts() -> No
         port = taken.getsockname()[1]
         result = subprocess.run(
             [sys.executable, "-m", "snakebot", "run", "--duration", "1", f"--foxglove={port}"],
-            capture_output=True, text=True, timeout=60,
+            capture_output=True,
+            text=True,
+            timeout=60,
         )
     assert result.returncode == 1, result.stderr
     assert "--foxglove" in result.stderr and str(port) in result.stderr
@@ -99,9 +104,19 @@ def test_a_scripted_drive_streams_its_status_and_joints(tmp_path: Path) -> None:
     script = tmp_path / "tour.txt"
     script.write_text("0.0 w\n0.0 w\n1.0 a\n4.0 q\n")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "drive", "--script", str(script), "--foxglove=0",
-         "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "drive",
+            "--script",
+            str(script),
+            "--foxglove=0",
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         assert proc.stderr is not None
@@ -128,9 +143,21 @@ def test_a_scripted_drive_streams_its_status_and_joints(tmp_path: Path) -> None:
 @pytest.mark.parametrize(("host", "loopback"), [("0.0.0.0", "127.0.0.1"), ("::", r"\[::1\]")])
 def test_a_wildcard_host_warns_and_prints_a_url_that_works(host: str, loopback: str) -> None:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "run", "--duration", "1", "--foxglove=0",
-         "--foxglove-host", host, "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--duration",
+            "1",
+            "--foxglove=0",
+            "--foxglove-host",
+            host,
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         assert proc.stderr is not None

@@ -33,10 +33,26 @@ def test_a_drive_over_the_bus_records_fk_of_the_measured_joints_and_servo_health
     mcap = tmp_path / "bus.mcap"
     with emulator("--robot", "snake8") as emu:
         drive = subprocess.run(
-            [sys.executable, "-m", "snakebot", "drive", "--backend", "dynamixel", "--port",
-             emu.port, "--robot", "snake8", "--script", str(script), "--mcap", str(mcap),
-             "--json"],
-            capture_output=True, text=True, timeout=180,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "drive",
+                "--backend",
+                "dynamixel",
+                "--port",
+                emu.port,
+                "--robot",
+                "snake8",
+                "--script",
+                str(script),
+                "--mcap",
+                str(mcap),
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=180,
         )
     assert drive.returncode == 0, drive.stderr
     summary = json.loads(drive.stdout)

@@ -19,8 +19,9 @@ SCRIPT = Path(__file__).parents[1] / "drive" / "snake8_forward_left.txt"
 
 
 def snakebot(*argv: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "snakebot", *argv], capture_output=True,
-                          text=True, timeout=180)
+    return subprocess.run(
+        [sys.executable, "-m", "snakebot", *argv], capture_output=True, text=True, timeout=180
+    )
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +70,8 @@ def test_plot_writes_readable_pngs(drive_log: tuple[Path, dict[str, Any]], tmp_p
 
 
 def test_a_log_without_a_centre_of_mass_plots_without_the_path(
-    drive_log: tuple[Path, dict[str, Any]], tmp_path: Path,
+    drive_log: tuple[Path, dict[str, Any]],
+    tmp_path: Path,
 ) -> None:
     lines = drive_log[0].read_text().splitlines()
     hardware = tmp_path / "hardware.csv"  # what a servo chain writes: no CoM
@@ -83,13 +85,18 @@ def test_a_log_without_a_centre_of_mass_plots_without_the_path(
     assert result.returncode == 0, result.stderr
     folder = tmp_path / "hardware_plots"
     assert sorted(p.name for p in folder.iterdir()) == [
-        "efforts.png", "joints.png", "timing.png", "tracking.png"]
+        "efforts.png",
+        "joints.png",
+        "timing.png",
+        "tracking.png",
+    ]
     info = json.loads(snakebot("log", "info", str(hardware), "--json").stdout)
     assert info["distance_m"] is None and info["robot"] is None  # no sidecar, no CoM
 
 
 def test_export_mcap_holds_every_row_and_the_scene(
-    drive_log: tuple[Path, dict[str, Any]], tmp_path: Path,
+    drive_log: tuple[Path, dict[str, Any]],
+    tmp_path: Path,
 ) -> None:
     pytest.importorskip("foxglove")
     from tests.integration.telemetry.test_mcap_record import read_mcap
@@ -102,8 +109,7 @@ def test_export_mcap_holds_every_row_and_the_scene(
     table = read_log(log)
     joints = [m for _, m in topics["/joints"]]
     assert len(joints) == len(table.values)
-    assert np.allclose([m["position_rad"] for m in joints], table.joints("position_rad"),
-                       atol=1e-5)
+    assert np.allclose([m["position_rad"] for m in joints], table.joints("position_rad"), atol=1e-5)
     assert schema_names["/tf"] == "foxglove.FrameTransforms" and topics["/scene"]
     times_ns = np.array([t for t, _ in topics["/joints"]])
     time_s = table.column("time_s")
@@ -112,7 +118,8 @@ def test_export_mcap_holds_every_row_and_the_scene(
 
 
 def test_export_parquet_needs_pyarrow_or_round_trips(
-    drive_log: tuple[Path, dict[str, Any]], tmp_path: Path,
+    drive_log: tuple[Path, dict[str, Any]],
+    tmp_path: Path,
 ) -> None:
     log, _ = drive_log
     out = tmp_path / "drive.parquet"

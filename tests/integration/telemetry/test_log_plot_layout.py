@@ -27,7 +27,13 @@ def test_nothing_drawn_runs_off_the_edge_of_a_plot(
     assert "com_path.png" in [p.name for p in pictures]
     for picture in pictures:
         rgb = matplotlib.image.imread(picture)[..., :3]
-        border = np.concatenate([rgb[:3].reshape(-1, 3), rgb[-3:].reshape(-1, 3),
-                                 rgb[:, :3].reshape(-1, 3), rgb[:, -3:].reshape(-1, 3)])
+        border = np.concatenate(
+            [
+                rgb[:3].reshape(-1, 3),
+                rgb[-3:].reshape(-1, 3),
+                rgb[:, :3].reshape(-1, 3),
+                rgb[:, -3:].reshape(-1, 3),
+            ]
+        )
         ink = int((border.min(axis=1) < 0.9).sum())
         assert ink == 0, f"{picture.name}: {ink} drawn pixels on the picture's edge"

@@ -37,7 +37,9 @@ def read_mcap(path: Path) -> tuple[dict[str, list[tuple[int, Any]]], dict[str, s
 def snakebot(*argv: str) -> dict[str, Any]:
     result = subprocess.run(
         [sys.executable, "-m", "snakebot", *argv, "--json"],
-        capture_output=True, text=True, timeout=180,
+        capture_output=True,
+        text=True,
+        timeout=180,
     )
     assert result.returncode == 0, result.stderr
     summary: dict[str, Any] = json.loads(result.stdout)
@@ -54,8 +56,11 @@ def test_a_run_records_every_cycle_and_the_scene(tmp_path: Path) -> None:
     joints = [m for _, m in topics["/joints"]]
     assert len(joints) == len(log.values) == summary["control_cycles"] + 100  # + 1 s ramp-out
     assert [m["cycle"] for m in joints] == log.column("cycle").astype(int).tolist()
-    for key, prefix in (("command_rad", "command_rad"), ("position_rad", "position_rad"),
-                        ("effort_nm", "effort_nm")):
+    for key, prefix in (
+        ("command_rad", "command_rad"),
+        ("position_rad", "position_rad"),
+        ("effort_nm", "effort_nm"),
+    ):
         recorded = np.array([m[key] for m in joints])
         assert np.allclose(recorded, log.joints(prefix), atol=1e-5, rtol=1e-5), key
     com = np.array([m["com_m"] for m in joints])
@@ -77,8 +82,9 @@ def test_a_run_records_every_cycle_and_the_scene(tmp_path: Path) -> None:
 
 def test_a_scripted_drive_records_the_drive_status(tmp_path: Path) -> None:
     csv, mcap = tmp_path / "drive.csv", tmp_path / "drive.mcap"
-    summary = snakebot("drive", "--script", str(DRIVE_SCRIPT), "--log", str(csv),
-                       "--mcap", str(mcap))
+    summary = snakebot(
+        "drive", "--script", str(DRIVE_SCRIPT), "--log", str(csv), "--mcap", str(mcap)
+    )
     topics, schema_names = read_mcap(mcap)
     assert len(topics["/joints"]) == len(read_log(csv).values) == summary["control_cycles"]
     drive = [m for _, m in topics["/drive"]]
@@ -101,9 +107,21 @@ def test_a_killed_run_keeps_all_but_the_last_second_of_its_mcap(tmp_path: Path) 
 
     csv, mcap = tmp_path / "run.csv", tmp_path / "run.mcap"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "snakebot", "run", "--duration", "30", "--realtime",
-         "--log", str(csv), "--mcap", str(mcap)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--duration",
+            "30",
+            "--realtime",
+            "--log",
+            str(csv),
+            "--mcap",
+            str(mcap),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
     )
     deadline = time.monotonic() + 90
     while time.monotonic() < deadline and (not csv.exists() or len(read_log(csv).values) < 350):

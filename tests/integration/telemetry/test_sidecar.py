@@ -16,9 +16,26 @@ from snakebot.telemetry.sidecar import read_sidecar, sidecar_path
 def test_a_run_log_says_what_made_it(tmp_path: Path) -> None:
     log = tmp_path / "run.csv"
     result = subprocess.run(
-        [sys.executable, "-m", "snakebot", "run", "--robot", "snake12", "--gait", "sidewinding",
-         "--set", "amplitude_even=0.4", "--duration", "1", "--log", str(log), "--json"],
-        capture_output=True, text=True, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--robot",
+            "snake12",
+            "--gait",
+            "sidewinding",
+            "--set",
+            "amplitude_even=0.4",
+            "--duration",
+            "1",
+            "--log",
+            str(log),
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert result.returncode == 0, result.stderr
     assert json.loads(result.stdout)["log_sidecar"] == str(sidecar_path(log))
@@ -40,7 +57,10 @@ def test_a_run_log_says_what_made_it(tmp_path: Path) -> None:
     assert log.read_text().splitlines()[0].split(",") == [c["name"] for c in columns]
     units = {c["name"]: c["unit"] for c in columns}
     assert (units["time_s"], units["command_rad_3"], units["velocity_rad_s_11"]) == (
-        "s", "rad", "rad/s")
+        "s",
+        "rad",
+        "rad/s",
+    )
     assert (units["effort_nm_0"], units["com_z_m"]) == ("N m", "m")
 
 
@@ -49,9 +69,22 @@ def test_a_drive_log_names_its_gaits(tmp_path: Path) -> None:
     script.write_text("0.0 w\n0.5 q\n")
     log = tmp_path / "drive.csv"
     result = subprocess.run(
-        [sys.executable, "-m", "snakebot", "drive", "--script", str(script), "--log", str(log),
-         "--set", "amplitude=0.5", "--json"],
-        capture_output=True, text=True, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "drive",
+            "--script",
+            str(script),
+            "--log",
+            str(log),
+            "--set",
+            "amplitude=0.5",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert result.returncode == 0, result.stderr
     sidecar = read_sidecar(log)
@@ -65,7 +98,8 @@ def test_snakebot_and_its_cli_parser_do_not_import_the_telemetry_extras() -> Non
         "print(sorted(n for n in ('foxglove', 'mcap', 'matplotlib', 'pyarrow') "
         "if n in sys.modules))"
     )
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            timeout=60)
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"

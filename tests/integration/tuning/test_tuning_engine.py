@@ -62,8 +62,14 @@ def test_the_engine_samples_every_cycle_of_the_runner_to_the_bit() -> None:
         records: list[CycleRecord] = []
         metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
         with TwinBackend(robot) as twin:
-            run_gait(twin, make_gait(name, 8, params), SafetyLayer.for_robot(robot),
-                     RunPlan(1.2, ramp_out=False), metrics, observers=[records.append])
+            run_gait(
+                twin,
+                make_gait(name, 8, params),
+                SafetyLayer.for_robot(robot),
+                RunPlan(1.2, ramp_out=False),
+                metrics,
+                observers=[records.append],
+            )
         commands = GaitCommands([make_gait(name, 8, params)], robot)
         trace = TwinBatch(robot).run(commands, 1.2, 100.0)[0]
         assert commands.open_loop == (name == "serpenoid")

@@ -97,7 +97,9 @@ def test_cli_keeps_a_robot_file_in_si_and_reports_both_forms(
     config_dir: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = edit_robot(
-        config_dir, "snake8", "position_p = 640\nposition_i = 0\nposition_d = 4000",
+        config_dir,
+        "snake8",
+        "position_p = 640\nposition_i = 0\nposition_d = 4000",
         "kp_nm_per_rad = 2.578\nkd_nms_per_rad = 0.1289\nposition_i = 0",
     )
     argv = ["tune", "gains", "--robot", str(path), "--joints", "0", "--gait", "serpenoid"]

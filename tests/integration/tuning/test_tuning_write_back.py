@@ -14,8 +14,18 @@ from snakebot.cli.main import main
 from snakebot.config import load_robot
 from snakebot.config.paths import shipped_configs
 
-GAINS = ["tune", "gains", "--joints", "0", "--gait-duration", "1.5", "--budget", "4",
-         "--no-chirp", "--json"]
+GAINS = [
+    "tune",
+    "gains",
+    "--joints",
+    "0",
+    "--gait-duration",
+    "1.5",
+    "--budget",
+    "4",
+    "--no-chirp",
+    "--json",
+]
 
 
 def shipped_digest() -> dict[str, str]:
@@ -49,9 +59,10 @@ def test_tune_gains_out_writes_a_copy_and_text_says_where(
     assert shipped_digest() == before
     written = tomllib.loads(out.read_text())["gains"]
     assert load_robot(out).gain_registers.position_p == written["position_p"]
-    assert written != tomllib.loads((shipped_configs() / "robots" / "snake8.toml").read_text())[
-        "gains"
-    ]
+    assert (
+        written
+        != tomllib.loads((shipped_configs() / "robots" / "snake8.toml").read_text())["gains"]
+    )
 
 
 def test_tune_gains_dry_run_on_a_robot_file_writes_nothing(

@@ -29,13 +29,16 @@ def test_a_snake_of_each_model_sidewinds_on_the_twin(
     config_dir: Path, capsys: pytest.CaptureFixture[str], model: str
 ) -> None:
     text = (config_dir / "robots" / "snake12.toml").read_text()
-    gains = text[text.index("[gains]"):text.index("[settings]")]
+    gains = text[text.index("[gains]") : text.index("[settings]")]
     path = config_dir / "robots" / "model.toml"
     mass = f"mass_kg = {MODULE_MASS_KG.get(model, 0.085)} "
-    path.write_text(text.replace('servo = "XL430-W250"', f'servo = "{model}"')
-                    .replace(gains, "").replace('name = "snake12"', 'name = "model"')
-                    .replace("mass_kg = 0.085 ", mass)
-                    .replace("protocol = 2.0\n", ""))  # the model's own protocol (AX: 1.0)
+    path.write_text(
+        text.replace('servo = "XL430-W250"', f'servo = "{model}"')
+        .replace(gains, "")
+        .replace('name = "snake12"', 'name = "model"')
+        .replace("mass_kg = 0.085 ", mass)
+        .replace("protocol = 2.0\n", "")
+    )  # the model's own protocol (AX: 1.0)
     robot = load_robot(path)  # no [gains]: the model's factory gains
     argv = ["run", "--robot", str(path), "--gait", "sidewinding", "--duration", "3", "--json"]
     assert main(argv) == 0

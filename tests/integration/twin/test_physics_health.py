@@ -54,11 +54,16 @@ def test_a_capsule_sinking_into_the_floor_at_accepted_settings_is_a_typed_error_
     robot = edit_robot(config_dir, "snake8", "position_p = 640", "position_p = 16383")
     edit_robot(config_dir, "snake8", "position_d = 4000", "position_d = 16383")
     edit_robot(config_dir, "snake8", "timestep_s = 0.002", "timestep_s = 0.02")
-    edit_robot(config_dir, "snake8", "[joint_defaults]",
-               "[twin.servo]\narmature_kgm2 = 0.00001\n\n[joint_defaults]")
+    edit_robot(
+        config_dir,
+        "snake8",
+        "[joint_defaults]",
+        "[twin.servo]\narmature_kgm2 = 0.00001\n\n[joint_defaults]",
+    )
     log = tmp_path / "run.csv"
-    run = snakebot("run", "--robot", str(robot), "--rate", "50", "--duration", "10",
-                   "--log", str(log))
+    run = snakebot(
+        "run", "--robot", str(robot), "--rate", "50", "--duration", "10", "--log", str(log)
+    )
     assert run.returncode == 1, run.stdout + run.stderr
     assert "physics health: penetration at t=" in run.stderr
     assert "capsule radius 22.0 mm" in run.stderr
@@ -74,15 +79,17 @@ def test_penetration_past_the_warning_threshold_is_reported_in_the_summary() -> 
     assert any("floor penetration" in w for w in physics["warnings"])
 
 
-def run(robot: RobotConfig, gait: str | Gait, duration_s: float, rate_hz: float = 100.0,
-        **twin: object) -> dict[str, Any]:
+def run(
+    robot: RobotConfig, gait: str | Gait, duration_s: float, rate_hz: float = 100.0, **twin: object
+) -> dict[str, Any]:
     """``gait`` on the twin of ``robot``; the run's summary."""
     if isinstance(gait, str):
         gait = make_gait(gait, robot.joint_count, {})
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     with TwinBackend(robot, **twin) as backend:  # type: ignore[arg-type]
-        result = run_gait(backend, gait, SafetyLayer.for_robot(robot),
-                          RunPlan(duration_s, rate_hz), metrics)
+        result = run_gait(
+            backend, gait, SafetyLayer.for_robot(robot), RunPlan(duration_s, rate_hz), metrics
+        )
     return result.summary
 
 

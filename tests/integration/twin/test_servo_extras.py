@@ -30,8 +30,9 @@ def robot_with(config_dir: Path, servo: str = "", robot: str = "") -> RobotConfi
         path.write_text(path.read_text() + f"\n[twin]\n{servo}\n")
     path = config_dir / "robots" / "snake8.toml"
     if robot:
-        text = path.read_text().replace("[joint_defaults]", f"[twin.servo]\n{robot}\n\n"
-                                        "[joint_defaults]", 1)
+        text = path.read_text().replace(
+            "[joint_defaults]", f"[twin.servo]\n{robot}\n\n[joint_defaults]", 1
+        )
         path.write_text(text)
     return load_robot(path)
 
@@ -69,8 +70,11 @@ def test_the_p_gain_divisor_has_one_home_the_servo_files_physics(config_dir: Pat
     assert robot.gain_registers == shipped.gain_registers
     # A second key in the servo file's [twin] would be a second home: refused, pointing at it.
     path.write_text(path.read_text() + "\n[twin]\np_gain_divisor = 200\n")
-    with pytest.raises(ConfigError, match=r"xl430-w250.toml: twin.p_gain_divisor: the P-gain "
-                       r"divisor is physics.p_gain_divisor"):
+    with pytest.raises(
+        ConfigError,
+        match=r"xl430-w250.toml: twin.p_gain_divisor: the P-gain "
+        r"divisor is physics.p_gain_divisor",
+    ):
         load_robot(config_dir / "robots" / "snake8.toml")
 
 
@@ -92,15 +96,24 @@ def test_a_robots_fitted_p_gain_divisor_changes_what_its_registers_mean(config_d
     chain, motion = make_twin_chain(robot, 1_000_000)
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
-    with registered(chain) as url, DynamixelBackend(
-        robot, port=url, baud=1_000_000, port_handler_factory=EmulatedPortHandler,
-        clock=lambda: chain.now_s, sleep=chain.advance,
-    ) as backend:
+    with (
+        registered(chain) as url,
+        DynamixelBackend(
+            robot,
+            port=url,
+            baud=1_000_000,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        ) as backend,
+    ):
         assert backend.gain_registers == shipped.gain_registers
         backend.advance(0.02)
         chained_kp = motion.twin.model.actuator_gainprm[:, 0].copy()
-    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
-           for s in chain.servos}
+    got = {
+        (s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+        for s in chain.servos
+    }
     assert got == {(640, 0, 4000)}
     assert np.allclose(chained_kp, twin_kp)
 
@@ -115,8 +128,11 @@ def test_out_of_range_or_incomplete_parts_name_the_file_and_key(config_dir: Path
         robot_with(config_dir, servo="encoder_noise_rad = 1")
     servo = config_dir / "servos" / "xl430-w250.toml"
     servo.write_text(servo.read_text().replace("\n[twin]\nencoder_noise_rad = 1\n", ""))
-    with pytest.raises(ConfigError, match=r"snake8.toml: twin.servo.battery_resistance_ohm: "
-                       "battery sag needs the current draw"):
+    with pytest.raises(
+        ConfigError,
+        match=r"snake8.toml: twin.servo.battery_resistance_ohm: "
+        "battery sag needs the current draw",
+    ):
         robot_with(config_dir, robot="battery_resistance_ohm = 0.5")
 
 
@@ -146,8 +162,9 @@ def test_current_draw_and_electrical_cost_of_transport(config_dir: Path) -> None
 
 
 def test_battery_sag_lowers_the_torque_a_stalled_servo_gives(config_dir: Path) -> None:
-    robot = robot_with(config_dir, servo="stall_current_a = 1.3",
-                       robot="battery_resistance_ohm = 1.0")
+    robot = robot_with(
+        config_dir, servo="stall_current_a = 1.3", robot="battery_resistance_ohm = 1.0"
+    )
     with TwinBackend(robot) as twin:
         hold(twin, FOLD, 3.0)
         physics = twin.physics_health()
@@ -222,8 +239,12 @@ def test_the_head_imu_sees_a_roll_and_is_logged(tmp_path: Path) -> None:
     from snakebot.cli.main import main
 
     log = tmp_path / "roll.csv"
-    assert main(["run", "--robot", "snake12", "--gait", "rolling", "--duration", "6",
-                 "--log", str(log)]) == 0
+    assert (
+        main(
+            ["run", "--robot", "snake12", "--gait", "rolling", "--duration", "6", "--log", str(log)]
+        )
+        == 0
+    )
     telemetry = read_log(log)
     roll_rate = telemetry.column("gyro_x_rad_s")
     assert np.abs(roll_rate).max() > 1.0  # the head spins about its own axis

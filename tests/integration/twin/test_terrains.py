@@ -90,8 +90,6 @@ def test_on_rough_ground_the_snake_rests_on_the_field() -> None:
         twin.advance(0.5)
         positions = link_positions(twin)
         assert twin.data.ncon > 0
-        touching = {
-            twin.model.geom(int(g)).name for pair in twin.data.contact.geom for g in pair
-        }
+        touching = {twin.model.geom(int(g)).name for pair in twin.data.contact.geom for g in pair}
     assert "rough" in touching and "floor" not in touching
     assert np.abs(positions[:, 2]).max() < 0.05 + robot.link.radius_m

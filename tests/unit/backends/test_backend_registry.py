@@ -83,8 +83,10 @@ def _worm() -> object:
     return load_body("worm")
 
 
-NAME_TEST = re.compile(r"""(==|!=)\s*["'](sim|twin|dynamixel|softbody)["']|"""
-                       r"""in\s*\(\s*["'](sim|twin|dynamixel|softbody)["']""")
+NAME_TEST = re.compile(
+    r"""(==|!=)\s*["'](sim|twin|dynamixel|softbody)["']|"""
+    r"""in\s*\(\s*["'](sim|twin|dynamixel|softbody)["']"""
+)
 
 
 def test_no_module_branches_on_a_backend_name() -> None:

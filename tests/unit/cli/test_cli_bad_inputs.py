@@ -68,10 +68,26 @@ CASES = [
     bad("run", "--durration", "1", code=2, names=("usage: snakebot run", "--duration?")),
     bad("run", "--friction", "x", code=2, names=("--friction",)),
     bad("run", "--backend", "dynamixel", code=2, names=("--robot",)),
-    bad("run", "--backend", "dynamixel", *SNAKE12, "--port", "socket://127.0.0.1:9", code=2,
-        names=("--port", "socket://")),
-    bad("run", "--backend", "dynamixel", *SNAKE12, "--video", "{tmp}/a.mp4", code=2,
-        names=("--video",)),
+    bad(
+        "run",
+        "--backend",
+        "dynamixel",
+        *SNAKE12,
+        "--port",
+        "socket://127.0.0.1:9",
+        code=2,
+        names=("--port", "socket://"),
+    ),
+    bad(
+        "run",
+        "--backend",
+        "dynamixel",
+        *SNAKE12,
+        "--video",
+        "{tmp}/a.mp4",
+        code=2,
+        names=("--video",),
+    ),
     bad("run", "--backend", "dynamixel", *SNAKE12, "--port", "{blocker}", names=("{blocker}",)),
     bad("run", "--mcap", "/dev/full", names=("/dev/full", "MCAP", "I/O error")),
     bad("run", "--mcap", "{blocker}/run.mcap", names=("{blocker}/run.mcap", "Not a directory")),
@@ -80,8 +96,14 @@ CASES = [
     # log
     bad("log", "info", "{csv}", names=("{csv}", "line 2, column command_rad_0", "'abc'")),
     bad("log", "plot", "{binary}", names=("{binary}", "not UTF-8")),
-    bad("log", "export", "{tmp}/nope.csv", "--format", "mcap",
-        names=("{tmp}/nope.csv", "No such file")),
+    bad(
+        "log",
+        "export",
+        "{tmp}/nope.csv",
+        "--format",
+        "mcap",
+        names=("{tmp}/nope.csv", "No such file"),
+    ),
     bad("log", "export", "{csv}", "--format", "xml", code=2, names=("--format",)),
     bad("log", code=2, names=("ACTION",)),
     # model
@@ -89,8 +111,14 @@ CASES = [
     bad("model", "--out", "/dev/full", names=("/dev/full", "No space left")),
     bad("model", "--robot", "{heavy}", "--out", "{tmp}/m.xml", names=("{heavy}", "link.mass_kg")),
     bad("model", "--friction", "1", "--out", "{tmp}/m.xml", code=2, names=("--friction",)),
-    bad("model", "--robot", "{settings}", "--out", "{tmp}/m.xml",
-        names=("{settings}", "settings.bogus")),
+    bad(
+        "model",
+        "--robot",
+        "{settings}",
+        "--out",
+        "{tmp}/m.xml",
+        names=("{settings}", "settings.bogus"),
+    ),
     # gaits
     bad("gaits", "moonwalk", code=2, names=("moonwalk",)),
     # emulate (refused before it serves)
@@ -103,10 +131,18 @@ CASES = [
     # config
     bad("config", "diff", code=2, names=("--robot",)),
     bad("config", "diff", "--robot", "{url}", names=("{url}", "bus.port", "socket://")),
-    bad("config", "apply", "--robot", "{settings}", "--yes",
-        names=("{settings}", "settings.bogus")),
-    bad("config", "apply", *SNAKE12, "--port", "spy:///dev/null?file=x", code=2,
-        names=("--port", "spy://")),
+    bad(
+        "config", "apply", "--robot", "{settings}", "--yes", names=("{settings}", "settings.bogus")
+    ),
+    bad(
+        "config",
+        "apply",
+        *SNAKE12,
+        "--port",
+        "spy:///dev/null?file=x",
+        code=2,
+        names=("--port", "spy://"),
+    ),
     bad("config", "assign-id", *SNAKE12, "--to", "300", code=2, names=("--to",)),
     bad("config", "assign-id", "--robot", "{binary}", "--to", "3", names=("{binary}",)),
     # servo
@@ -124,8 +160,18 @@ CASES = [
     bad("tune", "gait", "--budget", "0", code=2, names=("--budget",)),
     # the library names its keyword ("params: ..."); the command line names the flag, exit 2
     bad("tune", "gait", "--gait", "dft", code=2, names=("--params: ",)),
-    bad("tune", "gait", "--method", "grid", "--params", "omega,amplitude,phase_lag,offset",
-        "--budget", "3", code=2, names=("--budget: 3",)),
+    bad(
+        "tune",
+        "gait",
+        "--method",
+        "grid",
+        "--params",
+        "omega,amplitude,phase_lag,offset",
+        "--budget",
+        "3",
+        code=2,
+        names=("--budget: 3",),
+    ),
     bad("sysid", "--record", "{tmp}/chirp.csv", "--joint", "99", code=2, names=("--joint: 99",)),
     bad("sysid", "--record", "{tmp}/chirp.csv", "--hold", "3", code=2, names=("--hold: 3",)),
     bad("tune", "gait", "--rate", "0", code=2, names=("--rate",)),
@@ -171,23 +217,42 @@ def files(config_dir: Path, tmp_path: Path) -> dict[str, Path]:
     robots = config_dir / "robots"
     heavy = edit_robot(config_dir, "snake8", "mass_kg = 0.085", "mass_kg = 1e308")
     settings = robots / "settings.toml"
-    settings.write_text((robots / "snake12.toml").read_text().replace(
-        "[settings]", "[settings]\nbogus = 1", 1))
+    settings.write_text(
+        (robots / "snake12.toml").read_text().replace("[settings]", "[settings]\nbogus = 1", 1)
+    )
     url = robots / "url.toml"
-    url.write_text((robots / "snake12.toml").read_text().replace(
-        'port = "/dev/ttyUSB0"', 'port = "socket://127.0.0.1:9"', 1))
-    return {"binary": binary, "blocker": blocker, "csv": csv, "gait": gait, "heavy": heavy,
-            "script": script, "badscript": badscript,
-            "settings": settings, "url": url, "tmp": tmp_path}
+    url.write_text(
+        (robots / "snake12.toml")
+        .read_text()
+        .replace('port = "/dev/ttyUSB0"', 'port = "socket://127.0.0.1:9"', 1)
+    )
+    return {
+        "binary": binary,
+        "blocker": blocker,
+        "csv": csv,
+        "gait": gait,
+        "heavy": heavy,
+        "script": script,
+        "badscript": badscript,
+        "settings": settings,
+        "url": url,
+        "tmp": tmp_path,
+    }
 
 
 def test_every_command_is_covered() -> None:
     covered = {case.argv[0] for case in CASES}
     assert covered == set(COMMANDS)
     assert {case.argv[1] for case in CASES if case.argv[0] == "config"} == {
-        "diff", "apply", "assign-id"}
+        "diff",
+        "apply",
+        "assign-id",
+    }
     assert {case.argv[1] for case in CASES if case.argv[0] == "servo"} == {
-        "reboot", "reset", "info"}
+        "reboot",
+        "reset",
+        "info",
+    }
     assert {case.argv[1] for case in CASES if case.argv[0] == "tune"} == {"gait", "gains"}
 
 
@@ -197,8 +262,9 @@ def test_bad_input_is_exit_1_or_2_naming_what_is_wrong(
 ) -> None:
     argv = [arg.format(**files) for arg in case.argv]
     if argv[0] == "emulate":  # one that wrongly starts serves until Ctrl-C: run it on a leash
-        done = subprocess.run([sys.executable, "-m", "snakebot", *argv], capture_output=True,
-                              text=True, timeout=60)
+        done = subprocess.run(
+            [sys.executable, "-m", "snakebot", *argv], capture_output=True, text=True, timeout=60
+        )
         code, err = done.returncode, done.stderr
     else:
         code = main(argv)
@@ -220,5 +286,6 @@ def test_a_bug_is_exit_3_with_the_traceback(
     assert main(["gaits", "serpenoid"]) == 3
     err = capsys.readouterr().err
     assert "Traceback" in err and "KeyError: 'serpenoid'" in err
-    assert err.rstrip().endswith("internal error (a bug in snakebot); please report it with the "
-                                 "traceback")
+    assert err.rstrip().endswith(
+        "internal error (a bug in snakebot); please report it with the traceback"
+    )

@@ -15,10 +15,16 @@ pytest.importorskip("argcomplete")
 
 def complete(line: str, tmp_path: Path) -> list[str]:
     answer = tmp_path / "candidates"
-    env = {**os.environ, "_ARGCOMPLETE": "1", "COMP_LINE": line, "COMP_POINT": str(len(line)),
-           "_ARGCOMPLETE_STDOUT_FILENAME": str(answer)}
-    done = subprocess.run([sys.executable, "-m", "snakebot"], env=env, capture_output=True,
-                          text=True, timeout=120)
+    env = {
+        **os.environ,
+        "_ARGCOMPLETE": "1",
+        "COMP_LINE": line,
+        "COMP_POINT": str(len(line)),
+        "_ARGCOMPLETE_STDOUT_FILENAME": str(answer),
+    }
+    done = subprocess.run(
+        [sys.executable, "-m", "snakebot"], env=env, capture_output=True, text=True, timeout=120
+    )
     assert done.returncode == 0, done.stderr
     return sorted(word.strip() for word in answer.read_text().split("\013"))
 

@@ -63,15 +63,27 @@ def run(capsys: pytest.CaptureFixture[str], argv: list[str]) -> tuple[int, str, 
 
 
 def test_the_walk_finds_every_subcommand() -> None:
-    assert {"run", "drive", "robots", "ports", "tune gait", "tune gains", "config apply",
-            "servo reset", "sysid", "emulate"} <= set(IDS)
+    assert {
+        "run",
+        "drive",
+        "robots",
+        "ports",
+        "tune gait",
+        "tune gains",
+        "config apply",
+        "servo reset",
+        "sysid",
+        "emulate",
+    } <= set(IDS)
     assert len(IDS) == len(set(IDS))
 
 
 def test_no_parser_accepts_abbreviations() -> None:
     def walk(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
         children = [
-            child for a in parser._actions if isinstance(a, argparse._SubParsersAction)
+            child
+            for a in parser._actions
+            if isinstance(a, argparse._SubParsersAction)
             for child in a.choices.values()
         ]
         return [parser, *(p for child in children for p in walk(child))]
@@ -81,7 +93,9 @@ def test_no_parser_accepts_abbreviations() -> None:
 
 @pytest.mark.parametrize(("path", "parser"), LEAVES, ids=IDS)
 def test_an_abbreviated_option_is_refused_with_the_subcommands_usage(
-    path: tuple[str, ...], parser: argparse.ArgumentParser, tmp_path: Path,
+    path: tuple[str, ...],
+    parser: argparse.ArgumentParser,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     argv = [*path, *required_argv(parser, tmp_path), "--jso"]
@@ -94,7 +108,9 @@ def test_an_abbreviated_option_is_refused_with_the_subcommands_usage(
 
 @pytest.mark.parametrize(("path", "parser"), LEAVES, ids=IDS)
 def test_a_misspelled_flag_is_named_with_its_nearest_match(
-    path: tuple[str, ...], parser: argparse.ArgumentParser, tmp_path: Path,
+    path: tuple[str, ...],
+    parser: argparse.ArgumentParser,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     code, _, err = run(capsys, [*path, *required_argv(parser, tmp_path), "--degub"])
@@ -114,7 +130,9 @@ def test_debug_is_accepted_before_and_after_the_subcommand(
 
 @pytest.mark.parametrize(("path", "parser"), LEAVES, ids=IDS)
 def test_json_is_accepted_and_usage_errors_come_as_json(
-    path: tuple[str, ...], parser: argparse.ArgumentParser, tmp_path: Path,
+    path: tuple[str, ...],
+    parser: argparse.ArgumentParser,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     json_action = options(parser).get("--json")
@@ -131,7 +149,9 @@ def test_json_is_accepted_and_usage_errors_come_as_json(
     ids=[i for i, (_, parser) in zip(IDS, LEAVES, strict=True) if "--robot" in options(parser)],
 )
 def test_a_file_error_with_json_is_a_json_error_of_code_1(
-    path: tuple[str, ...], parser: argparse.ArgumentParser, tmp_path: Path,
+    path: tuple[str, ...],
+    parser: argparse.ArgumentParser,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     missing = tmp_path / "nope.toml"
@@ -158,13 +178,16 @@ def test_port_and_baud_mean_the_same_everywhere(
         assert "--port" in found or path == ("emulate",)  # the emulator's own line rate
 
 
-HARDWARE = [(p, parser) for p, parser in LEAVES
-            if "--port" in options(parser) and p not in NO_ROBOT_NEEDED]
+HARDWARE = [
+    (p, parser) for p, parser in LEAVES if "--port" in options(parser) and p not in NO_ROBOT_NEEDED
+]
 
 
 @pytest.mark.parametrize(("path", "parser"), HARDWARE, ids=[" ".join(p) for p, _ in HARDWARE])
 def test_robot_is_required_before_real_servos_are_touched(
-    path: tuple[str, ...], parser: argparse.ArgumentParser, tmp_path: Path,
+    path: tuple[str, ...],
+    parser: argparse.ArgumentParser,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     found = options(parser)
@@ -243,7 +266,10 @@ def test_dry_run_on_servos_writes_no_register(
     after = [bytes(s.memory.data) for s in chain.servos]
     changed = [i for i, (b, a) in enumerate(zip(before, after, strict=True)) if b != a]
     assert [s.servo_id for s in chain.servos] == list(range(1, 13))
-    assert not changed or all(  # reads may refresh live state (present position...), not EEPROM
-        before[i][:64] == after[i][:64] for i in changed
+    assert (
+        not changed
+        or all(  # reads may refresh live state (present position...), not EEPROM
+            before[i][:64] == after[i][:64] for i in changed
+        )
     )
     assert chain.servo(4).torque_enabled

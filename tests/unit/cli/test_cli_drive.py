@@ -22,11 +22,13 @@ def drive(tmp_path: Path, script: str, *argv: str) -> int:
     [
         # Bad values typed on the command line are usage errors (2), like argparse's own.
         (["--gaits", "slither"], 2, "unknown gait 'slither'"),
-        (["--gaits", "sidewinding,rolling", "--set", "amplitude_even=0.3"], 2,
-         "amplitude_even=0.3: expected GAIT.KEY=VALUE with GAIT one of sidewinding, rolling"),
+        (
+            ["--gaits", "sidewinding,rolling", "--set", "amplitude_even=0.3"],
+            2,
+            "amplitude_even=0.3: expected GAIT.KEY=VALUE with GAIT one of sidewinding, rolling",
+        ),
         (["--gaits", "serpenoid", "--set", "omega=fast"], 2, "expected a number in rad/s"),
-        (["--gaits", "keyframes", "--set", "advance=error"], 1,
-         "keyframes: cannot be driven live"),
+        (["--gaits", "keyframes", "--set", "advance=error"], 1, "keyframes: cannot be driven live"),
         (["--smoothing", "-1"], 2, "--smoothing: expected seconds >= 0"),
         (["--record", "/proc/nope/keys.rec"], 1, "cannot write the recording"),
     ],
@@ -55,8 +57,17 @@ def test_a_short_drive_prints_its_summary_and_keeps_its_log(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     log = tmp_path / "drive.csv"
-    code = drive(tmp_path, "0 w\n0 w\n0 w\n0 w\n3 q\n", "--robot", "snake8", "--log", str(log),
-                 "--set", "amplitude=0.3", "--json")
+    code = drive(
+        tmp_path,
+        "0 w\n0 w\n0 w\n0 w\n3 q\n",
+        "--robot",
+        "snake8",
+        "--log",
+        str(log),
+        "--set",
+        "amplitude=0.3",
+        "--json",
+    )
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["gaits"] == ["serpenoid"] and summary["stopped_by"] == "quit"

@@ -36,7 +36,9 @@ def test_ctrl_c_during_start_up_prints_interrupted_and_exits_130(marker: str) ->
     # `marker` and lands in the start-up that follows it (building the parser alone takes ~0.5 s).
     proc = subprocess.Popen(
         [sys.executable, "-X", "importtime", "-m", "snakebot", "gaits"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     assert proc.stderr is not None
     seen = []
@@ -64,26 +66,24 @@ def test_a_signal_after_the_command_finished_keeps_its_exit_code_and_output(
     # signal. The signal is sent from those spots.
     hook = {
         "command_returned": "real = main.main\n"
-                            "def hit(argv=None):\n    code = real(argv)\n"
-                            "    kill()\n    return code\n"
-                            "main.main = hit\n",
-        "exiting": "real = sys.exit\n"
-                   "def hit(code):\n    kill()\n    real(code)\n"
-                   "sys.exit = hit\n",
+        "def hit(argv=None):\n    code = real(argv)\n"
+        "    kill()\n    return code\n"
+        "main.main = hit\n",
+        "exiting": "real = sys.exit\ndef hit(code):\n    kill()\n    real(code)\nsys.exit = hit\n",
         # module teardown, after Python has put the default signal handlers back
-        "tearing_down": "class Dying:\n    def __del__(self):\n        kill()\n"
-                        "dying = Dying()\n",
+        "tearing_down": "class Dying:\n    def __del__(self):\n        kill()\ndying = Dying()\n",
     }[where]
     script = (
         "import os, sys\n"
         "from snakebot.cli import main\n"
         f"def kill():\n    os.kill(os.getpid(), {int(signum)})\n"
-        + hook +
-        "sys.argv = ['snakebot', 'gaits', '--json']\n"
+        + hook
+        + "sys.argv = ['snakebot', 'gaits', '--json']\n"
         "main.entry_point()\n"
     )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=60)
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
     assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert proc.returncode == 0
     assert '"serpenoid"' in proc.stdout  # the gait list was printed, not lost

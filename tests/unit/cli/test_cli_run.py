@@ -13,9 +13,19 @@ from snakebot.telemetry import read_log
 from tests.conftest import edit_robot
 
 SUMMARY_KEYS = {
-    "distance_m", "displacement_m", "speed_mps", "heading_deg", "body_length_m", "joints",
-    "cycles", "body_lengths_per_cycle", "tracking_rms_rad", "max_abs_command_rad",
-    "cost_of_transport", "achieved_rate_hz", "overruns",
+    "distance_m",
+    "displacement_m",
+    "speed_mps",
+    "heading_deg",
+    "body_length_m",
+    "joints",
+    "cycles",
+    "body_lengths_per_cycle",
+    "tracking_rms_rad",
+    "max_abs_command_rad",
+    "cost_of_transport",
+    "achieved_rate_hz",
+    "overruns",
 }
 
 
@@ -120,12 +130,26 @@ def test_gaits_lists_every_gait_with_units(capsys: pytest.CaptureFixture[str]) -
     assert main(["gaits", "--json"]) == 0
     listing = json.loads(capsys.readouterr().out)
     names = {g["name"] for g in listing}
-    assert {"serpenoid", "compound", "sidewinding", "rolling", "lateral_undulation",
-            "linear_progression", "turn_in_place", "dft", "dft_shift", "simple",
-            "keyframes"} <= names
+    assert {
+        "serpenoid",
+        "compound",
+        "sidewinding",
+        "rolling",
+        "lateral_undulation",
+        "linear_progression",
+        "turn_in_place",
+        "dft",
+        "dft_shift",
+        "simple",
+        "keyframes",
+    } <= names
     serpenoid = next(g for g in listing if g["name"] == "serpenoid")
     assert [(p["name"], p["unit"]) for p in serpenoid["params"]] == [
-        ("amplitude", "rad"), ("omega", "rad/s"), ("phase_lag", "rad"), ("offset", "rad")]
+        ("amplitude", "rad"),
+        ("omega", "rad/s"),
+        ("phase_lag", "rad"),
+        ("offset", "rad"),
+    ]
 
 
 def test_video_is_rendered_offscreen(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -38,8 +38,9 @@ def test_a_log_on_a_full_device(capsys: pytest.CaptureFixture[str]) -> None:
 def test_a_log_under_a_file(capsys: pytest.CaptureFixture[str], blocker: Path) -> None:
     code, _, err = run(capsys, "--log", str(blocker / "run.csv"))
     assert code == 1
-    assert err == (f"snakebot: error: {blocker}/run.csv: cannot write the log: Not a directory "
-                   f"({blocker})\n")
+    assert err == (
+        f"snakebot: error: {blocker}/run.csv: cannot write the log: Not a directory ({blocker})\n"
+    )
 
 
 @pytest.mark.parametrize(
@@ -65,11 +66,18 @@ def test_an_unwritable_video_stops_the_run_before_it_starts(
 
 def test_video_renders_offscreen_without_a_display_or_mujoco_gl(tmp_path: Path) -> None:
     video = tmp_path / "run.mp4"
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")
+    }
     done = subprocess.run(
         [sys.executable, "-m", "snakebot", "run", "--duration", "0.3", "--video", str(video)],
-        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+        cwd=tmp_path,
     )
     if sys.platform.startswith("linux"):
         assert done.returncode == 0, done.stderr
@@ -90,11 +98,18 @@ def test_video_renders_headless_when_main_is_called_in_process(tmp_path: Path) -
     """main() from a script (not the console script) with nothing set: this was exit 1 ("no
     offscreen rendering") because mujoco was imported before MUJOCO_GL was chosen."""
     video = tmp_path / "run.mp4"
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")
+    }
     done = subprocess.run(
         [sys.executable, "-c", HEADLESS_VIDEO_IN_PROCESS, str(video)],
-        capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+        cwd=tmp_path,
     )
     assert done.returncode == 0, done.stderr
     assert video.stat().st_size > 1000
@@ -123,8 +138,7 @@ def test_video_without_imageio_leaves_an_existing_log_untouched(
     monkeypatch.setitem(sys.modules, "imageio.v2", None)
     log = tmp_path / "yesterday.csv"
     log.write_text("time_s,joint\n0.0,0.1\n")
-    code, out, err = run(capsys, "--video", str(tmp_path / "run.mp4"), "--log", str(log),
-                         "--force")
+    code, out, err = run(capsys, "--video", str(tmp_path / "run.mp4"), "--log", str(log), "--force")
     assert code == 1 and out == ""
     assert "pip install 'snakebot[video]'" in err
     assert log.read_text() == "time_s,joint\n0.0,0.1\n"
@@ -145,7 +159,10 @@ def test_a_video_the_disk_cannot_finish_is_exit_1_not_wrote_n_frames(tmp_path: P
     video = tmp_path / "run.mp4"
     done = subprocess.run(
         [sys.executable, "-m", "snakebot", "run", "--duration", "1", "--video", str(video)],
-        capture_output=True, text=True, timeout=300, cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
         preexec_fn=_file_size_limit(4096),
     )
     assert done.returncode == 1, done.stderr

@@ -15,14 +15,31 @@ def ax_robot(config_dir: Path) -> Path:
     """snake12 built from AX-12A servos on Protocol 1.0 (one Read per servo a cycle)."""
     edit_robot(config_dir, "snake12", 'servo = "XL430-W250"', 'servo = "AX-12A"')
     edit_robot(config_dir, "snake12", "protocol = 2.0", "protocol = 1.0")
-    path = edit_robot(config_dir, "snake12", "position_p = 640\nposition_i = 0\nposition_d = 4000",
-                      "compliance_slope = 32")
+    path = edit_robot(
+        config_dir,
+        "snake12",
+        "position_p = 640\nposition_i = 0\nposition_d = 4000",
+        "compliance_slope = 32",
+    )
     return path
 
 
 def run(*argv: str) -> int:
-    return main(["run", "--backend", "dynamixel", "--port", "/dev/ttyUSB9", "--gait",
-                 "sidewinding", "--duration", "1", "--dry-run", *argv])
+    return main(
+        [
+            "run",
+            "--backend",
+            "dynamixel",
+            "--port",
+            "/dev/ttyUSB9",
+            "--gait",
+            "sidewinding",
+            "--duration",
+            "1",
+            "--dry-run",
+            *argv,
+        ]
+    )
 
 
 def test_a_rate_the_ax_bus_cannot_hold_is_a_usage_error_with_the_ceiling(
@@ -52,8 +69,21 @@ def test_drive_refuses_the_rate_too_before_the_port_opens(
     robot = ax_robot(config_dir)
     script = tmp_path / "keys.txt"
     script.write_text("0.5 q\n")
-    code = main(["drive", "--backend", "dynamixel", "--port", "/dev/ttyUSB9", "--robot",
-                 str(robot), "--script", str(script), "--rate", "100"])
+    code = main(
+        [
+            "drive",
+            "--backend",
+            "dynamixel",
+            "--port",
+            "/dev/ttyUSB9",
+            "--robot",
+            str(robot),
+            "--script",
+            str(script),
+            "--rate",
+            "100",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2, err
     assert "--rate: 100: the servo bus cannot hold 100 Hz: at most 67 Hz" in err

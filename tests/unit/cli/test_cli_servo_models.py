@@ -34,9 +34,15 @@ def test_lists_shipped_and_user_models(
     payload = json.loads(capsys.readouterr().out)
     rows = {row["model"]: row for row in payload["models"]}
     assert rows["AX-12W"]["file"] == str(tmp_path / "ax_12w.toml")
-    assert rows["AX-12A"] == {"model": "AX-12A", "model_number": 12, "family": "dynamixel",
-                              "protocols": [1.0], "ticks": 1024, "registers": 32,
-                              "file": "shipped"}
+    assert rows["AX-12A"] == {
+        "model": "AX-12A",
+        "model_number": 12,
+        "family": "dynamixel",
+        "protocols": [1.0],
+        "ticks": 1024,
+        "registers": 32,
+        "file": "shipped",
+    }
     assert rows["XL430-W250"]["protocols"] == [2.0, 1.0]
     assert payload["folders"][-1] == str(tmp_path.resolve())
     assert main(["servo", "models"]) == 0

@@ -41,15 +41,19 @@ SCALARS = (
 )
 VALUES = st.recursive(
     SCALARS,
-    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner,
-                                                                 max_size=2),
+    lambda inner: (
+        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner, max_size=2)
+    ),
     max_leaves=6,
 )
 
 
 def _lines_with_values(text: str) -> list[int]:
-    return [i for i, line in enumerate(text.split("\n"))
-            if "=" in line and not line.lstrip().startswith("#")]
+    return [
+        i
+        for i, line in enumerate(text.split("\n"))
+        if "=" in line and not line.lstrip().startswith("#")
+    ]
 
 
 def _replace_value(text: str, index: int, value: object) -> str:
@@ -66,8 +70,9 @@ FILES = {
 }
 
 
-@settings(max_examples=150, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(kind=st.sampled_from(sorted(FILES)), line=st.integers(min_value=0), value=VALUES)
 def test_any_value_at_any_key_loads_or_is_a_config_error(
     config_dir: Path, kind: str, line: int, value: object

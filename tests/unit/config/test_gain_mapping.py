@@ -71,16 +71,41 @@ def test_an_ax_robot_takes_its_stiffness_in_si(config_dir: Path) -> None:
 @pytest.mark.parametrize(
     ("robot", "old", "new", "key", "expected"),
     [
-        ("snake12-ax12a", "compliance_slope = 32", "position_p = 32", "gains.position_p",
-         "AX-12A has a Compliance Slope (compliance_slope"),
-        ("snake12-ax12a", "compliance_slope = 32", "compliance_slope = 32\nkd_nms_per_rad = 0.1",
-         "gains.kd_nms_per_rad", "the damping has no register"),
-        ("snake12-ax12a", "compliance_slope = 32", "compliance_slope = 32\nkp_nm_per_rad = 4.0",
-         "gains.kp_nm_per_rad", "not both"),
-        ("snake12-ax12a", "compliance_slope = 32", "compliance_slope = 255",
-         "gains.compliance_slope", "Compliance Slope register range"),
-        ("snake12", "position_d = 4000", "position_d = 4000\ncompliance_slope = 32",
-         "gains.compliance_slope", "XL430-W250 has Position P/I/D Gain"),
+        (
+            "snake12-ax12a",
+            "compliance_slope = 32",
+            "position_p = 32",
+            "gains.position_p",
+            "AX-12A has a Compliance Slope (compliance_slope",
+        ),
+        (
+            "snake12-ax12a",
+            "compliance_slope = 32",
+            "compliance_slope = 32\nkd_nms_per_rad = 0.1",
+            "gains.kd_nms_per_rad",
+            "the damping has no register",
+        ),
+        (
+            "snake12-ax12a",
+            "compliance_slope = 32",
+            "compliance_slope = 32\nkp_nm_per_rad = 4.0",
+            "gains.kp_nm_per_rad",
+            "not both",
+        ),
+        (
+            "snake12-ax12a",
+            "compliance_slope = 32",
+            "compliance_slope = 255",
+            "gains.compliance_slope",
+            "Compliance Slope register range",
+        ),
+        (
+            "snake12",
+            "position_d = 4000",
+            "position_d = 4000\ncompliance_slope = 32",
+            "gains.compliance_slope",
+            "XL430-W250 has Position P/I/D Gain",
+        ),
     ],
 )
 def test_a_gain_of_the_other_kind_of_loop_is_refused_naming_the_key(

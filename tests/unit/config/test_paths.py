@@ -53,11 +53,17 @@ def test_order_is_env_then_cwd_then_user_then_shipped(
     monkeypatch.setenv("SNAKEBOT_CONFIG_PATH", f"{env_a}:{env_b}")
     folders = config_search_path()
     assert [f.origin for f in folders] == [
-        "SNAKEBOT_CONFIG_PATH", "SNAKEBOT_CONFIG_PATH", "./firmware_configs", "user config",
+        "SNAKEBOT_CONFIG_PATH",
+        "SNAKEBOT_CONFIG_PATH",
+        "./firmware_configs",
+        "user config",
         "shipped",
     ]
     assert [f.path for f in folders[:4]] == [
-        env_a, env_b, clean_env / "work" / "firmware_configs", clean_env / "xdg" / "snakebot"
+        env_a,
+        env_b,
+        clean_env / "work" / "firmware_configs",
+        clean_env / "xdg" / "snakebot",
     ]
 
 
@@ -84,8 +90,9 @@ def test_first_match_wins_and_robots_names_the_origin(
 
     assert main(["robots", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)
-    mine = [(r["origin"], r["path"], r["shadowed"]) for r in listed["robots"]
-            if r["name"] == "mysnake"]
+    mine = [
+        (r["origin"], r["path"], r["shadowed"]) for r in listed["robots"] if r["name"] == "mysnake"
+    ]
     assert mine == [
         ("SNAKEBOT_CONFIG_PATH", str(env), False),
         ("./firmware_configs", str(local), True),

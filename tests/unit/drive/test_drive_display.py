@@ -72,9 +72,19 @@ def test_hardware_readings_missing_on_the_twin_read_n_a() -> None:
 def cycle(k: int, error: float) -> DriveCycle:
     state = JointState(k * 0.01, np.full(12, -error), np.zeros(12), np.zeros(12))
     return DriveCycle(
-        cycle=k, gait_time_s=k * 0.01, target_rad=np.zeros(12), command_rad=np.zeros(12),
-        state=state, body=None, amplitude=1.0, scored=True, period_s=0.01, overrun=False,
-        achieved_rate_hz=100.0, status=status(), keys=(),
+        cycle=k,
+        gait_time_s=k * 0.01,
+        target_rad=np.zeros(12),
+        command_rad=np.zeros(12),
+        state=state,
+        body=None,
+        amplitude=1.0,
+        scored=True,
+        period_s=0.01,
+        overrun=False,
+        achieved_rate_hz=100.0,
+        status=status(),
+        keys=(),
     )
 
 
@@ -118,8 +128,15 @@ def test_a_narrow_terminal_gets_lines_cut_to_its_width_not_wrapped() -> None:
         fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 40, 0, 0))
         with open(slave, "w", closefd=False) as stream:
             display = DriveDisplay(
-                stream, title="t" * 60, gaits=GAITS, gait_index=lambda: 0, notice=lambda: "",
-                rate_hz=100.0, servo_ids=range(1, 13), health=dict, alerts=tuple,
+                stream,
+                title="t" * 60,
+                gaits=GAITS,
+                gait_index=lambda: 0,
+                notice=lambda: "",
+                rate_hz=100.0,
+                servo_ids=range(1, 13),
+                health=dict,
+                alerts=tuple,
                 overruns=lambda: 0,
             )
             display(cycle(0, 0.0))

@@ -14,7 +14,18 @@ from snakebot.drive.keys import KeyDecoder, analog, normalise
 def test_letters_arrows_and_control_keys_decode() -> None:
     decoder = KeyDecoder()
     assert decoder.feed(b"wA1 \x1b[A\x1b[B\x1b[C\x1b[D\x03\x04\t\r") == [
-        "w", "A", "1", "space", "up", "down", "right", "left", "ctrl-c", "ctrl-d", "tab", "enter",
+        "w",
+        "A",
+        "1",
+        "space",
+        "up",
+        "down",
+        "right",
+        "left",
+        "ctrl-c",
+        "ctrl-d",
+        "tab",
+        "enter",
     ]
 
 
@@ -43,8 +54,14 @@ def test_unknown_sequences_are_dropped_whole() -> None:
 
 @pytest.mark.parametrize(
     ("text", "name"),
-    [("W", "W"), ("Space", "space"), ("UP", "up"), ("Ctrl-C", "ctrl-c"),
-     ("speed=+0.50", "speed=0.5"), ("turn=-1", "turn=-1")],
+    [
+        ("W", "W"),
+        ("Space", "space"),
+        ("UP", "up"),
+        ("Ctrl-C", "ctrl-c"),
+        ("speed=+0.50", "speed=0.5"),
+        ("turn=-1", "turn=-1"),
+    ],
 )
 def test_script_names_normalise(text: str, name: str) -> None:
     assert normalise(text) == name
@@ -52,8 +69,11 @@ def test_script_names_normalise(text: str, name: str) -> None:
 
 @pytest.mark.parametrize(
     ("text", "message"),
-    [("jump", "unknown key 'jump'.*speed=V / turn=V"), ("speed=2", "-1..1, got '2'"),
-     ("turn=nan", "-1..1")],
+    [
+        ("jump", "unknown key 'jump'.*speed=V / turn=V"),
+        ("speed=2", "-1..1, got '2'"),
+        ("turn=nan", "-1..1"),
+    ],
 )
 def test_bad_key_names_say_what_a_key_looks_like(text: str, message: str) -> None:
     with pytest.raises(ValueError, match=message):
@@ -85,8 +105,23 @@ def _chunked(data: bytes, cuts: list[int]) -> list[bytes]:
 _TERMINAL_BYTES = st.lists(
     st.one_of(
         st.binary(max_size=8),
-        st.sampled_from([b"\x1b", b"\x1b[", b"\x1bO", b"\x1b[1;5A", b"\x1b[15~", b"\x1b[A",
-                         b"\x1bOD", b"\xe2\x82\xac", b"\xe2", b"\x03", b"[", b";", b"5"]),
+        st.sampled_from(
+            [
+                b"\x1b",
+                b"\x1b[",
+                b"\x1bO",
+                b"\x1b[1;5A",
+                b"\x1b[15~",
+                b"\x1b[A",
+                b"\x1bOD",
+                b"\xe2\x82\xac",
+                b"\xe2",
+                b"\x03",
+                b"[",
+                b";",
+                b"5",
+            ]
+        ),
     ),
     max_size=40,
 ).map(b"".join)

@@ -74,5 +74,7 @@ def test_a_recording_replays_as_the_same_events() -> None:
         record(event)
     assert stream.getvalue().startswith("# robot snake12\n# replay it\n")
     assert parse_script(stream.getvalue()) == [
-        InputEvent(0.01, "w"), InputEvent(1.234568, "left"), InputEvent(3.0, "turn=0.25")
+        InputEvent(0.01, "w"),
+        InputEvent(1.234568, "left"),
+        InputEvent(3.0, "turn=0.25"),
     ]

@@ -25,8 +25,12 @@ GOLDEN = [
         Instruction.SYNC_WRITE,
         bytes.fromhex("1E 04 00 10 00 50 01 01 20 02 60 03 02 30 00 70 01 03 20 02 80 03"),
     ),
-    ("FF FF FE 09 92 00 02 01 1E 02 02 24 1D", 0xFE, Instruction.BULK_READ,
-     bytes.fromhex("00 02 01 1E 02 02 24")),
+    (
+        "FF FF FE 09 92 00 02 01 1E 02 02 24 1D",
+        0xFE,
+        Instruction.BULK_READ,
+        bytes.fromhex("00 02 01 1E 02 02 24"),
+    ),
 ]
 
 
@@ -52,8 +56,12 @@ def test_parser_resyncs_after_garbage_and_split_chunks() -> None:
     ping = build_instruction(3, Instruction.PING)
     stream = b"\x00\xff\x12\xff\xff\xff" + ping + b"\xff\xff\xff\x07" + ping
     parser = StreamParser(stale_after_s=None)
-    found = [p for chunk in (stream[i : i + 3] for i in range(0, len(stream), 3))
-             for p in parser.feed(chunk) if p.intact]
+    found = [
+        p
+        for chunk in (stream[i : i + 3] for i in range(0, len(stream), 3))
+        for p in parser.feed(chunk)
+        if p.intact
+    ]
     assert [(p.servo_id, p.instruction) for p in found] == [(3, Instruction.PING)] * 2
 
 

@@ -55,7 +55,12 @@ def test_the_protocol_1_error_byte_reads_bit_by_bit() -> None:
     assert P1.status_errors(0x24) == ("overheating", "overload")
     assert P1.status_errors(0x00) == ()
     assert P1.status_errors(0x7F) == (
-        "input voltage", "angle limit", "overheating", "range", "checksum", "overload",
+        "input voltage",
+        "angle limit",
+        "overheating",
+        "range",
+        "checksum",
+        "overload",
         "instruction",
     )
 
@@ -70,8 +75,8 @@ def test_the_protocol_2_error_byte_is_a_number_plus_the_alert_bit() -> None:
     ("family", "method", "expected"),
     [
         # reference/servo-families.md §5: 12 servos at L = 6.
-        (P1, "read", WireCost(240, 12, 12)),       # 20 B per servo, 2.40 ms at 1 Mbps
-        (P1, "bulk_read", WireCost(187, 12, 1)),   # 3N + 7 = 43 B request + 12 x 12 B
+        (P1, "read", WireCost(240, 12, 12)),  # 20 B per servo, 2.40 ms at 1 Mbps
+        (P1, "bulk_read", WireCost(187, 12, 1)),  # 3N + 7 = 43 B request + 12 x 12 B
         # Protocol 2.0: 14 + N request; 11 + L per status; fast: one 8 + N(L + 4) reply.
         (P2, "sync_read", WireCost(14 + 12 + 12 * 17, 12, 1)),
         (P2, "fast_sync_read", WireCost(14 + 12 + 8 + 12 * 10, 1, 1)),

@@ -21,8 +21,11 @@ SNAKE12 = [j.axis for j in load_robot("snake12").joints]  # yaw, pitch, yaw, ...
 def test_cmu_presets_that_need_a_pitch_wave_are_refused_on_the_all_yaw_snake8(name: str) -> None:
     # The audit: on snake8 "turn_in_place" went straight 7.2 m and "rolling" did not roll,
     # with no warning.
-    with pytest.raises(GaitError, match=rf"gait '{name}' needs .*pitch on odd joints.*snake8 has "
-                       r"other axes on joints 1 \(yaw\), 3 \(yaw\)"):
+    with pytest.raises(
+        GaitError,
+        match=rf"gait '{name}' needs .*pitch on odd joints.*snake8 has "
+        r"other axes on joints 1 \(yaw\), 3 \(yaw\)",
+    ):
         check_joint_axes(name, SNAKE8, "snake8")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -50,8 +53,21 @@ def test_every_gait_says_what_axes_it_needs_in_words() -> None:
 
 def test_the_cli_refuses_rolling_on_snake8_before_anything_moves() -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "snakebot", "run", "--robot", "snake8", "--gait", "rolling",
-         "--duration", "1"], capture_output=True, text=True, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "snakebot",
+            "run",
+            "--robot",
+            "snake8",
+            "--gait",
+            "rolling",
+            "--duration",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert done.returncode == 1
     assert "gait 'rolling' needs" in done.stderr and "snake8" in done.stderr

@@ -219,9 +219,7 @@ def test_bad_options_are_named(option: str, value: float) -> None:
 
 
 def test_the_first_command_starts_from_the_measured_pose() -> None:
-    gait = LiveGait(
-        3, lower_rad=-1.0, upper_rad=1.0, max_speed_rad_s=5.0, period_s=DT
-    )
+    gait = LiveGait(3, lower_rad=-1.0, upper_rad=1.0, max_speed_rad_s=5.0, period_s=DT)
     gait.select("serpenoid")
     first = gait.command(12.0, np.array([0.5, 2.0, -0.2]))
     np.testing.assert_array_equal(first, [0.5, 1.0, -0.2])  # clipped into the limits

@@ -14,8 +14,14 @@ from snakebot.gaits.registry import GAITS
 
 SHIPPED = sorted(name for name in GAITS.names() if GAITS.origin(name).kind == "built-in")
 PHASES = {
-    "serpenoid": 1, "dft": 0, "simple": 0, "dft_shift": 1, "keyframes": 1,
-    "rectilinear": 1, "undulation": 1, "miller_sidewinding": 1,
+    "serpenoid": 1,
+    "dft": 0,
+    "simple": 0,
+    "dft_shift": 1,
+    "keyframes": 1,
+    "rectilinear": 1,
+    "undulation": 1,
+    "miller_sidewinding": 1,
 }
 
 

@@ -22,8 +22,13 @@ def encoding(name: str, **kwargs: float) -> object:
 
 @pytest.mark.parametrize(
     ("name", "cls", "dim"),
-    [("simple", SimpleGait, N), ("sinusoid", SerpenoidGait, 4), ("dft", DftGait, 5),
-     ("dft_shift", DftShiftGait, 5), ("compound", CompoundGait, 9)],
+    [
+        ("simple", SimpleGait, N),
+        ("sinusoid", SerpenoidGait, 4),
+        ("dft", DftGait, 5),
+        ("dft_shift", DftShiftGait, 5),
+        ("compound", CompoundGait, 9),
+    ],
 )
 def test_each_encoding_makes_the_gait_class_run_plays(name: str, cls: type, dim: int) -> None:
     enc = make_encoding(name, N, LOWER, UPPER)

@@ -8,8 +8,15 @@ from snakebot.rl.evaluate import EpisodeStats, EvalResult, print_table
 
 
 def _episode(seed: int, success: bool) -> EpisodeStats:
-    return EpisodeStats(seed, episode_return=3.0 if success else -1.0, steps=60,
-                        success=success, duration_s=6.0, path_m=1.8, positive_work_j=2.0)
+    return EpisodeStats(
+        seed,
+        episode_return=3.0 if success else -1.0,
+        steps=60,
+        success=success,
+        duration_s=6.0,
+        path_m=1.8,
+        positive_work_j=2.0,
+    )
 
 
 def test_a_policy_that_reached_no_goal_shows_n_a_in_the_time_to_goal_column() -> None:
@@ -28,9 +35,18 @@ def test_a_policy_that_reached_no_goal_shows_n_a_in_the_time_to_goal_column() ->
 
 
 def test_a_velocity_policy_has_no_success_rate_to_show() -> None:
-    episode = EpisodeStats(0, 100.0, 300, success=False, duration_s=30.0, path_m=6.0,
-                           positive_work_j=9.0, speed_error_mps=0.05, command=(0.2, 0.0),
-                           achieved=(0.18, 0.01))
+    episode = EpisodeStats(
+        0,
+        100.0,
+        300,
+        success=False,
+        duration_s=30.0,
+        path_m=6.0,
+        positive_work_j=9.0,
+        speed_error_mps=0.05,
+        command=(0.2, 0.0),
+        achieved=(0.18, 0.01),
+    )
     summary = EvalResult("policy", 1.0, [episode]).summary()
     assert summary["success_rate"] is None and summary["speed_error_mps"] == 0.05
     out = io.StringIO()
@@ -40,12 +56,16 @@ def test_a_velocity_policy_has_no_success_rate_to_show() -> None:
 
 def test_a_policy_that_stayed_put_has_no_cost_of_transport_and_a_small_one_is_not_zero() -> None:
     # Measured: a zero policy's COM drifted microns and its CoT printed as 0.00 (1.6e-21).
-    still = EpisodeStats(0, -12.0, 300, success=False, duration_s=30.0, path_m=2e-6,
-                         positive_work_j=3e-20)
-    frugal = EpisodeStats(0, 1.0, 300, success=False, duration_s=30.0, path_m=5.0,
-                          positive_work_j=0.2)
-    results = {"zero": EvalResult("zero", 1.0, [still, still]),
-               "frugal": EvalResult("frugal", 1.0, [frugal])}
+    still = EpisodeStats(
+        0, -12.0, 300, success=False, duration_s=30.0, path_m=2e-6, positive_work_j=3e-20
+    )
+    frugal = EpisodeStats(
+        0, 1.0, 300, success=False, duration_s=30.0, path_m=5.0, positive_work_j=0.2
+    )
+    results = {
+        "zero": EvalResult("zero", 1.0, [still, still]),
+        "frugal": EvalResult("frugal", 1.0, [frugal]),
+    }
     assert results["zero"].summary()["cost_of_transport"] is None
     out = io.StringIO()
     print_table(results, out)

@@ -80,7 +80,9 @@ def test_a_robot_file_in_si_loads_like_its_register_twin(config_dir: Path) -> No
     registers = load_robot(config_dir / "robots" / "snake12.toml")
     kp, kd = registers.gains.kp_nm_per_rad, registers.gains.kd_nms_per_rad
     path = edit_robot(
-        config_dir, "snake12", "position_p = 640\nposition_i = 0\nposition_d = 4000",
+        config_dir,
+        "snake12",
+        "position_p = 640\nposition_i = 0\nposition_d = 4000",
         f"kp_nm_per_rad = {kp!r}\nkd_nms_per_rad = {kd!r}\nposition_i = 7",
     )
     si = load_robot(path)
@@ -90,8 +92,9 @@ def test_a_robot_file_in_si_loads_like_its_register_twin(config_dir: Path) -> No
 
 
 def test_both_gain_forms_at_once_are_refused_naming_file_and_key(config_dir: Path) -> None:
-    path = edit_robot(config_dir, "snake12", "position_d = 4000",
-                      "position_d = 4000\nkd_nms_per_rad = 0.1")
+    path = edit_robot(
+        config_dir, "snake12", "position_d = 4000", "position_d = 4000\nkd_nms_per_rad = 0.1"
+    )
     with pytest.raises(ConfigError) as info:
         load_robot(path)
     assert (info.value.source, info.value.key) == (str(path), "gains.kd_nms_per_rad")
@@ -99,8 +102,9 @@ def test_both_gain_forms_at_once_are_refused_naming_file_and_key(config_dir: Pat
 
 
 def test_without_gains_a_robot_gets_the_control_tables_factory_gains(config_dir: Path) -> None:
-    path = edit_robot(config_dir, "snake12", "position_p = 640\nposition_i = 0\nposition_d = 4000",
-                      "")
+    path = edit_robot(
+        config_dir, "snake12", "position_p = 640\nposition_i = 0\nposition_d = 4000", ""
+    )
     text = path.read_text().replace("[gains]", "")
     path.write_text(text)
     robot = load_robot(path)

@@ -25,8 +25,10 @@ SHIPPED = {
     "XH430-W350": ("xh430_w350", 1000, (2.0, 1.0)),
     "XM540-W270": ("xm540_w270", 1120, (2.0, 1.0)),
 }
-FIXES = {**MODEL_FILE_FIXES, **{("XC330-M288", n): a for (m, n), a in MODEL_FILE_FIXES.items()
-                                if m == "XL330-M288"}}
+FIXES = {
+    **MODEL_FILE_FIXES,
+    **{("XC330-M288", n): a for (m, n), a in MODEL_FILE_FIXES.items() if m == "XL330-M288"},
+}
 
 
 def test_the_shipped_models_are_exactly_issue_21s() -> None:
@@ -71,10 +73,20 @@ def test_every_sdk_model_file_item_is_at_its_address(model: str) -> None:
 EMANUAL_DEFAULTS = {
     "XH430-W350": {"current_limit": 648, "velocity_limit": 130, "position_p_gain": 900},
     "XM540-W270": {"current_limit": 2047, "velocity_limit": 128, "external_port_mode_1": 3},
-    "XC330-M288": {"current_limit": 2352, "velocity_limit": 350, "position_p_gain": 1100,
-                   "position_d_gain": 500, "max_voltage_limit": 70, "min_voltage_limit": 35},
-    "2XL430-W250": {"velocity_limit": 250, "position_d_gain": 2000, "velocity_i_gain": 1800,
-                    "temperature_limit": 72},
+    "XC330-M288": {
+        "current_limit": 2352,
+        "velocity_limit": 350,
+        "position_p_gain": 1100,
+        "position_d_gain": 500,
+        "max_voltage_limit": 70,
+        "min_voltage_limit": 35,
+    },
+    "2XL430-W250": {
+        "velocity_limit": 250,
+        "position_d_gain": 2000,
+        "velocity_i_gain": 1800,
+        "temperature_limit": 72,
+    },
     "MX-28-2": {"velocity_limit": 380, "position_p_gain": 850, "acceleration_limit": 32767},
     "MX-64-2": {"current_limit": 1941, "velocity_limit": 435},
     "MX-106-2": {"current_limit": 2047, "velocity_limit": 360},
@@ -109,9 +121,13 @@ def test_current_sensing_and_its_units() -> None:
 def test_datasheet_figures() -> None:
     rpm = 2 * math.pi / 60
     figures = {  # model: (stall N·m, no-load rpm, volts)
-        "XC330-M288": (0.93, 81, 5.0), "XH430-W350": (3.4, 30, 12.0),
-        "XM540-W270": (10.6, 30, 12.0), "2XL430-W250": (1.4, 57, 11.1),
-        "AX-18A": (1.8, 97, 12.0), "MX-64": (6.0, 63, 12.0), "MX-106-2": (8.4, 45, 12.0),
+        "XC330-M288": (0.93, 81, 5.0),
+        "XH430-W350": (3.4, 30, 12.0),
+        "XM540-W270": (10.6, 30, 12.0),
+        "2XL430-W250": (1.4, 57, 11.1),
+        "AX-18A": (1.8, 97, 12.0),
+        "MX-64": (6.0, 63, 12.0),
+        "MX-106-2": (8.4, 45, 12.0),
     }
     for model, (torque, speed, volts) in figures.items():
         specs = table_for_model(model).specs

@@ -116,8 +116,9 @@ def test_overlapping_registers_are_refused(tmp_path: Path) -> None:
 
 
 def test_a_default_outside_its_range_is_refused(tmp_path: Path) -> None:
-    error = _error(tmp_path, AX_12W.replace("{ default = 300 }", "{ default = 300 }\n"
-                                            "id = { default = 254 }"))
+    error = _error(
+        tmp_path, AX_12W.replace("{ default = 300 }", "{ default = 300 }\nid = { default = 254 }")
+    )
     assert error.key == "registers.id.default"
     assert "254 lies outside 0..253" in str(error)
 
@@ -133,8 +134,10 @@ def test_a_model_number_taken_by_another_model_is_refused(tmp_path: Path) -> Non
     add_model_dir(_folder(tmp_path, ax_12w=AX_12W.replace("300", "12")))
     with pytest.raises(ConfigError) as info:
         table_for_model("AX-12W")
-    assert (info.value.source, info.value.key) == (str(tmp_path / "ax_12w.toml"),
-                                                   "model.model_number")
+    assert (info.value.source, info.value.key) == (
+        str(tmp_path / "ax_12w.toml"),
+        "model.model_number",
+    )
     assert "AX-12A" in str(info.value)
 
 

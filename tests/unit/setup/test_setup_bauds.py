@@ -19,22 +19,28 @@ from snakebot.setup.bauds import (
 from snakebot.setup.scan import sweep_seconds
 
 
-@pytest.mark.parametrize(("servo_rate", "port"), [
-    (57143, 57600),  # 2 000 000 / 35, an AX or MX at Baud Rate 34
-    (117647, 115200),  # 2 000 000 / 17
-    (1_000_000, 1_000_000),
-    (400_000, None),  # 2 000 000 / 5: no rate the SDK's port handler opens is near
-    (2_250_000, None),
-])
+@pytest.mark.parametrize(
+    ("servo_rate", "port"),
+    [
+        (57143, 57600),  # 2 000 000 / 35, an AX or MX at Baud Rate 34
+        (117647, 115200),  # 2 000 000 / 17
+        (1_000_000, 1_000_000),
+        (400_000, None),  # 2 000 000 / 5: no rate the SDK's port handler opens is near
+        (2_250_000, None),
+    ],
+)
 def test_a_servo_rate_is_opened_at_the_nearest_port_rate(servo_rate: int, port: int | None) -> None:
     assert port_rate(servo_rate) == port
 
 
-@pytest.mark.parametrize(("model", "factory", "value_1m", "value_57600"), [
-    ("AX-12A", 1_000_000, 1, 34),
-    ("MX-28", 57600, 1, 34),
-    ("XL430-W250", 57600, 3, 1),
-])
+@pytest.mark.parametrize(
+    ("model", "factory", "value_1m", "value_57600"),
+    [
+        ("AX-12A", 1_000_000, 1, 34),
+        ("MX-28", 57600, 1, 34),
+        ("XL430-W250", 57600, 3, 1),
+    ],
+)
 def test_each_model_is_searched_at_its_own_rates_factory_first(
     model: str, factory: int, value_1m: int, value_57600: int
 ) -> None:

@@ -23,8 +23,10 @@ def test_offsets_up_to_the_calibrate_margin_fit_the_shipped_position_limits(
     robot = load_robot(name)
     chain = load_settings(robot)
     offset = math.radians(MAX_OFFSET_DEG) * 0.999
-    zeros = [JointZero(i, j.servo_id, 2048, 0.0, sign * offset * (-1) ** i)
-             for i, j in enumerate(robot.joints)]
+    zeros = [
+        JointZero(i, j.servo_id, 2048, 0.0, sign * offset * (-1) ** i)
+        for i, j in enumerate(robot.joints)
+    ]
     assert refusals(chain, zeros) == []
 
 

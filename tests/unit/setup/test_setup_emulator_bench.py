@@ -82,8 +82,13 @@ def test_scramble_gives_settings_the_backend_refuses() -> None:
     robot = load_robot("snake12")
     chain = EmulatedChain(robot_servos(MODEL, robot.servo_ids, 1_000_000), baud=1_000_000)
     scramble(chain, seed=1)
-    keys = ("return_delay_time", "drive_mode", "operating_mode", "min_position_limit",
-            "max_position_limit")
+    keys = (
+        "return_delay_time",
+        "drive_mode",
+        "operating_mode",
+        "min_position_limit",
+        "max_position_limit",
+    )
     values = {s.servo_id: {k: s.peek(k) for k in keys} for s in chain.servos}
     errors, _ = check_settings(values, robot.servo_ids, TickConverter.for_robot(robot))
     assert any("reverse bit" in e for e in errors) and any("needs 3" in e for e in errors)

@@ -35,8 +35,12 @@ def test_shipped_robots_have_valid_settings(name: str) -> None:
 
 def test_robot_and_joint_overrides_take_precedence(config_dir: Path) -> None:
     path = edit_robot(config_dir, "snake12", "[settings]", "[settings]\nshutdown = 53")
-    edit_robot(config_dir, "snake12", "servo_id = 2\n",
-               "servo_id = 2\nsettings = { shutdown = 21, return_delay_time_us = 40 }\n")
+    edit_robot(
+        config_dir,
+        "snake12",
+        "servo_id = 2\n",
+        "servo_id = 2\nsettings = { shutdown = 21, return_delay_time_us = 40 }\n",
+    )
     chain = load_settings(load_robot(path))
     assert chain.for_id(1).get("shutdown").raw == 53
     assert chain.for_id(2).get("shutdown").raw == 21
@@ -97,16 +101,23 @@ def test_settings_must_cover_what_run_checks(config_dir: Path) -> None:
 
 
 def test_a_key_set_twice_in_two_units_is_refused(config_dir: Path) -> None:
-    path = edit_robot(config_dir, "snake12", "[settings]",
-                      "[settings]\nreturn_delay_time = 0\nreturn_delay_time_us = 0")
+    path = edit_robot(
+        config_dir,
+        "snake12",
+        "[settings]",
+        "[settings]\nreturn_delay_time = 0\nreturn_delay_time_us = 0",
+    )
     with pytest.raises(ConfigError, match="set twice"):
         load_settings(load_robot(path))
 
 
-@pytest.mark.parametrize(("line", "message"), [
-    ("lock = 1", "lock is never written: a locked EEPROM"),
-    ("protocol_type = 1", r"protocol_type is not a setting: the robot file's \[bus\] protocol"),
-])
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("lock = 1", "lock is never written: a locked EEPROM"),
+        ("protocol_type = 1", r"protocol_type is not a setting: the robot file's \[bus\] protocol"),
+    ],
+)
 def test_lock_and_protocol_type_are_never_settings(
     config_dir: Path, line: str, message: str
 ) -> None:
@@ -132,8 +143,9 @@ def test_without_a_bus_watchdog_config_apply_refuses_what_run_refuses(config_dir
 def test_without_a_bus_watchdog_alarm_shutdown_must_be_set(config_dir: Path) -> None:
     servo = config_dir / "servos" / "ax-12a.toml"
     text = servo.read_text()
-    servo.write_text("\n".join(
-        line for line in text.splitlines() if not line.startswith("shutdown")) + "\n")
+    servo.write_text(
+        "\n".join(line for line in text.splitlines() if not line.startswith("shutdown")) + "\n"
+    )
     with pytest.raises(ConfigError, match="missing shutdown") as info:
         load_settings(load_robot(config_dir / "robots" / "snake12-ax12a.toml"))
     assert info.value.source.endswith("ax-12a.toml")

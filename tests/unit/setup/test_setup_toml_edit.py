@@ -28,7 +28,7 @@ timestep_s = 0.002
 def test_values_are_replaced_or_added_and_comments_kept() -> None:
     out = set_in_joints(TEXT, "zero_offset_rad", ["-0.1", "0.02"])
     assert out == TEXT.replace(
-        'servo_id = 1      # yaw\n', 'servo_id = 1      # yaw\nzero_offset_rad = -0.1\n'
+        "servo_id = 1      # yaw\n", "servo_id = 1      # yaw\nzero_offset_rad = -0.1\n"
     ).replace("zero_offset_rad = 0.25   # measured", "zero_offset_rad = 0.02   # measured")
 
 
@@ -41,9 +41,13 @@ def test_line_endings_are_kept() -> None:
 
 def test_inline_joints_are_refused() -> None:
     with pytest.raises(ValueError, match="found 0 \\[\\[joints\\]\\] tables, expected 2"):
-        set_in_joints('joints = [{servo_id = 1}, {servo_id = 2}]\n', "zero_offset_rad", ["0", "0"])
+        set_in_joints("joints = [{servo_id = 1}, {servo_id = 2}]\n", "zero_offset_rad", ["0", "0"])
 
 
 def test_floats_are_rounded_without_negative_zero() -> None:
     assert [format_float(v) for v in (0.123456, -0.00001, 0.0, -1.5)] == [
-        "0.1235", "0.0", "0.0", "-1.5"]
+        "0.1235",
+        "0.0",
+        "0.0",
+        "-1.5",
+    ]

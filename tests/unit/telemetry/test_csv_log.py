@@ -77,8 +77,12 @@ def test_a_file_size_limit_is_an_output_error_and_the_rows_before_it_stay(tmp_pa
         resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
 
     done = subprocess.run(
-        [sys.executable, "-c", WRITER, str(path)], preexec_fn=limit, capture_output=True,
-        text=True, timeout=60, env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+        [sys.executable, "-c", WRITER, str(path)],
+        preexec_fn=limit,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
     )
     assert done.returncode == 0, done.stderr
     rows, message = done.stdout.splitlines()

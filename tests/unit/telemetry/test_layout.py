@@ -52,8 +52,9 @@ def test_the_3d_view_follows_the_head_in_the_world_frame_of_the_scene() -> None:
 
 def test_the_shipped_layout_is_what_the_tool_writes() -> None:
     pytest.importorskip("foxglove.layouts")
-    spec = importlib.util.spec_from_file_location("make_layout",
-                                                  REPO / "tools" / "make_foxglove_layout.py")
+    spec = importlib.util.spec_from_file_location(
+        "make_layout", REPO / "tools" / "make_foxglove_layout.py"
+    )
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

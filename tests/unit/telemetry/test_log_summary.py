@@ -17,8 +17,9 @@ def make_log(time_s: np.ndarray, com: np.ndarray | None, joints: int = 2) -> Tel
     velocity = np.ones((rows, joints))
     effort = np.full((rows, joints), 0.5)
     com_values = np.full((rows, 3), np.nan) if com is None else com
-    values = np.column_stack([time_s, np.arange(rows), command, position, velocity, effort,
-                              com_values])
+    values = np.column_stack(
+        [time_s, np.arange(rows), command, position, velocity, effort, com_values]
+    )
     return TelemetryLog(column_names(joints), values, "synthetic.csv")
 
 
@@ -26,8 +27,10 @@ def test_rate_late_cycles_tracking_and_distance() -> None:
     time_s = np.arange(101) * 0.01
     time_s[50:] += 0.02  # one period of 30 ms: late at 100 Hz
     com = np.column_stack([np.linspace(0, 0.3, 101), np.linspace(0, 0.4, 101), np.zeros(101)])
-    summary = summarize(make_log(time_s, com), {"rate_hz": 100.0, "robot": {
-        "joint_count": 2, "link": {"mass_kg": 0.1}}})
+    summary = summarize(
+        make_log(time_s, com),
+        {"rate_hz": 100.0, "robot": {"joint_count": 2, "link": {"mass_kg": 0.1}}},
+    )
     assert summary["late_cycles"] == 1
     assert summary["worst_period_s"] == pytest.approx(0.03)
     assert summary["achieved_rate_hz"] == pytest.approx(100 / 1.02)

@@ -41,8 +41,9 @@ def test_fk_of_the_twins_measured_joints_reproduces_the_twins_shape() -> None:
         head = Rotation.from_quat(quat[0], scalar_first=True)
         return head.inv().apply(pos - pos[0])
 
-    assert np.allclose(in_head_frame(fk_pos, fk_quat), in_head_frame(twin_pos, twin_quat),
-                       atol=1e-9)
+    assert np.allclose(
+        in_head_frame(fk_pos, fk_quat), in_head_frame(twin_pos, twin_quat), atol=1e-9
+    )
 
 
 def test_messages_name_every_link_frame_and_draw_a_capsule_per_link() -> None:
@@ -59,4 +60,6 @@ def test_messages_name_every_link_frame_and_draw_a_capsule_per_link() -> None:
     cylinder = entity["cylinders"][0]
     assert cylinder["size"]["z"] == robot.link.length_m - 2 * robot.link.radius_m
     assert [s["pose"]["position"]["x"] for s in entity["spheres"]] == [
-        -robot.link.radius_m, -(robot.link.length_m - robot.link.radius_m)]
+        -robot.link.radius_m,
+        -(robot.link.length_m - robot.link.radius_m),
+    ]

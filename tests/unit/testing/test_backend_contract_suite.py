@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-MODULE = '''
+MODULE = """
 import numpy as np
 
 from snakebot.backends.base import Backend
@@ -52,7 +52,7 @@ class Perfect(Backend):
 class TestPerfect(BackendContract):
     def make(self, robot):
         return Perfect(robot)
-'''
+"""
 
 
 def run_suite(tmp_path: Path, time_scale: float) -> dict[str, str]:

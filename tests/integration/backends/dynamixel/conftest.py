@@ -42,9 +42,13 @@ class Bench:
     def backend(self, robot: RobotConfig | None = None, **kwargs: Any) -> DynamixelBackend:
         chain = self.chain
         return DynamixelBackend(
-            robot or robot_variant(ramp_s=0.2), port=self.url, baud=BAUD,
+            robot or robot_variant(ramp_s=0.2),
+            port=self.url,
+            baud=BAUD,
             port_handler_factory=EmulatedPortHandler,
-            clock=lambda: chain.now_s, sleep=chain.advance, **kwargs,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+            **kwargs,
         )
 
     def add(self, servo_id: int, model: str = MODEL) -> VirtualServo:

@@ -29,7 +29,8 @@ def test_registers_by_name_with_signed_values(bench: Bench, bus: DynamixelBus) -
     bus.write(2, "position_p_gain", 1234)
     assert servo.peek("position_p_gain") == 1234
     assert bus.read_block(2, ("position_d_gain", "position_p_gain")) == {
-        "position_d_gain": 4000, "position_p_gain": 1234,
+        "position_d_gain": 4000,
+        "position_p_gain": 1234,
     }
 
 
@@ -45,8 +46,9 @@ def test_sync_write_of_a_contiguous_block(bench: Bench, bus: DynamixelBus) -> No
 
 
 def test_bulk_read_takes_a_different_block_per_servo(bench: Bench, bus: DynamixelBus) -> None:
-    values = bus.bulk_read({1: "present_temperature", 4: ("model_number", "firmware_version"),
-                            7: "present_position"})
+    values = bus.bulk_read(
+        {1: "present_temperature", 4: ("model_number", "firmware_version"), 7: "present_position"}
+    )
     assert values[1] == {"present_temperature": 30}
     assert values[4] == {"model_number": 1060, "firmware_version": 46}
     assert values[7] == {"present_position": 2048}
@@ -72,8 +74,9 @@ def test_stock_port_handler_over_a_pseudo_terminal() -> None:
 
     chain = make_bench(range(1, 13))
     with PtyServer(chain) as server:
-        backend = DynamixelBackend(robot_variant(ramp_s=0.05), port=server.device_path,
-                                   baud=BAUD)  # dynamixel_sdk.PortHandler on a real tty
+        backend = DynamixelBackend(
+            robot_variant(ramp_s=0.05), port=server.device_path, baud=BAUD
+        )  # dynamixel_sdk.PortHandler on a real tty
         with backend:
             backend.send_command(JointCommand(np.full(12, 0.2)))
             for _ in range(30):

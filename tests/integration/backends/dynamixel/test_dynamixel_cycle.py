@@ -43,8 +43,12 @@ def test_a_gait_is_tracked_and_goals_follow_the_tick_convention(bench: Bench) ->
             errors.append(backend.read_state().position_rad - goal)
         for joint, servo_id in enumerate(robot.servo_ids):
             j = robot.joints[joint]
-            expected = rad_to_ticks(goal[joint], zero_offset_rad=j.zero_offset_rad,
-                                    direction=j.direction, ticks=X_SERIES_TICKS)
+            expected = rad_to_ticks(
+                goal[joint],
+                zero_offset_rad=j.zero_offset_rad,
+                direction=j.direction,
+                ticks=X_SERIES_TICKS,
+            )
             assert bench.servo(servo_id).peek("goal_position") == expected
         for _ in range(50):
             backend.advance(DT)
@@ -114,8 +118,10 @@ def test_si_gains_are_written_to_the_position_pid_registers(bench: Bench) -> Non
         backend.set_position_i_gain(12)
         backend.set_gains(wanted)
         assert backend.gain_registers == GainRegisters(900, 12, 34)
-    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
-           for s in bench.chain.servos}
+    got = {
+        (s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+        for s in bench.chain.servos
+    }
     assert got == {(900, 12, 34)}
 
 
@@ -141,7 +147,8 @@ def test_gains_beyond_the_registers_are_clipped_to_the_control_table(bench: Benc
         backend.set_gains(PDGains(kp_nm_per_rad=1e6, kd_nms_per_rad=1e6))
         assert backend.gain_registers is not None
         assert (backend.gain_registers.position_p, backend.gain_registers.position_d) == (
-            16383, 16383
+            16383,
+            16383,
         )
     assert {s.peek("position_p_gain") for s in bench.chain.servos} == {16383}
 
@@ -153,8 +160,10 @@ def test_connect_writes_the_robot_files_registers_back_unchanged(bench: Bench) -
         servo.poke("position_d_gain", 7)
     with bench.backend():
         pass
-    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
-           for s in bench.chain.servos}
+    got = {
+        (s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+        for s in bench.chain.servos
+    }
     assert got == {(640, 0, 4000)}
 
 
@@ -228,6 +237,8 @@ def test_a_gain_candidates_i_register_reaches_the_servos_beside_the_pd_contract(
     with bench.backend() as backend:
         sent = apply_gains(backend, backend.robot, GainRegisters(700, 25, 300))
         assert sent == backend.robot.servo.gains_of(GainRegisters(700, 25, 300))
-    got = {(s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
-           for s in bench.chain.servos}
+    got = {
+        (s.peek("position_p_gain"), s.peek("position_i_gain"), s.peek("position_d_gain"))
+        for s in bench.chain.servos
+    }
     assert got == {(700, 25, 300)}

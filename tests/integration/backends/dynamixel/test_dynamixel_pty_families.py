@@ -47,10 +47,30 @@ def test_a_protocol_1_snake_runs_a_gait_over_the_pty_emulator(
     with emulator("--robot", str(path), *extra) as emu:
         assert {s["protocol"] for s in emu.first["servos"]} == {robot.bus.protocol}
         run = subprocess.run(
-            [sys.executable, "-m", "snakebot", "run", "--backend", "dynamixel", "--robot",
-             str(path), "--port", emu.port, "--gait", "serpenoid", "--duration", "2",
-             "--rate", "50", "--log", str(log), "--json"],
-            capture_output=True, text=True, timeout=180,
+            [
+                sys.executable,
+                "-m",
+                "snakebot",
+                "run",
+                "--backend",
+                "dynamixel",
+                "--robot",
+                str(path),
+                "--port",
+                emu.port,
+                "--gait",
+                "serpenoid",
+                "--duration",
+                "2",
+                "--rate",
+                "50",
+                "--log",
+                str(log),
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=180,
         )
     assert run.returncode == 0, run.stderr
     assert "Traceback" not in run.stderr

@@ -61,12 +61,14 @@ def x_series(protocol: float) -> Callable[..., RobotConfig]:
     def robot(folder: Path, **safety: Any) -> RobotConfig:
         base = robot_variant("snake12", **safety)
         return dataclasses.replace(base, bus=dataclasses.replace(base.bus, protocol=protocol))
+
     return robot
 
 
 def shipped(name: str) -> Callable[..., RobotConfig]:
     def robot(folder: Path, **safety: Any) -> RobotConfig:
         return robot_variant(name, **safety)
+
     return robot
 
 
@@ -102,8 +104,10 @@ zero_offset_rad = 0.0
 direction = 1
 lower_rad = -1.5
 upper_rad = 1.5
-""" + "".join(f'\n[[joints]]\nservo_id = {i}\naxis = "{("yaw", "pitch")[(i - 1) % 2]}"\n'
-              for i in range(1, 13))
+""" + "".join(
+    f'\n[[joints]]\nservo_id = {i}\naxis = "{("yaw", "pitch")[(i - 1) % 2]}"\n'
+    for i in range(1, 13)
+)
 
 
 def mx28(folder: Path, **safety: Any) -> RobotConfig:
@@ -138,8 +142,11 @@ class FamilyBench:
 
     def backend(self, robot: RobotConfig, **kwargs: Any) -> DynamixelBackend:
         chain = self.chain
-        options: dict[str, Any] = {"clock": lambda: chain.now_s, "sleep": chain.advance,
-                                   "port_handler_factory": EmulatedPortHandler}
+        options: dict[str, Any] = {
+            "clock": lambda: chain.now_s,
+            "sleep": chain.advance,
+            "port_handler_factory": EmulatedPortHandler,
+        }
         options.update(kwargs)
         return DynamixelBackend(robot, port=self.url, baud=BAUD, **options)
 
@@ -152,8 +159,9 @@ def fbench(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[FamilyBen
         yield FamilyBench(family, chain, url, tmp_path)
 
 
-def assert_left_per_policy(bench: FamilyBench, backend: DynamixelBackend, policy: str,
-                           skip: tuple[int, ...] = ()) -> None:
+def assert_left_per_policy(
+    bench: FamilyBench, backend: DynamixelBackend, policy: str, skip: tuple[int, ...] = ()
+) -> None:
     """Torque as the policy says on every answering servo, a watchdog (where there is one)
     disarmed, and so still a second of bus silence later."""
     servos = [s for s in bench.chain.servos if s.servo_id not in skip]
@@ -169,8 +177,12 @@ def assert_left_per_policy(bench: FamilyBench, backend: DynamixelBackend, policy
 
 def test_each_family_reads_by_its_own_method(fbench: FamilyBench) -> None:
     backend = fbench.backend(fbench.robot(ramp_s=0.2))
-    expected = {"x-p2": "fast_sync_read", "x-p1": "bulk_read", "ax12a": "read",
-                "mx28": "bulk_read"}[fbench.family.name]
+    expected = {
+        "x-p2": "fast_sync_read",
+        "x-p1": "bulk_read",
+        "ax12a": "read",
+        "mx28": "bulk_read",
+    }[fbench.family.name]
     assert backend.bus.capabilities.read_method == expected
     with backend:
         state = backend.read_state()
@@ -236,10 +248,14 @@ def test_a_joint_found_outside_its_limits_is_brought_in_at_the_slew_limit(
     goals: list[int] = []
     with fbench.backend(robot) as backend:
         goals.append(servo.peek("goal_position"))  # Goal = Present at torque on
-        run_gait(backend, make_gait("serpenoid", 12), SafetyLayer.for_robot(robot),
-                 RunPlan(duration_s=1.0), RunMetrics(12, robot.body_length_m,
-                                                     robot.total_mass_kg),
-                 on_cycle=lambda cycle, t: goals.append(servo.peek("goal_position")))
+        run_gait(
+            backend,
+            make_gait("serpenoid", 12),
+            SafetyLayer.for_robot(robot),
+            RunPlan(duration_s=1.0),
+            RunMetrics(12, robot.body_length_m, robot.total_mass_kg),
+            on_cycle=lambda cycle, t: goals.append(servo.peek("goal_position")),
+        )
     angles = (np.array(goals) - ticks.centre) * ticks.rad_per_tick
     assert abs(angles[0] - 2.5) < 2 * ticks.rad_per_tick
     step_limit = robot.max_speed_rad_s * 0.01 + ticks.rad_per_tick  # one 100 Hz cycle, a tick
@@ -300,7 +316,6 @@ def test_the_port_vanishing_mid_run_is_a_bus_error_saying_what_the_servos_do(
         assert "no Bus Watchdog" in text and "Alarm Shutdown" in text
         fbench.chain.advance(1.0)
         assert all(s.torque_enabled for s in fbench.chain.servos)  # what the text says
-
 
 
 def test_an_overload_mid_run_stops_it_naming_the_servo(fbench: FamilyBench) -> None:

@@ -23,8 +23,12 @@ def recording_backend(bench: Bench, policy: str, goals: list[int]) -> DynamixelB
         chain.advance(dt)
 
     return DynamixelBackend(
-        robot_variant(ramp_s=0.3, stop_policy=policy), port=bench.url, baud=BAUD,
-        port_handler_factory=EmulatedPortHandler, clock=lambda: chain.now_s, sleep=sleep,
+        robot_variant(ramp_s=0.3, stop_policy=policy),
+        port=bench.url,
+        baud=BAUD,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: chain.now_s,
+        sleep=sleep,
     )
 
 

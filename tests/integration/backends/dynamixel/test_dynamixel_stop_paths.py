@@ -45,6 +45,7 @@ def silence_when_torque_on(servo_id: int) -> Callable[[EmulatedChain], None]:
         servo = chain.servo(servo_id)
         if servo.torque_enabled and not chain.faults_of(servo).silent:
             chain.silence(servo_id)
+
     return watch
 
 
@@ -123,8 +124,12 @@ def ramp_backend(bench: Bench, policy: str, on_sleep: Callable[[int], None]) -> 
         chain.advance(dt)
 
     return DynamixelBackend(
-        robot_variant(ramp_s=1.0, stop_policy=policy), port=bench.url, baud=BAUD,
-        port_handler_factory=EmulatedPortHandler, clock=lambda: chain.now_s, sleep=sleep,
+        robot_variant(ramp_s=1.0, stop_policy=policy),
+        port=bench.url,
+        baud=BAUD,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: chain.now_s,
+        sleep=sleep,
     )
 
 
@@ -183,9 +188,7 @@ def test_a_second_ctrl_c_during_the_stop_ramp_still_ends_in_the_policy(
 
 
 @pytest.mark.parametrize("policy", ["hold", "limp"])
-def test_any_exception_in_the_stop_ramp_still_ends_in_the_policy(
-    bench: Bench, policy: str
-) -> None:
+def test_any_exception_in_the_stop_ramp_still_ends_in_the_policy(bench: Bench, policy: str) -> None:
     sleeps: list[int] = []
     fail = {"at": None}
 
@@ -205,9 +208,7 @@ def test_any_exception_in_the_stop_ramp_still_ends_in_the_policy(
 
 
 @pytest.mark.parametrize("policy", ["hold", "limp"])
-def test_ctrl_c_propagating_into_close_ramps_at_the_speed_limit(
-    bench: Bench, policy: str
-) -> None:
+def test_ctrl_c_propagating_into_close_ramps_at_the_speed_limit(bench: Bench, policy: str) -> None:
     backend = ramp_backend(bench, policy, lambda k: None)
     with pytest.raises(KeyboardInterrupt), backend:
         bend(backend)

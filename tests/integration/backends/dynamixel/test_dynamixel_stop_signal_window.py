@@ -41,10 +41,16 @@ pytestmark = pytest.mark.skipif(os.name != "posix", reason="signals to self need
 
 POLICIES = typing.get_args(StopPolicy)
 WAY_OUT = {  # the runner's exit path and the backend's, to the stop's first transaction
-    f"{code.co_filename}:{code.co_name}" for code in (
-        runner.run_gait.__code__, runner._ramp_out.__code__, Backend.__exit__.__code__,
-        Backend.close.__code__, DynamixelBackend._close.__code__, StopSequence.close.__code__,
-        interrupts.deferred_interrupts.__code__, interrupts.DeferredInterrupts.__init__.__code__,
+    f"{code.co_filename}:{code.co_name}"
+    for code in (
+        runner.run_gait.__code__,
+        runner._ramp_out.__code__,
+        Backend.__exit__.__code__,
+        Backend.close.__code__,
+        DynamixelBackend._close.__code__,
+        StopSequence.close.__code__,
+        interrupts.deferred_interrupts.__code__,
+        interrupts.DeferredInterrupts.__init__.__code__,
         interrupts.DeferredInterrupts.__enter__.__code__,
         interrupts.DeferredInterrupts.arm.__code__,
     )
@@ -96,9 +102,14 @@ def ctrl_c_run(policy: str, way_out: WayOut) -> None:
     chain = make_bench(range(1, 13))
     robot = robot_variant(ramp_s=0.03, stop_policy=policy)
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, baud=BAUD,
-                                   port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            baud=BAUD,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
 
         def on_cycle(cycle: int, gait_time_s: float) -> None:
             if cycle == FIRST_CTRL_C_CYCLE:
@@ -107,10 +118,14 @@ def ctrl_c_run(policy: str, way_out: WayOut) -> None:
 
         try:
             with backend:  # the extra SIGINTs may raise after the stop, or join the first one
-                run_gait(backend, make_gait("sidewinding", 12), SafetyLayer.for_robot(robot),
-                         RunPlan(duration_s=5.0),
-                         RunMetrics(12, robot.body_length_m, robot.total_mass_kg),
-                         on_cycle=on_cycle)
+                run_gait(
+                    backend,
+                    make_gait("sidewinding", 12),
+                    SafetyLayer.for_robot(robot),
+                    RunPlan(duration_s=5.0),
+                    RunMetrics(12, robot.body_length_m, robot.total_mass_kg),
+                    on_cycle=on_cycle,
+                )
         except KeyboardInterrupt:
             pass
         finally:
@@ -142,9 +157,14 @@ def test_a_users_own_loop_gets_its_ctrl_c_from_the_next_backend_call(policy: str
     robot = robot_variant(ramp_s=0.1, stop_policy=policy)
     ran_on: list[int] = []
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, baud=BAUD,
-                                   port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            baud=BAUD,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with pytest.raises(KeyboardInterrupt) as info, backend:
             state = backend.read_state()
             for cycle in range(100):

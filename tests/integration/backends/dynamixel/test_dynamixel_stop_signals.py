@@ -71,8 +71,9 @@ class Points:
             os.kill(os.getpid(), signum)
 
 
-def stopping_backend(chain: EmulatedChain, url: str, policy: str, points: Points,
-                     ramp_s: float = 0.2) -> DynamixelBackend:
+def stopping_backend(
+    chain: EmulatedChain, url: str, policy: str, points: Points, ramp_s: float = 0.2
+) -> DynamixelBackend:
     """Connected, bent away from the safe pose; every moment of the bus goes to ``points``."""
 
     def clock() -> float:
@@ -80,8 +81,12 @@ def stopping_backend(chain: EmulatedChain, url: str, policy: str, points: Points
         return chain.now_s
 
     backend = DynamixelBackend(
-        robot_variant(ramp_s=ramp_s, stop_policy=policy), port=url, baud=BAUD,
-        port_handler_factory=EmulatedPortHandler, clock=clock, sleep=chain.advance,
+        robot_variant(ramp_s=ramp_s, stop_policy=policy),
+        port=url,
+        baud=BAUD,
+        port_handler_factory=EmulatedPortHandler,
+        clock=clock,
+        sleep=chain.advance,
     )
     backend.connect()
     for _ in range(20):
@@ -102,8 +107,9 @@ def count_points(policy: str, ramp_s: float = 0.2) -> dict[str, int]:
 
 
 def assert_goals_inside_limits(chain: EmulatedChain, backend: DynamixelBackend) -> None:
-    for servo, (_gain, _bias, low, high) in zip(chain.servos, backend.converter.goal_terms,
-                                                strict=True):
+    for servo, (_gain, _bias, low, high) in zip(
+        chain.servos, backend.converter.goal_terms, strict=True
+    ):
         assert low <= servo.peek("goal_position") <= high, servo.servo_id
 
 

@@ -132,14 +132,24 @@ def test_every_goal_the_new_model_receives_is_inside_the_joint_limits(robot_path
         servo.poke("return_delay_time", 0)
     goals: list[list[int]] = []
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with backend:
-            run_gait(backend, make_gait("serpenoid", len(IDS)), SafetyLayer.for_robot(robot),
-                     RunPlan(duration_s=2.0),
-                     RunMetrics(len(IDS), robot.body_length_m, robot.total_mass_kg),
-                     on_cycle=lambda cycle, t: goals.append(
-                         [s.peek("goal_position") for s in chain.servos]))
+            run_gait(
+                backend,
+                make_gait("serpenoid", len(IDS)),
+                SafetyLayer.for_robot(robot),
+                RunPlan(duration_s=2.0),
+                RunMetrics(len(IDS), robot.body_length_m, robot.total_mass_kg),
+                on_cycle=lambda cycle, t: goals.append(
+                    [s.peek("goal_position") for s in chain.servos]
+                ),
+            )
     ticks = table_for_model(MODEL).specs.ticks
     angles = (np.array(goals) - ticks.centre) / ticks.ticks_per_rad
     assert len(goals) >= 150  # 2 s at 100 Hz, less the cycles of the ramp-out

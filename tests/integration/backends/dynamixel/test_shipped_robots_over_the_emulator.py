@@ -68,17 +68,28 @@ def test_every_gait_its_axes_allow_runs_over_the_emulator(
         present.append([s.peek("present_position") for s in chain.servos])
 
     with registered(chain) as url:
-        backend = DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler,
-                                   clock=lambda: chain.now_s, sleep=chain.advance)
+        backend = DynamixelBackend(
+            robot,
+            port=url,
+            port_handler_factory=EmulatedPortHandler,
+            clock=lambda: chain.now_s,
+            sleep=chain.advance,
+        )
         with backend:
-            run_gait(backend, gait, SafetyLayer.for_robot(robot), RunPlan(duration_s=1.5),
-                     RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
-                     on_cycle=record)
+            run_gait(
+                backend,
+                gait,
+                SafetyLayer.for_robot(robot),
+                RunPlan(duration_s=1.5),
+                RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
+                on_cycle=record,
+            )
     converter = TickConverter.for_robot(robot)
     goal, now = np.array(goals), np.array(present)
     assert len(goals) >= 120, f"{gait_name}: {len(goals)} cycles"  # 1.5 s at 100 Hz + ramp-out
     assert np.all(goal >= converter.lower_ticks) and np.all(goal <= converter.upper_ticks), (
-        f"{gait_name}: a goal outside the joint limits")
+        f"{gait_name}: a goal outside the joint limits"
+    )
     moved = np.abs(goal - goal[0]).max() / converter.ticks.ticks_per_rad
     followed = np.abs(now - now[0]).max() / converter.ticks.ticks_per_rad
     assert moved > 0.1, f"{gait_name}: the gait did not reach the servos ({moved:.3f} rad)"

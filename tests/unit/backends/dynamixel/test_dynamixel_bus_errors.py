@@ -76,9 +76,7 @@ def test_status_error_byte_becomes_a_typed_error(bus: DynamixelBus, port: Script
     assert len(port.written) == 1  # not retried
 
 
-def test_eeprom_access_error_says_torque_must_be_off(
-    bus: DynamixelBus, port: ScriptedPort
-) -> None:
+def test_eeprom_access_error_says_torque_must_be_off(bus: DynamixelBus, port: ScriptedPort) -> None:
     port.script = [status(3, 0x07)]
     with pytest.raises(ServoStatusError, match="only be written with torque off"):
         bus.write(3, "operating_mode", 3)
@@ -186,8 +184,16 @@ def test_sync_read_decodes_signed_values(bus: DynamixelBus, port: ScriptedPort) 
 
 def test_one_missing_servo_never_publishes_zeros(bus: DynamixelBus, port: ScriptedPort) -> None:
     group = status(1, 0, block(1, 2, 2100)) + status(3, 0, block(3, 4, 1900))  # 2 is silent
-    port.script = [group, group, group, status(1, 0, block(1, 2, 2101)), None, None, None,
-                   status(3, 0, block(3, 4, 1901))]
+    port.script = [
+        group,
+        group,
+        group,
+        status(1, 0, block(1, 2, 2101)),
+        None,
+        None,
+        None,
+        status(3, 0, block(3, 4, 1901)),
+    ]
     with pytest.raises(SyncReadError) as info:
         bus.sync_read(KEYS, [1, 2, 3])
     error = info.value
@@ -203,8 +209,13 @@ def test_one_missing_servo_never_publishes_zeros(bus: DynamixelBus, port: Script
 def test_records_fall_back_to_single_reads_when_every_servo_answers_alone(
     bus: DynamixelBus, port: ScriptedPort
 ) -> None:
-    port.script = [None, None, None, status(1, 0, block(1, -2, 2100)),
-                   status(2, 0, block(3, 4, 1900))]
+    port.script = [
+        None,
+        None,
+        None,
+        status(1, 0, block(1, -2, 2100)),
+        status(2, 0, block(3, 4, 1900)),
+    ]
     plan = bus.sync_read_plan(KEYS, [1, 2])
     rows = plan.read_rows(fast=True)
     assert rows == [(1, -2, 2100), (3, 4, 1900)]

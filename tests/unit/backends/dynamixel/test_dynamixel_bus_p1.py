@@ -18,8 +18,11 @@ STATE = ("present_load", "present_velocity", "present_position")  # 36..41 on AX
 
 
 def block(position: int, speed_raw: int, load_raw: int) -> bytes:
-    return (position.to_bytes(2, "little") + speed_raw.to_bytes(2, "little")
-            + load_raw.to_bytes(2, "little"))
+    return (
+        position.to_bytes(2, "little")
+        + speed_raw.to_bytes(2, "little")
+        + load_raw.to_bytes(2, "little")
+    )
 
 
 @pytest.fixture
@@ -28,8 +31,14 @@ def port() -> ScriptedPort:
 
 
 def bus_of(model: str, port: ScriptedPort) -> DynamixelBus:
-    bus = DynamixelBus("fake1", 1_000_000, model=model, protocol=1.0,
-                       port_handler_factory=lambda name: port, retries=1)
+    bus = DynamixelBus(
+        "fake1",
+        1_000_000,
+        model=model,
+        protocol=1.0,
+        port_handler_factory=lambda name: port,
+        retries=1,
+    )
     bus.open()
     return bus
 
@@ -41,16 +50,23 @@ def test_an_ax_chain_is_read_one_servo_at_a_time_with_sign_magnitude_speed(
     assert bus.capabilities.read_method == "read"
     port.script = [status1(1, 0, block(512, 1024 + 5, 30)), status1(2, 0, block(700, 7, 1024 + 40))]
     values = bus.sync_read(STATE, [1, 2])
-    assert port.written == [build_instruction(1, 0x02, bytes([36, 6])),
-                            build_instruction(2, 0x02, bytes([36, 6]))]
+    assert port.written == [
+        build_instruction(1, 0x02, bytes([36, 6])),
+        build_instruction(2, 0x02, bytes([36, 6])),
+    ]
     assert values[1] == {"present_position": 512, "present_velocity": -5, "present_load": 30}
     assert values[2] == {"present_position": 700, "present_velocity": 7, "present_load": -40}
 
 
 def test_a_silent_ax_servo_is_named_and_the_others_are_kept(port: ScriptedPort) -> None:
     bus = bus_of("AX-12A", port)
-    port.script = [status1(1, 0, block(512, 0, 0)), None, status1(1, 0, block(512, 0, 0)), None,
-                   None]
+    port.script = [
+        status1(1, 0, block(512, 0, 0)),
+        None,
+        status1(1, 0, block(512, 0, 0)),
+        None,
+        None,
+    ]
     with pytest.raises(SyncReadError) as info:
         bus.sync_read(STATE, [1, 2])
     assert info.value.missing_ids == (2,)
@@ -98,8 +114,9 @@ def test_a_checksum_error_is_sent_again(port: ScriptedPort) -> None:
 def test_goals_go_out_in_one_protocol_1_sync_write(port: ScriptedPort) -> None:
     bus = bus_of("AX-12A", port)
     bus.sync_write_plan("goal_position", [1, 2]).write([512, 600])
-    assert port.written == [build_instruction(0xFE, 0x83, bytes([30, 2, 1, 0x00, 0x02,
-                                                                   2, 0x58, 0x02]))]
+    assert port.written == [
+        build_instruction(0xFE, 0x83, bytes([30, 2, 1, 0x00, 0x02, 2, 0x58, 0x02]))
+    ]
 
 
 def test_a_milder_factory_reset_is_refused_where_the_family_resets_everything(

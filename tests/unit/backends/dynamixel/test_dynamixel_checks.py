@@ -30,8 +30,13 @@ IDS = tuple(range(1, 9))
 
 def good_settings() -> dict[int, dict[str, int]]:
     return {
-        i: {"return_delay_time": 0, "drive_mode": 0, "operating_mode": 3,
-            "min_position_limit": 0, "max_position_limit": 4095}
+        i: {
+            "return_delay_time": 0,
+            "drive_mode": 0,
+            "operating_mode": 3,
+            "min_position_limit": 0,
+            "max_position_limit": 4095,
+        }
         for i in IDS
     }
 
@@ -45,7 +50,9 @@ def test_hardware_error_bits_decode_by_name() -> None:
     assert decode_hardware_error(0) == ()
     assert decode_hardware_error(0x24) == ("overheating", "overload")
     assert decode_hardware_error(0x01 | 0x08 | 0x10) == (
-        "input_voltage", "motor_encoder", "electrical_shock"
+        "input_voltage",
+        "motor_encoder",
+        "electrical_shock",
     )
     assert decode_hardware_error(0x42) == ("bit1", "bit6")
 
@@ -113,8 +120,15 @@ def test_without_a_watchdog_alarm_shutdown_must_cover_overload_and_heat() -> Non
     ax = TickConverter.for_robot(load_robot("snake12-ax12a"))
     ids = tuple(range(1, 13))
     # AX-12A: no Operating or Drive Mode register; CW/CCW Angle Limit 0..1023, Alarm Shutdown 36
-    settings = {i: {"return_delay_time": 0, "min_position_limit": 0, "max_position_limit": 1023,
-                    "shutdown": 36} for i in ids}
+    settings = {
+        i: {
+            "return_delay_time": 0,
+            "min_position_limit": 0,
+            "max_position_limit": 1023,
+            "shutdown": 36,
+        }
+        for i in ids
+    }
     assert check_settings(settings, ids, ax, watchdog=False) == ([], [])
     settings[3]["shutdown"] = 4  # overheating only
     settings[5]["min_position_limit"] = settings[5]["max_position_limit"] = 0  # wheel mode
@@ -150,8 +164,7 @@ def test_latency_warning_gives_the_cap_and_the_fix() -> None:
 def test_wire_time_matches_the_reference_tables() -> None:
     # reference/performance.md Table 7a/7b: N=16, 4 Mbps, RDT 0, 10-byte read
     p2 = family_named("dynamixel-p2")
-    assert cycle_wire_time_s(p2, "fast_sync_read", 16, 10, 4_000_000) == (
-        pytest.approx(890e-6), 1)
+    assert cycle_wire_time_s(p2, "fast_sync_read", 16, 10, 4_000_000) == (pytest.approx(890e-6), 1)
     assert cycle_wire_time_s(p2, "sync_read", 16, 10, 4_000_000) == (pytest.approx(1150e-6), 16)
     assert cycle_wire_time_s(p2, "fast_sync_read", 8, 10, 1_000_000)[0] == pytest.approx(1960e-6)
 
@@ -161,9 +174,13 @@ def test_wire_time_of_protocol_1_matches_servo_families_section_5() -> None:
     # Sync Write 0.44 ms
     p1 = family_named("dynamixel-p1")
     assert cycle_wire_time_s(p1, "read", 12, 6, 1_000_000, write_bytes=2) == (
-        pytest.approx(2.84e-3), 12)
+        pytest.approx(2.84e-3),
+        12,
+    )
     assert cycle_wire_time_s(p1, "bulk_read", 12, 6, 1_000_000, write_bytes=2) == (
-        pytest.approx(2.31e-3), 12)
+        pytest.approx(2.31e-3),
+        12,
+    )
 
 
 def test_latency_warning_counts_one_timer_per_reply_turnaround() -> None:
@@ -183,4 +200,3 @@ def test_stop_ramp_is_smooth_and_ends_on_the_safe_pose() -> None:
     steps = np.diff(np.array([start] + [p for _, p in poses]), axis=0)
     assert np.abs(steps[0]).max() < np.abs(steps[25]).max()  # slow start, faster middle
     assert ramp_poses(start, target, 0.0)[-1][0] == 0.0
-

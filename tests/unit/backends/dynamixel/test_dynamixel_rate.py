@@ -40,7 +40,8 @@ def test_mx_bulk_read_pays_one_usb_tail_and_a_return_delay_per_servo() -> None:
     assert budget.wire_s == pytest.approx(2.31e-3)  # 1.87 ms bulk read + 0.44 ms sync write
     assert budget.cycle_s == pytest.approx(3.31e-3)  # §5: ≈ 3.3 ms
     assert cycle_budget(P1, "bulk_read", 12, 6, 2, 1_000_000, 500e-6).cycle_s == pytest.approx(
-        9.31e-3)  # §5: RDT 250 → ≈ 10 ms ≈ 100 Hz
+        9.31e-3
+    )  # §5: RDT 250 → ≈ 10 ms ≈ 100 Hz
     slow = cycle_budget(P1, "bulk_read", 12, 6, 2, 57_600, 0.0)
     assert slow.wire_s == pytest.approx(231 * 10 / 57_600)  # §5: the read alone 32 ms
 
@@ -70,13 +71,25 @@ def test_a_rate_above_the_ceiling_is_refused_with_the_ceiling_and_the_ways_to_mo
 
 
 def test_only_remedies_that_help_are_offered() -> None:
-    mx = cycle_budget(P1, "bulk_read", 12, 6, 2, 57_600, 0.0, 0.0, usb_assumed=False,
-                      fastest_baud=3_000_000)
+    mx = cycle_budget(
+        P1, "bulk_read", 12, 6, 2, 57_600, 0.0, 0.0, usb_assumed=False, fastest_baud=3_000_000
+    )
     assert mx.remedies() == [
         "a faster baud rate (up to 3000000 bit/s for this model: [bus] baud, written to the "
-        "servos by `snakebot config apply`)"]
-    done = cycle_budget(P2, "fast_sync_read", 12, 10, 4, 4_000_000, 0.0, 0.0, usb_assumed=False,
-                        fastest_baud=4_000_000)
+        "servos by `snakebot config apply`)"
+    ]
+    done = cycle_budget(
+        P2,
+        "fast_sync_read",
+        12,
+        10,
+        4,
+        4_000_000,
+        0.0,
+        0.0,
+        usb_assumed=False,
+        fastest_baud=4_000_000,
+    )
     assert done.remedies() == ["a lower rate: this bus is at its fastest settings"]
 
 
@@ -93,8 +106,12 @@ def test_the_robot_files_return_delay_counts_and_a_joints_own_wins(config_dir: P
     path = edit_robot(config_dir, "snake12", "[settings]", "[settings]\nreturn_delay_time_us = 100")
     backend = DynamixelBackend(load_robot(path), port="/dev/ttyUSB9")
     assert backend.rate_budget().return_delay_s == pytest.approx(100e-6)
-    path = edit_robot(config_dir, "snake12", "servo_id = 7\n",
-                      "servo_id = 7\nsettings = { return_delay_time_us = 500 }\n")
+    path = edit_robot(
+        config_dir,
+        "snake12",
+        "servo_id = 7\n",
+        "servo_id = 7\nsettings = { return_delay_time_us = 500 }\n",
+    )
     backend = DynamixelBackend(load_robot(path), port="/dev/ttyUSB9")
     assert backend.rate_budget().return_delay_s == pytest.approx(500e-6)
 

@@ -50,11 +50,13 @@ def test_zero_offset_is_added_before_the_direction() -> None:
     angle=st.floats(-math.pi, math.pi),
     offset=st.floats(-0.5, 0.5),
     direction=st.sampled_from([1, -1]),
-    model=st.sampled_from([
-        ticks.X_SERIES_TICKS,
-        ticks.TickModel(count=1024, travel_deg=300.0, centre=512, maximum=1023),
-        ticks.TickModel(count=1003846, centre=501923, maximum=1003845),
-    ]),
+    model=st.sampled_from(
+        [
+            ticks.X_SERIES_TICKS,
+            ticks.TickModel(count=1024, travel_deg=300.0, centre=512, maximum=1023),
+            ticks.TickModel(count=1003846, centre=501923, maximum=1003845),
+        ]
+    ),
 )
 def test_round_trip_within_half_a_tick(
     angle: float, offset: float, direction: int, model: ticks.TickModel

@@ -47,11 +47,16 @@ def test_a_finished_video_reads_back_with_every_frame(tmp_path: Path) -> None:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_FSIZE")
-@pytest.mark.skipif(importlib.util.find_spec("gymnasium") is None,
-                    reason="rl eval's writer needs the rl extra")
+@pytest.mark.skipif(
+    importlib.util.find_spec("gymnasium") is None, reason="rl eval's writer needs the rl extra"
+)
 def test_rl_evals_video_on_a_full_disk_is_an_output_error_naming_it(tmp_path: Path) -> None:
     path = tmp_path / "eval.mp4"
-    done = subprocess.run([sys.executable, "-c", ENCODE_ON_A_FULL_DISK, str(path)],
-                          capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-c", ENCODE_ON_A_FULL_DISK, str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 1, done.stderr
     assert done.stdout.startswith(f"{path}: ") and "a full disk?" in done.stdout
