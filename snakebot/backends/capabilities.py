@@ -113,7 +113,8 @@ class Resettable(Protocol):
 
 @runtime_checkable
 class Simulated(Protocol):
-    """Has a MuJoCo model and data to render or view (the twin, the soft body)."""
+    """Has a MuJoCo model and data to render or view (the twin, the soft body); built at
+    connect, so a backend has this ability once connected."""
 
     model: mujoco.MjModel
     data: mujoco.MjData

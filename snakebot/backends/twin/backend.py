@@ -139,7 +139,6 @@ class TwinBackend(Backend):
                 physics, self.joint_count, servo.torque_limit_nm, servo.no_load_speed_rad_s
             )
             self._force_limit = self.model.actuator_forcerange.copy()
-        self._start_com = self.data.subtree_com[self._head_id].copy()
         self.reset_physics_health()
 
     def reset(self, position_rad: np.ndarray | None = None) -> JointState:
@@ -171,7 +170,6 @@ class TwinBackend(Backend):
             )
             self.model.actuator_forcerange[:] = self._force_limit
             self._apply_gains()
-        self._start_com = data.subtree_com[self._head_id].copy()
         self.reset_physics_health()
         if self._pacer is not None:
             self._pacer = Pacer(self.stats)
@@ -179,9 +177,14 @@ class TwinBackend(Backend):
 
     def reset_physics_health(self, limits: HealthLimits | None = None) -> None:
         """Start the physics-health account afresh (a learning environment's new episode), with
-        ``limits`` from now on when given. Nothing happens with the checks off."""
+        ``limits`` from now on when given, and the servos' electrical figures (energy, current,
+        the distance the cost of transport counts) from here; the physics checks stay off
+        where they are off."""
         if limits is not None:
             self._health_limits = limits
+        if self.electrics is not None:
+            self.electrics.restart_account()
+        self._start_com = self.data.subtree_com[self._head_id].copy()
         if self._health_limits is None:
             return
         servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
