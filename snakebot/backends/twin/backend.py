@@ -11,7 +11,6 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import Simulated
 from snakebot.backends.pacing import Pacer
-from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.health import (
     DEFAULT_LIMITS,
@@ -55,7 +54,7 @@ class TwinBackend(Backend):
     """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
 
     ``friction`` overrides the robot's ground model (``--friction``); ``timestep_s`` overrides
-    ``twin.timestep_s``; ``terrain`` (a Terrain, a Cliff, ``--terrain`` text such as
+    ``twin.timestep_s``; ``terrain`` (a Terrain, ``--terrain`` text such as
     ``"pegs:density=12"``, or None for flat) sets the ground and the start pose;
     ``friction_model`` ("auto", "pairs", "scale"; None: the robot file's) how the ground's
     friction is made. A bad terrain raises ConfigError here, naming the key.
@@ -77,7 +76,7 @@ class TwinBackend(Backend):
         friction: GroundFriction | None = None,
         timestep_s: float | None = None,
         realtime: bool = False,
-        terrain: Terrain | Cliff | str | None = None,
+        terrain: Terrain | str | None = None,
         friction_model: FrictionModel | None = None,
         health: HealthLimits | None = DEFAULT_LIMITS,
         seed: int = 0,

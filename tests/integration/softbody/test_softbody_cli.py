@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from snakebot.backends.twin import TwinBackend
-from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.terrain.cliff import Cliff
 from snakebot.cli.main import main
 from snakebot.config import load_robot
 from snakebot.telemetry import read_log
@@ -83,7 +83,8 @@ def test_model_exports_a_body_with_its_skin(
         (["--robot", "worm", "--backend", "dynamixel"], 1, "runs on the twin only"),
         (["--robot", "snake8", "--directional", "off"], 2, "mass-spring bodies only"),
         (["--robot", "worm", "--friction", "0.1,0.5"], 2, "isotropic"),
-        (["--robot", "worm", "--terrain", "stairs"], 2, "flat, cliff"),
+        (["--robot", "worm", "--terrain", "stairs"], 2, "expected one of flat, slope, pegs"),
+        (["--robot", "worm", "--terrain", "pegs"], 2, "body lies on flat or cliff"),
         (["--robot", "worm", "--terrain", "cliff:height_m=x"], 2, "height_m"),
         (["--robot", "worm", "--terrain", "cliff:edge_m=0.01"], 2, "flat top"),
         (["--robot", "snake8", "--gait", "rectilinear"], 1, "not whole segments"),
