@@ -142,3 +142,18 @@ def test_gaits_lists_millers_gaits(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     for name in ("rectilinear", "undulation", "miller_sidewinding"):
         assert name in out
+
+
+def test_the_soft_body_is_its_own_backend_and_twin_picks_it_by_the_file(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--backend softbody`` runs a body file; ``--backend twin`` (the default) runs the same
+    body the same way, chosen by the file's kind; a servo robot on softbody is refused."""
+    argv = ("--robot", "worm", "--gait", "rectilinear", "--duration", "1", "--terrain", "cliff")
+    own = run_json(capsys, *argv, "--backend", "softbody")
+    picked = run_json(capsys, *argv, "--backend", "twin")
+    assert own["backend"] == "softbody" and picked["backend"] == "twin"
+    assert own["distance_m"] == picked["distance_m"] and own["distance_m"] is not None
+    assert own["contact_fraction"] == picked["contact_fraction"]
+    assert main(["run", "--robot", "snake8", "--backend", "softbody", "--duration", "0.2"]) == 1
+    assert "snake8: is not a mass-spring body" in capsys.readouterr().err
