@@ -30,6 +30,7 @@ __all__ = [
     "ChecksPhysics",
     "OnBus",
     "ReportsHealth",
+    "ReportsTravel",
     "Resettable",
     "SensesBody",
     "SensesCurrent",
@@ -96,6 +97,16 @@ class SensesCurrent(Protocol):
 
     def present_current_a(self) -> FloatArray:
         """Current per joint (N,) A as of the last ``read_state``."""
+        ...
+
+
+@runtime_checkable
+class ReportsTravel(Protocol):
+    """Measures how the body travelled over the run beyond what the runner measures (the soft
+    body: its mean axis, the travel angle against it, the ground contact), for the summary."""
+
+    def travel(self) -> Mapping[str, float]:
+        """Figures since connect, by name with the unit in the name (``travel_angle_deg``)."""
         ...
 
 
@@ -178,6 +189,7 @@ CAPABILITIES: tuple[type, ...] = (
     ReportsHealth,
     ChecksPhysics,
     SensesCurrent,
+    ReportsTravel,
     Resettable,
     Simulated,
     OnBus,

@@ -33,6 +33,7 @@ from snakebot.backends.capabilities import (
     ChecksPhysics,
     OnBus,
     ReportsHealth,
+    ReportsTravel,
     Resettable,
     SensesBody,
     SensesCurrent,
@@ -277,6 +278,20 @@ class BackendContract:
             settled = np.abs(backend.present_current_a())
         assert driving.shape == (8,) and np.isfinite(driving).all()
         assert driving.sum() > 2 * settled.sum() and driving.sum() > 0.01, (driving, settled)
+
+    def test_travel_figures_are_finite_and_named(
+        self, make_backend: Callable[[str], Backend]
+    ) -> None:
+        """ReportsTravel: after the joints moved, named finite figures."""
+        backend = make_backend("snake8")
+        if not isinstance(backend, ReportsTravel):
+            pytest.skip(_not_claimed(backend, ReportsTravel))
+        with backend:
+            self._bend(backend, np.full(8, 0.3), 0.3)
+            figures = dict(backend.travel())
+        assert figures, "no travel figures after the joints moved"
+        for name, value in figures.items():
+            assert "_" in name and np.isfinite(value), (name, value)
 
     def test_reset_is_as_good_as_a_new_backend(
         self, make_backend: Callable[[str], Backend]
