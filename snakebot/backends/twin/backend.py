@@ -366,8 +366,8 @@ class TwinBackend(Backend):
         return self._sensors.gyro_rad_s(self.data)
 
     def _present_current_a(self) -> np.ndarray:
-        """Each servo's current (N,) A, signed as its torque: |torque| over the torque
-        constant, as the servo file's electrical model draws it."""
+        """Each servo's current (N,) A, signed as its output torque: the torque over the
+        torque constant (stall torque / ``stall_current_a``), the electrical model's draw."""
         assert self.electrics is not None
         torque = self._servo_torque()
         current: np.ndarray = torque / self.electrics.torque_constant_nm_per_a
