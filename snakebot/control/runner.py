@@ -31,6 +31,7 @@ from snakebot.control.cycle import (
     CycleObserver,
     CycleRecord,
     CycleSchedule,
+    CycleSink,
     GaitCycle,
     StopCheck,
 )
@@ -39,9 +40,17 @@ from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer, smooth_ramp
 from snakebot.errors import BackendError
 from snakebot.gaits import Gait
-from snakebot.telemetry.sink import CycleLog
+from snakebot.gaits.table import CommandTable
 
-__all__ = ["CycleHook", "CycleObserver", "CycleRecord", "RunPlan", "RunResult", "run_gait"]
+__all__ = [
+    "CycleHook",
+    "CycleObserver",
+    "CycleRecord",
+    "RunPlan",
+    "RunResult",
+    "play_commands",
+    "run_gait",
+]
 
 
 @dataclass(frozen=True)
@@ -81,15 +90,16 @@ def run_gait(
     plan: RunPlan,
     metrics: RunMetrics,
     *,
-    log: CycleLog | None = None,
+    log: CycleSink | None = None,
     on_cycle: CycleHook | None = None,
     observers: Sequence[CycleObserver] = (),
     stop: StopCheck | None = None,
 ) -> RunResult:
     """Run ``gait`` on a connected ``backend`` for ``plan.duration_s``, then ramp out.
 
-    ``on_cycle(cycle, gait_time_s)`` runs after every cycle (progress, video, viewer), then each
-    of ``observers`` gets the cycle's ``CycleRecord``. ``stop()`` is asked before every gait
+    ``log`` (a telemetry sink: snakebot.telemetry.sink) and then each of ``observers`` get every
+    cycle's ``CycleRecord``, then ``on_cycle(cycle, gait_time_s)`` runs (progress, video,
+    viewer); ``RunResult.log_rows`` are the rows ``log`` took. ``stop()`` is asked before every gait
     cycle: a reason ends the gait there as Ctrl-C does (ramp-out, then ``RunResult.stopped_by``);
     with ``plan.duration_s`` None only ``stop`` or Ctrl-C ends the gait. Raises what ended the
     run early (after the ramp-out where the bus still works; see the module doc), and, before
@@ -102,9 +112,8 @@ def run_gait(
         GaitCycle([gait], safety),
         schedule,
         metrics,
-        log=log,
         on_cycle=on_cycle,
-        observers=observers,
+        observers=[*([] if log is None else [log]), *observers],
     )
     loop.start()
     interrupted = False
@@ -139,6 +148,42 @@ def run_gait(
     if callable(health) and (physics := health()) is not None:
         summary["physics"] = physics
     return RunResult(summary, interrupted, 0 if log is None else log.rows, stopped_by=stopped_by)
+
+
+def play_commands(
+    backend: Backend,
+    commands: np.ndarray,
+    rate_hz: float,
+    safety: SafetyLayer,
+    *,
+    observers: Sequence[CycleObserver] = (),
+) -> list[CycleRecord]:
+    """Play a command table (T, N) rad on a connected ``backend``, one row per control period,
+    through the control loop; returns every cycle's record (each of ``observers`` sees them).
+
+    The table is a gait (snakebot.gaits.table.CommandTable) behind ``safety``, usually
+    ``SafetyLayer.clip_only(robot)``: step tests and chirps must reach the servo as they were
+    made. There is no ramp-out, the table's last row is where it ends. On the twin that is T
+    cycles; a late cycle (a slow bus) plays the row of its time, so there may be fewer.
+    Raises the backend's ConfigError for a rate it cannot hold before the first command,
+    GaitError for a table that is not (T, N) finite angles, and what the loop raises.
+    """
+    backend.check_rate(rate_hz)
+    schedule = CycleSchedule(rate_hz)
+    table = CommandTable(commands, schedule.period_s)
+    schedule = CycleSchedule(rate_hz, table.duration_s)
+    records: list[CycleRecord] = []
+    loop = CycleLoop(
+        backend,
+        GaitCycle([table], safety),
+        schedule,
+        None,
+        observers=[records.append, *observers],
+    )
+    loop.start()
+    while schedule.in_gait(gait_time := loop.elapsed_s):
+        loop.step(gait_time, 1.0, scored=True)
+    return records
 
 
 def _ramp_out(

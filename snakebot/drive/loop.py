@@ -91,7 +91,7 @@ def run_drive(
             controller.notice = gate.notice
         _check_stop(controller, source, stop_check, keys_waiting=gate.waiting > 0)
         done = loop.step(now, 1.0, scored=True)
-        assert done is not None  # records=True
+        assert done is not None  # records=True: the loop returns every record
         status = live.status()
         record = DriveCycle(**vars(done), status=status, keys=keys)
         for observer in observers:
