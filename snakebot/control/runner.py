@@ -26,7 +26,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import ChecksPhysics
 from snakebot.control.cycle import (
     CycleHook,
     CycleObserver,
@@ -39,6 +38,7 @@ from snakebot.control.cycle import (
 from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer, smooth_ramp
+from snakebot.control.summary import run_summary
 from snakebot.errors import BackendError
 from snakebot.gaits import Gait
 from snakebot.gaits.table import CommandTable
@@ -139,14 +139,13 @@ def run_gait(
         _ramp_out(loop, safety, loop.elapsed_s, failure)
     if failure is not None:
         raise failure
-    summary = metrics.summary(gait.period_s)
-    summary["rate_hz"] = plan.rate_hz
-    summary["achieved_rate_hz"] = _achieved_rate(metrics, schedule.period_s)
-    summary["overruns"] = backend.stats.overruns
-    summary["backend_stats"] = dict(backend.stats.extra)
-    summary["interrupted"] = interrupted
-    if isinstance(backend, ChecksPhysics) and (physics := backend.physics_health()) is not None:
-        summary["physics"] = physics  # the twin's physics checks
+    summary = run_summary(
+        metrics,
+        backend,
+        rate_hz=plan.rate_hz,
+        gait_period_s=gait.period_s,
+        interrupted=interrupted,
+    )
     return RunResult(summary, interrupted, 0 if log is None else log.rows, stopped_by=stopped_by)
 
 
@@ -220,9 +219,3 @@ def _ramp_out(
         if failure is None:
             raise
         failure.add_note(f"the ramp-out after it stopped too: {exc!r}")
-
-
-def _achieved_rate(metrics: RunMetrics, dt: float) -> float:
-    start = metrics.start_time_s or 0.0
-    elapsed = metrics.end_time_s - start
-    return metrics.cycles / elapsed if elapsed > 0 else 1.0 / dt
