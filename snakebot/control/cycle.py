@@ -190,9 +190,11 @@ class CycleRecord:
 CycleObserver = Callable[[CycleRecord], None]
 """Sees every cycle's record: telemetry sinks, the drive display, tuning samples, a test.
 
-The record is the only thing that leaves the loop, so a new channel is one ``CycleRecord``
-field that the loop fills, plus the sinks that choose to show it: no sink's signature changes
-and the sinks that do not show it never hear of it (tests/unit/control/test_cycle_channel.py)."""
+The record is the only thing that leaves the loop, so a new channel is one field: of the
+state or body a backend reads (the record carries them as they are: no edit to the loop), or of
+the record where the loop itself makes it, plus the sinks that choose to show it. No sink's
+signature changes and the sinks that do not show it never hear of it
+(tests/integration/control/test_cycle_channel.py)."""
 
 
 @runtime_checkable
