@@ -23,6 +23,7 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import GainRegisters, RobotConfig
+from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, play_commands, run_gait
 from snakebot.control.safety import SafetyLayer
@@ -248,14 +249,16 @@ def _gait_tracking(backend: Backend, robot: RobotConfig, test: GainTest) -> tupl
     run = np.zeros(robot.joint_count)
     longest = [0.0]
 
-    def watch(cycle: int, gait_time_s: float) -> None:
+    def watch(record: CycleRecord) -> None:
+        # the effort the cycle measured (a read of its own would cost a bus transaction)
         nonlocal run
-        saturated = np.abs(backend.read_state().effort_nm) >= limit
+        saturated = np.abs(record.state.effort_nm) >= limit
         run = np.where(saturated, run + 1, 0)
         longest[0] = max(longest[0], float(run.max()) / test.rate_hz)
 
     plan = RunPlan(test.gait_s, test.rate_hz)
-    result = run_gait(backend, gait, SafetyLayer.for_robot(robot), plan, metrics, on_cycle=watch)
+    safety = SafetyLayer.for_robot(robot)
+    result = run_gait(backend, gait, safety, plan, metrics, observers=[watch])
     tracking = result.summary["tracking_rms_rad"]
     return float(tracking) if isinstance(tracking, float) else math.nan, longest[0]
 
