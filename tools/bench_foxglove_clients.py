@@ -15,7 +15,8 @@ The hogs, the swarm and the emulator are stopped on every exit path (including C
 ``--write-cost`` measures instead, in this process, what handing one cycle's record to
 ``FoxgloveTelemetry`` costs the control thread (median and 99th percentile, paced at 100 Hz for
 ``--duration`` s) and the CPU seconds of the whole process (every thread: the SDK's, the
-gate's), with and without the swarm; a loaded machine disturbs these figures far less than a bus run's rate.
+gate's), with and without the swarm; a loaded machine disturbs these figures far less than a
+bus run's rate.
 
 Usage::
 
