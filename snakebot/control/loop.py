@@ -11,6 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import SensesBody
 from snakebot.control.cycle import (
     CycleHook,
     CycleObserver,
@@ -49,6 +50,8 @@ class CycleLoop:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
         self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
         self.records = records
+        self.body_sensor = backend if isinstance(backend, SensesBody) else None
+        """The backend where it measures the body (COM, head orientation), else None."""
         self.state: JointState = backend.read_state()
         self.start_s = self.state.time_s
         self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target
@@ -61,7 +64,8 @@ class CycleLoop:
     def start(self) -> None:
         """Reset the gaits and the safety layer to the measured pose; open the scored window."""
         self.gaits.reset(self.state.position_rad)
-        self.metrics.start(self.state.time_s, self.backend.body_state())
+        sensor = self.body_sensor
+        self.metrics.start(self.state.time_s, None if sensor is None else sensor.body_state())
 
     @property
     def elapsed_s(self) -> float:
@@ -87,7 +91,7 @@ class CycleLoop:
         backend.send_command(JointCommand(command))
         backend.advance(schedule.period_s)
         self.state = state = backend.read_state()
-        body = backend.body_state()
+        body = None if self.body_sensor is None else self.body_sensor.body_state()
         self.stage = "metrics"
         if scored:
             self.metrics.add(command, state, body, schedule.period_s)

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import ChecksPhysics
 from snakebot.control.cycle import (
     CycleHook,
     CycleObserver,
@@ -135,9 +136,8 @@ def run_gait(
     summary["overruns"] = backend.stats.overruns
     summary["backend_stats"] = dict(backend.stats.extra)
     summary["interrupted"] = interrupted
-    health = getattr(backend, "physics_health", None)  # the twin's physics checks
-    if callable(health) and (physics := health()) is not None:
-        summary["physics"] = physics
+    if isinstance(backend, ChecksPhysics) and (physics := backend.physics_health()) is not None:
+        summary["physics"] = physics  # the twin's physics checks
     return RunResult(summary, interrupted, 0 if log is None else log.rows, stopped_by=stopped_by)
 
 

@@ -7,7 +7,8 @@ plays that gait at the phases it integrates, once per control cycle, as the env 
 
 Pose source. A velocity policy observes only the servos. A goal policy also needs the snake's
 centre of mass and heading every step: anything with a ``body_state() -> BodyState | None``
-method (``PoseSource``) provides them. The twin backend is one; a motion-capture rig or an
+method (``PoseSource``) provides them. A backend that senses the body (``SensesBody``: the twin)
+is one; a motion-capture rig or an
 odometry estimate can be another (see docs/learning.md, "Pose sources"). On a backend with no
 pose (the servo bus) a goal policy is refused, saying why.
 """
@@ -22,6 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import SensesBody
 from snakebot.config import RobotConfig
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, GaitError
@@ -52,17 +54,17 @@ class PoseSource(Protocol):
 
 
 def knows_pose(backend: Backend) -> bool:
-    """True when ``backend`` measures the body's pose itself (overrides ``body_state``)."""
-    return type(backend).body_state is not Backend.body_state
+    """True when ``backend`` measures the body's pose itself (``SensesBody``)."""
+    return isinstance(backend, SensesBody)
 
 
 def state_reader(backend: Backend) -> StateReader:
-    """The joint state the runner read last: the bus backend keeps it (``last_state``), so no
-    extra bus transaction; on the twin a read is a copy of the simulation state."""
+    """The joint state the runner read last (every backend keeps it: ``last_state``), so no
+    extra bus transaction; a read before the first cycle's."""
 
     def read() -> JointState:
-        last = getattr(backend, "last_state", None)
-        return last if isinstance(last, JointState) else backend.read_state()
+        last = backend.last_state
+        return last if last is not None else backend.read_state()
 
     return read
 
@@ -264,7 +266,7 @@ def policy_gait_for_backend(
             f"the policy acts at {action_hz:g} Hz; run the "
             f"control loop at least that fast (e.g. 100 Hz)",
         )
-    if pose is None and knows_pose(backend):
+    if pose is None and isinstance(backend, SensesBody):
         pose = backend
     gait = PolicyGait(policy, robot, state_reader(backend), command, pose=pose)
     kind = "goal" if gait.goal_task else "velocity"

@@ -11,11 +11,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import mujoco
-
 from snakebot.backends.registry import make_backend
 from snakebot.backends.twin import TwinBackend
-from snakebot.backends.twin.model_builder import hold_ctrl_history, link_name
+from snakebot.backends.twin.model_builder import link_name
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.cycle import CycleSchedule
 from snakebot.control.metrics import head_yaw_rad
@@ -83,14 +81,8 @@ class TwinLoop:
 
     def reset(self, phase_rad: float) -> JointState:
         """Straight snake at rest at the origin, facing +x; the phases start at ``phase_rad``."""
-        model, data = self.backend.model, self.backend.data
-        mujoco.mj_resetData(model, data)
-        data.ctrl[:] = 0.0
-        hold_ctrl_history(model, data, data.ctrl)
-        mujoco.mj_forward(model, data)
+        self.state = self.backend.reset()  # Resettable: physics health afresh too
         self.clock.reset(phase_rad)
-        self.backend.reset_physics_health()  # each episode is judged on its own
-        self.state = self.backend.read_state()
         self.safety.reset(self.state.position_rad)
         return self.state
 

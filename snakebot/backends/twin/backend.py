@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Protocol
 
 import mujoco
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import Simulated
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.friction.scale import FrictionModel
@@ -39,12 +39,7 @@ JointSelection = int | slice | Sequence[int] | np.ndarray
 """Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""
 
 
-class Simulated(Protocol):
-    """A backend with a MuJoCo model and data to render or view (the twin, a soft body)."""
-
-    model: mujoco.MjModel
-    data: mujoco.MjData
-
+__all__ = ["JointSelection", "Simulated", "TwinBackend"]
 
 class TwinBackend(Backend):
     """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
@@ -60,6 +55,9 @@ class TwinBackend(Backend):
     supply sag, overload protection (a trip raises ServoFaultError unless
     ``raise_on_overload`` is False, e.g. under the emulator, which latches it) and encoder and
     IMU noise drawn from ``seed``.
+
+    Abilities (``backends.capabilities``): SensesBody, SensesImu, ChecksPhysics, Resettable,
+    Simulated; SensesCurrent where the servo file models the current (``stall_current_a``).
     """
 
     def __init__(
@@ -93,6 +91,8 @@ class TwinBackend(Backend):
         self.data: mujoco.MjData
         self._pacer: Pacer | None = None
         self._steps_per_period: dict[float, int] = {}
+        if robot.servo.physics.extras.stall_current_a is not None:
+            self.present_current_a = self._present_current_a  # SensesCurrent: this servo file
 
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
@@ -131,6 +131,41 @@ class TwinBackend(Backend):
             self._force_limit = self.model.actuator_forcerange.copy()
         self._start_com = self.data.subtree_com[self._head_id].copy()
         self.reset_physics_health()
+
+    def reset(self, position_rad: np.ndarray | None = None) -> JointState:
+        """Back to the start at once (Resettable): the model's start pose at rest (the origin,
+        facing +x, or where the terrain starts it), the joints straight or at ``position_rad``
+        (N,) rad with their goals there, time 0, the servos' electrical state and the
+        physics-health account afresh. Gains and torque stay as they are. ValueError for a
+        wrong shape."""
+        self._require_connected()
+        model, data = self.model, self.data
+        mujoco.mj_resetData(model, data)
+        if position_rad is not None:
+            pose = np.asarray(position_rad, dtype=float)
+            if pose.shape != (self.joint_count,):
+                raise ValueError(
+                    f"reset pose has shape {pose.shape}, expected ({self.joint_count},) angles"
+                )
+            data.qpos[self._qpos_index] = pose
+            data.ctrl[:] = pose
+        else:
+            data.ctrl[:] = 0.0
+        hold_ctrl_history(model, data, data.ctrl)
+        mujoco.mj_forward(model, data)
+        if self.electrics is not None:
+            physics = self.robot.servo.physics
+            servo = servo_dynamics(physics, self.robot.gains)
+            self.electrics = ServoElectrics(
+                physics, self.joint_count, servo.torque_limit_nm, servo.no_load_speed_rad_s
+            )
+            self.model.actuator_forcerange[:] = self._force_limit
+            self._apply_gains()
+        self._start_com = data.subtree_com[self._head_id].copy()
+        self.reset_physics_health()
+        if self._pacer is not None:
+            self._pacer = Pacer(self.stats)
+        return self.read_state()
 
     def reset_physics_health(self, limits: HealthLimits | None = None) -> None:
         """Start the physics-health account afresh (a learning environment's new episode), with
@@ -303,6 +338,19 @@ class TwinBackend(Backend):
             electrical = self.electrics.summary(self.robot.total_mass_kg, distance)
             out = {**(out or {}), **electrical}
         return out
+
+    def head_gyro_rad_s(self) -> np.ndarray:
+        """The head IMU's gyro (3,) rad/s in the head's frame, with the servo file's noise."""
+        self._require_connected()
+        return self._sensors.gyro_rad_s(self.data)
+
+    def _present_current_a(self) -> np.ndarray:
+        """Each servo's current (N,) A, signed as its torque: |torque| over the torque
+        constant, as the servo file's electrical model draws it."""
+        assert self.electrics is not None
+        torque = self._servo_torque()
+        current: np.ndarray = torque / self.electrics.torque_constant_nm_per_a
+        return current
 
     def body_state(self) -> BodyState:
         """Centre of mass of the whole snake and the head's orientation."""
