@@ -22,7 +22,7 @@ from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.cliff import Cliff
-from snakebot.backends.twin.readouts import check_steps, unstable_count
+from snakebot.backends.twin.readouts import StepCheck
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError
 from snakebot.types import BodyState, JointState, PDGains
@@ -83,6 +83,7 @@ class SoftBodyBackend(Backend):
         built = build_body_model(self.body, friction=self.friction, terrain=self.terrain)
         self.model, self.lattice = built.model, built.lattice
         self.data = mujoco.MjData(self.model)
+        self._step_check = StepCheck(self.model, self.data, finite_positions=True)
         self.start_positions = built.start_positions
         lat = self.body.lattice
         self.muscles = MuscleMap(self.lattice, lat.segment_length_m, lat.width_m, lat.height_m)
@@ -188,8 +189,7 @@ class SoftBodyBackend(Backend):
         model, data = self.model, self.data
         if self.body.muscles.volume_preservation:
             self._apply_muscles()
-        before = int(unstable_count(data.warning.number))
-        time_before = float(data.time)
+        self._step_check.start()
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
         for step in range(steps):
@@ -199,7 +199,7 @@ class SoftBodyBackend(Backend):
             mujoco.mj_step(model, data)
             if rule.enabled and data.ncon:
                 rule.apply(displacement, velocity, data.contact.geom)
-        check_steps(model, data, steps, time_before, before, finite_positions=True)
+        self._step_check.finish(steps)
         self._track()
         if self._pacer is not None:
             self._pacer.wait(dt_s)

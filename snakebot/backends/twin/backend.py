@@ -22,12 +22,7 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
-from snakebot.backends.twin.readouts import (
-    Capsules,
-    check_steps,
-    servo_torque_nm,
-    unstable_count,
-)
+from snakebot.backends.twin.readouts import Capsules, StepCheck, servo_torque_nm
 from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.backends.twin.terrain import Terrain, as_terrain
@@ -40,6 +35,7 @@ JointSelection = int | slice | Sequence[int] | np.ndarray
 
 
 __all__ = ["JointSelection", "Simulated", "TwinBackend"]
+
 
 class TwinBackend(Backend):
     """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
@@ -104,6 +100,7 @@ class TwinBackend(Backend):
             friction_model=self._friction_model,
         )
         self.data = mujoco.MjData(self.model)
+        self._step_check = StepCheck(self.model, self.data)
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]
         self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
@@ -270,11 +267,9 @@ class TwinBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
-        model, data = self.model, self.data
-        before = int(unstable_count(data.warning.number))
-        time_before = float(data.time)
-        mujoco.mj_step(model, data, steps)
-        check_steps(model, data, steps, time_before, before)
+        self._step_check.start()
+        mujoco.mj_step(self.model, self.data, steps)
+        self._step_check.finish(steps)
         if self.physics_monitor is not None:
             self.physics_monitor.sample(self.data, dt_s, self._servo_torque())
         if self.electrics is not None:

@@ -11,7 +11,7 @@ so a tuned or learned result measured on one path is what another path measures:
   is every backend's formula (the servo bus reports effort and velocity too), so it is defined
   beside ``JointState`` in ``snakebot.types`` and the twin's users take it from here.
 - ``Capsules.clearance_m``: how high the lowest point of the module capsules is above z = 0.
-- ``unstable_count`` / ``check_steps``: whether MuJoCo met an instability inside a physics step
+- ``unstable_count`` / ``StepCheck``: whether MuJoCo met an instability inside a physics step
   (it answers one by resetting the state and counting a warning, not with NaN), and when.
 """
 
@@ -31,7 +31,7 @@ __all__ = [
     "UNSTABLE_WARNINGS",
     "WARNING_NUMBER",
     "Capsules",
-    "check_steps",
+    "StepCheck",
     "divergence_time_s",
     "positive_power_w",
     "servo_torque_nm",
@@ -111,22 +111,41 @@ def divergence_time_s(
     return time_before_s + max(steps - after_reset, 0) * timestep_s
 
 
-def check_steps(
-    model: mujoco.MjModel,
-    data: mujoco.MjData,
-    steps: int,
-    time_before_s: float,
-    unstable_before: int,
-    *,
-    finite_positions: bool = False,
-) -> None:
-    """Raise SimulationDivergedError when the ``steps`` physics steps just taken from
-    ``time_before_s`` met an instability (``unstable_count`` rose from ``unstable_before``), or,
-    with ``finite_positions``, left a position that is not finite; at the time it happened."""
-    diverged = int(unstable_count(data.warning.number)) != unstable_before
-    if diverged or (finite_positions and not np.isfinite(data.qpos).all()):
-        timestep = float(model.opt.timestep)
-        raise SimulationDivergedError(
-            divergence_time_s(time_before_s, steps, timestep, float(data.time)),
-            "MuJoCo reported bad accelerations (state was reset)",
-        )
+class StepCheck:
+    """The whole-physics-step check of one MjData: did the physics steps since ``start`` meet
+    an instability (``unstable_count`` rose) or, with ``finite_positions``, leave a position
+    that is not finite? The counters are read through a view of MjData's own, a few scalar
+    reads per control cycle."""
+
+    def __init__(
+        self, model: mujoco.MjModel, data: mujoco.MjData, *, finite_positions: bool = False
+    ) -> None:
+        self._model, self._data = model, data
+        self._number = data.warning.number  # a view: MuJoCo counts into it
+        self._which = tuple(UNSTABLE_WARNINGS.tolist())
+        self._finite = finite_positions
+        self._before = 0
+        self._time_before_s = 0.0
+
+    def count(self) -> int:
+        """``unstable_count`` of the data now."""
+        number = self._number
+        first, second, third = self._which
+        return int(number[first] + number[second] + number[third])
+
+    def start(self) -> None:
+        """Before stepping: remember the count and the time."""
+        self._before = self.count()
+        self._time_before_s = float(self._data.time)
+
+    def finish(self, steps: int) -> None:
+        """After ``steps`` physics steps: SimulationDivergedError at the time the instability
+        happened (MuJoCo reset the state and stepped on), if one did."""
+        data = self._data
+        diverged = self.count() != self._before
+        if diverged or (self._finite and not np.isfinite(data.qpos).all()):
+            timestep = float(self._model.opt.timestep)
+            raise SimulationDivergedError(
+                divergence_time_s(self._time_before_s, steps, timestep, float(data.time)),
+                "MuJoCo reported bad accelerations (state was reset)",
+            )

@@ -12,11 +12,13 @@ from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.readouts import (
     WARNING_NUMBER,
     Capsules,
+    StepCheck,
     positive_power_w,
     servo_torque_nm,
     unstable_count,
 )
 from snakebot.config import load_robot
+from snakebot.errors import SimulationDivergedError
 from snakebot.tuning.engine import twin_layout
 from snakebot.types import JointCommand
 
@@ -89,3 +91,30 @@ def test_an_instability_counts_for_one_run_and_per_run_in_a_batch(twin: TwinBack
     warnings[2, mujoco.mjtWarning.mjWARN_BADQACC] = (5, 2)
     warnings[0, mujoco.mjtWarning.mjWARN_CONTACTFULL] = (7, 4)  # not an instability
     np.testing.assert_array_equal(unstable_count(warnings[..., WARNING_NUMBER]), [0, 1, 2])
+
+
+def test_the_step_check_names_when_the_instability_happened_inside_the_steps(
+    twin: TwinBackend,
+) -> None:
+    model = twin.model
+    data = mujoco.MjData(model)
+    check = StepCheck(model, data)
+    mujoco.mj_step(model, data, 3)
+    check.start()
+    mujoco.mj_step(model, data, 2)
+    check.finish(2)  # a credible step passes
+    check.start()
+    data.qvel[0] = 1e11
+    mujoco.mj_step(model, data, 5)  # MuJoCo resets at the first of the 5 and steps on
+    with pytest.raises(SimulationDivergedError) as caught:
+        check.finish(5)
+    assert caught.value.time_s == pytest.approx(5 * model.opt.timestep)
+    # a position left non-finite counts where the caller asks for it (the soft body's friction
+    # rule writes velocities between steps): without a MuJoCo warning
+    check, strict = StepCheck(model, data), StepCheck(model, data, finite_positions=True)
+    check.start()
+    strict.start()
+    data.qpos[0] = np.nan
+    check.finish(0)
+    with pytest.raises(SimulationDivergedError):
+        strict.finish(0)
