@@ -73,6 +73,12 @@ class CycleLoop:
         """Robot time since the run started."""
         return self.state.time_s - self.start_s
 
+    def gait_step(self) -> CycleRecord:
+        """One scored gait cycle now: the gait's targets at the robot time since the start,
+        ramped in as the schedule ramps (``run_gait``'s gait cycles, a learning env's)."""
+        gait_time = self.state.time_s - self.start_s
+        return self.step(gait_time, self.schedule.ramp_in(gait_time), scored=True)
+
     def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord:
         """One cycle with the targets of ``gait_time_s`` at ``amplitude``; scored cycles count
         in the metrics. Returns the cycle's record (the metrics and observers have seen it)."""

@@ -121,11 +121,11 @@ def run_gait(
     stopped_by = ""
     failure: Exception | None = None
     try:
-        while schedule.in_gait(gait_time := loop.elapsed_s):
+        while schedule.in_gait(loop.elapsed_s):
             if stop is not None and (reason := stop()) is not None:
                 stopped_by = reason
                 break
-            loop.step(gait_time, schedule.ramp_in(gait_time), scored=True)
+            loop.gait_step()
     except KeyboardInterrupt:
         interrupted = True
     except BackendError:
