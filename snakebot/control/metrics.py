@@ -1,13 +1,17 @@
-"""Summary metrics of a run, accumulated per cycle in O(1) memory."""
+"""Summary metrics of a run, accumulated per cycle in O(1) memory: an observer of the records."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from snakebot.types import BodyState, JointState
+from snakebot.types import BodyState, JointState, positive_power_w
+
+if TYPE_CHECKING:
+    from snakebot.control.cycle import CycleRecord
 
 GRAVITY_M_S2 = 9.81
 
@@ -29,14 +33,26 @@ class RunMetrics:
     _positive_work_j: float = 0.0
     _turn_rad: float = 0.0
     _last_yaw: float | None = None
+    control_period_s: float | None = None
     extra: dict[str, object] = field(default_factory=dict)
 
-    def start(self, time_s: float, body: BodyState | None) -> None:
-        """Mark the beginning of the scored window."""
+    def start(
+        self, time_s: float, body: BodyState | None, control_period_s: float | None = None
+    ) -> None:
+        """Mark the beginning of the scored window; ``control_period_s`` is the period each
+        record observed (``__call__``) accounts for (None: the time the cycle took)."""
+        self.control_period_s = control_period_s
         self.start_time_s = time_s
         self.start_com = None if body is None else body.com_m.copy()
         self.end_com = self.start_com
         self._last_yaw = None if body is None else head_yaw_rad(body.head_quat)
+
+    def __call__(self, record: CycleRecord) -> None:
+        """Observe a cycle's record: a scored cycle counts (the ramp-out's do not)."""
+        if record.scored:
+            period = self.control_period_s
+            dt_s = record.period_s if period is None else period
+            self.add(record.command_rad, record.state, record.body, dt_s)
 
     def add(
         self, command: np.ndarray, state: JointState, body: BodyState | None, dt_s: float
@@ -45,8 +61,8 @@ class RunMetrics:
         error = command - state.position_rad
         self._squared_error_sum += float(error @ error)
         self._max_abs_command = max(self._max_abs_command, float(np.abs(command).max()))
-        power = state.effort_nm * state.velocity_rad_s
-        self._positive_work_j += float(power[power > 0].sum()) * dt_s
+        power = positive_power_w(state.effort_nm, state.velocity_rad_s)
+        self._positive_work_j += float(power.sum()) * dt_s
         self.cycles += 1
         self.end_time_s = state.time_s
         if body is not None:
@@ -55,6 +71,11 @@ class RunMetrics:
             if self._last_yaw is not None:
                 self._turn_rad += math.remainder(yaw - self._last_yaw, 2 * math.pi)
             self._last_yaw = yaw
+
+    @property
+    def positive_work_j(self) -> float:
+        """Positive joint work of the scored cycles so far, J."""
+        return self._positive_work_j
 
     def summary(self, period_s: float | None) -> dict[str, object]:
         """The run's summary, JSON-ready; distance-based keys are None without a COM."""

@@ -12,12 +12,7 @@ from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import Simulated
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.friction.scale import FrictionModel
-from snakebot.backends.twin.health import (
-    DEFAULT_LIMITS,
-    HealthLimits,
-    HealthMonitor,
-    divergence_time_s,
-)
+from snakebot.backends.twin.health import DEFAULT_LIMITS, HealthLimits, HealthMonitor
 from snakebot.backends.twin.imu import TwinSensors
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
@@ -26,11 +21,12 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
+from snakebot.backends.twin.readouts import Capsules, StepCheck, servo_torque_nm
 from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.backends.twin.terrain import Terrain, as_terrain
 from snakebot.config.schema import RobotConfig
-from snakebot.errors import ConfigError, ServoFaultError, SimulationDivergedError
+from snakebot.errors import ConfigError, ServoFaultError
 from snakebot.types import BodyState, JointState, PDGains
 
 JointSelection = int | slice | Sequence[int] | np.ndarray
@@ -38,16 +34,6 @@ JointSelection = int | slice | Sequence[int] | np.ndarray
 
 
 __all__ = ["JointSelection", "Simulated", "TwinBackend"]
-
-# MuJoCo answers instability by resetting the state and counting a warning, not with NaN.
-_BAD_WARNINGS = np.array(
-    [
-        mujoco.mjtWarning.mjWARN_BADQACC,
-        mujoco.mjtWarning.mjWARN_BADQPOS,
-        mujoco.mjtWarning.mjWARN_BADQVEL,
-    ],
-    dtype=int,
-)
 
 
 class TwinBackend(Backend):
@@ -113,6 +99,7 @@ class TwinBackend(Backend):
             friction_model=self._friction_model,
         )
         self.data = mujoco.MjData(self.model)
+        self._step_check = StepCheck(self.model, self.data)
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]
         self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
@@ -187,13 +174,9 @@ class TwinBackend(Backend):
         if self._health_limits is None:
             return
         servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
-        links = np.array(
-            [self.model.geom(f"{link_name(i)}_geom").id for i in range(self.robot.link_count)]
-        )
         self.physics_monitor = HealthMonitor(
             self.model,
-            links,
-            self.robot.link.radius_m,
+            Capsules.of_modules(self.model, self.robot.link_count),
             self._dof_index,
             self._head_id,
             no_load_speed_rad_s=servo.no_load_speed_rad_s,
@@ -207,10 +190,10 @@ class TwinBackend(Backend):
     # -- the cycle ---------------------------------------------------------------------------
     def _servo_torque(self) -> np.ndarray:
         """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
-        velocity = self.data.qvel[self._dof_index]
-        damping = self.model.dof_damping[self._dof_index]
-        torque: np.ndarray = self.data.actuator_force - damping * velocity
-        return torque
+        dof = self._dof_index
+        return servo_torque_nm(
+            self.data.actuator_force, self.model.dof_damping[dof], self.data.qvel[dof]
+        )
 
     def _read_state(self) -> JointState:
         data = self.data
@@ -286,16 +269,9 @@ class TwinBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
-        warnings = self.data.warning.number
-        before = int(warnings[_BAD_WARNINGS].sum())
-        time_before = float(self.data.time)
+        self._step_check.start()
         mujoco.mj_step(self.model, self.data, steps)
-        if int(warnings[_BAD_WARNINGS].sum()) != before:
-            timestep = float(self.model.opt.timestep)
-            raise SimulationDivergedError(
-                divergence_time_s(time_before, steps, timestep, float(self.data.time)),
-                "MuJoCo reported bad accelerations (state was reset)",
-            )
+        self._step_check.finish(steps)
         if self.physics_monitor is not None:
             self.physics_monitor.sample(self.data, dt_s, self._servo_torque())
         if self.electrics is not None:
