@@ -1,5 +1,8 @@
 """The Feetech FT-SCS codec against the worked packets of Feetech's wiki (protocol/ft-scs.md)."""
 
+import importlib
+import sys
+
 import pytest
 
 from snakebot.emulation.protocol_feetech import (
@@ -48,7 +51,9 @@ def test_wiki_status_packets(wire: str, servo_id: int, error: int, params: bytes
 
 
 def test_status_bits_are_the_sdk_error_bits() -> None:
-    import scservo_sdk.protocol_packet_handler as sdk
+    # The package re-exports the handler class under its module's name: ask for the module.
+    importlib.import_module("scservo_sdk")
+    sdk = sys.modules["scservo_sdk.protocol_packet_handler"]
 
     assert ErrorBit.VOLTAGE == sdk.ERRBIT_VOLTAGE
     assert ErrorBit.ANGLE == sdk.ERRBIT_ANGLE
