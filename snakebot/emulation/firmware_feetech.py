@@ -21,6 +21,9 @@ motors/feetech; servo-families.md §2):
 - Goal Speed 0 in position mode is the fastest the servo goes; Acceleration 0 is no limit.
 - Torque Limit (48) starts at Max Torque (16) on power-up; Torque Enable 2 (damping) drives no
   position. Torque Enable 1 clears the status bits (their cause is checked again next step).
+- A Goal Position write turns the torque on when it is off: Feetech's own example programs
+  (FTServo_Python sms_sts/write.py, scscl/reg_write.py) move a servo fresh from power-up without
+  ever writing Torque Enable.
 """
 
 from __future__ import annotations
@@ -143,6 +146,8 @@ def apply_side_effects(servo: VirtualServo, values: dict[str, int]) -> None:
         memory.set("torque_enable", 0)
     elif torque == 1:
         servo.clear_alarms()
+    elif torque is None and "goal_position" in values and memory.get("torque_enable") == 0:
+        memory.set("torque_enable", 1)
     eeprom = any(memory.by_key[key].eeprom for key in values)
     if eeprom and memory.has("lock") and memory.get("lock") == 0:
         servo.save_eeprom()
