@@ -68,9 +68,8 @@ def test_a_silent_servo_is_named_after_the_retries(model: str) -> None:
     chain.silence(7)
     with registered(chain) as url:
         bus = DynamixelBus(url, 1_000_000, model=model)
-        with bus:
-            with pytest.raises(SyncReadError) as info:
-                bus.sync_read(("present_position",), list(IDS))
+        with bus, pytest.raises(SyncReadError) as info:
+            bus.sync_read(("present_position",), list(IDS))
     assert info.value.missing_ids == (7,)
     assert sorted(info.value.partial) == [i for i in IDS if i != 7]
     assert "There is no status packet" in str(info.value) or "servo(s) 7" in str(info.value)
