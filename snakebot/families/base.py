@@ -66,6 +66,16 @@ class WireCost(NamedTuple):
     round_trips: int
 
 
+class EepromLock(NamedTuple):
+    """A write lock in front of a family's EEPROM: the register ``key`` and the values that open
+    (``unlocked``) and close (``locked``) it. Feetech's Lock (55 on STS, 48 on SCS): 0 = EEPROM
+    writes persist after power-off, 1 (its power-on value) = they are not saved."""
+
+    key: str
+    unlocked: int
+    locked: int
+
+
 class ServoFamily(ABC):
     """One servo family's protocol: identity, instruction set, error byte and timing.
 
@@ -104,6 +114,14 @@ class ServoFamily(ABC):
     """The error of a write the servo refused for its state (EEPROM with torque on), if any."""
     factory_reset_takes_option: bool
     """Whether Factory Reset carries a what-to-keep option (else it always resets everything)."""
+    byte_order: str = "little"
+    """How the family's servos order the bytes of a word on the wire: "little" (Dynamixel,
+    Feetech STS) or "big" (Feetech SCS)."""
+    eeprom_lock: EepromLock | None = None
+    """The lock an EEPROM write must open first and close after (None: no such lock; a
+    Dynamixel P1 Lock only ever closes, until power-off)."""
+    restart_replies: bool = True
+    """Whether a Reboot/Restart instruction is answered (Feetech's Restart 0x08 is not)."""
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ServoFamily) and other.name == self.name

@@ -53,6 +53,7 @@ _SPEC_FIELDS = {
     "stall_torque_nm",
     "stall_current_a",
     "axes",
+    "position_mode",
 }
 
 
@@ -159,7 +160,9 @@ def _sign(source: Path, key: str, facts: dict[str, Any], size: int) -> tuple[str
     return sign, sign_bit
 
 
-def _register(source: Path, key: str, facts: dict[str, Any], eeprom_end: int) -> Register:
+def _register(
+    source: Path, key: str, facts: dict[str, Any], eeprom_end: int, byteorder: str
+) -> Register:
     where = f"registers.{key}"
     unknown = set(facts) - _REGISTER_FIELDS
     if unknown:
@@ -188,6 +191,7 @@ def _register(source: Path, key: str, facts: dict[str, Any], eeprom_end: int) ->
         scale=float(facts.get("scale", 1.0)),
         signed=sign == "twos",
         sign_bit=sign_bit,
+        byteorder=byteorder,
     )
     if register.access not in ACCESS_MODES:
         raise ConfigError(source, f"{where}.access", f"must be R or RW, not {register.access!r}")
@@ -267,6 +271,7 @@ def _specs(source: Path, model: dict[str, Any]) -> ServoSpecs:
         stall_torque_nm=float(model.get("stall_torque_nm", 1.0)),
         stall_current_a=float(model.get("stall_current_a", 1.0)),
         axes=_axes(source, model),
+        position_mode=int(model.get("position_mode", 3)),
     )
 
 
@@ -297,15 +302,29 @@ def _model_file_rows(
     return rows
 
 
+PROTOCOLS = {"dynamixel": (1.0, 2.0), "feetech": (0.0, 1.0)}
+"""The protocol numbers each vendor's model data may list: Dynamixel Protocol 1.0/2.0; Feetech's
+SDK protocol_end, 0 for STS/SMS (little-endian words) and 1 for SCS (big-endian)."""
+
+
 def _protocols(source: Path, model: dict[str, Any]) -> tuple[float, ...]:
+    vendor = str(model.get("family", "dynamixel"))
+    allowed = PROTOCOLS.get(vendor)
+    if allowed is None:
+        known = ", ".join(PROTOCOLS)
+        raise ConfigError(source, "model.family", f"unknown vendor {vendor!r}; known: {known}")
     protocols = model.get("protocols", [model.get("protocol", 2.0)])
-    if (
-        not isinstance(protocols, list)
-        or not protocols
-        or any(p not in (1.0, 2.0) for p in protocols)
-    ):
-        raise ConfigError(source, "model.protocols", f"must list 1.0 and/or 2.0, not {protocols!r}")
+    if not isinstance(protocols, list) or not protocols or any(p not in allowed for p in protocols):
+        have = " and/or ".join(f"{p:.1f}" for p in allowed)
+        raise ConfigError(source, "model.protocols", f"must list {have}, not {protocols!r}")
     return tuple(float(p) for p in protocols)
+
+
+def _byteorder(facts_by_key: dict[str, dict[str, Any]]) -> str:
+    """How the model's words go on the wire: big-endian where its END register (key
+    ``byte_order``, Feetech address 2) powers up 1 (the SCS series), else little-endian."""
+    end = facts_by_key.get("byte_order", {})
+    return "big" if end.get("default") == 1 else "little"
 
 
 def build_table(source: Path) -> ServoTable:
@@ -321,7 +340,7 @@ def build_table(source: Path) -> ServoTable:
     unknown = (
         set(model)
         - _SPEC_FIELDS
-        - {"name", "model_number", "protocol", "protocols", "family", "model_file"}
+        - {"name", "model_number", "protocol", "protocols", "family", "model_file", "variant_of"}
     )
     if unknown:
         raise ConfigError(source, "model", f"unknown field(s) {sorted(unknown)}")
@@ -339,9 +358,11 @@ def build_table(source: Path) -> ServoTable:
         if "model_file" in model
         else {}
     )
+    merged = {**rows, **facts_by_key}
+    byteorder = _byteorder(merged)
     registers = {
-        key: _register(source, key, facts, specs.eeprom_end)
-        for key, facts in {**rows, **facts_by_key}.items()
+        key: _register(source, key, facts, specs.eeprom_end, byteorder)
+        for key, facts in merged.items()
     }
     _check_overlaps(source, registers)
     protocols = _protocols(source, model)

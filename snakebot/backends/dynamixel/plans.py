@@ -17,6 +17,7 @@ import numpy as np
 
 from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.blocks import Block
+from snakebot.backends.dynamixel.links import GroupReader, Link
 from snakebot.families import READ_METHODS
 from snakebot.servo_tables import Register, RegisterValueError
 from snakebot.servo_tables.table import decode_magnitude
@@ -36,9 +37,12 @@ _STRUCT_CODES = {
 Row = tuple[int, ...]
 
 
-def block_struct(block: Block) -> struct.Struct:
-    """Little-endian struct of one servo's block: one code per field, pad bytes for gaps."""
-    codes, at = ["<"], 0
+def block_struct(block: Block, prefix: int = 0) -> struct.Struct:
+    """Struct of one servo's block in its byte order (little-endian but on Feetech SCS): one
+    code per field, pad bytes for gaps and for ``prefix`` bytes before the block (the status
+    byte a Feetech Sync Read keeps in front of each servo's data)."""
+    big = any(f.byteorder == "big" for f in block.fields)
+    codes, at = [">" if big else "<", "x" * prefix], 0
     for f in block.fields:
         codes.append("x" * (f.offset - at) + _STRUCT_CODES[(f.size, f.signed)])
         at = f.offset + f.size
@@ -58,7 +62,8 @@ class SyncWritePlan:
         self.ids = tuple(ids)
         self._transport = transport
         code = _STRUCT_CODES[(register.size, register.signed)]
-        self._packer = struct.Struct("<" + ("B" + code) * len(ids))
+        order = ">" if register.byteorder == "big" else "<"
+        self._packer = struct.Struct(order + ("B" + code) * len(ids))
         self._args: list[int] = [v for i in ids for v in (i, 0)]  # [id, value] per servo
         self._what = f"sync write {register.key}"
 
@@ -107,7 +112,7 @@ class ReadPlan:
     def __init__(
         self,
         transport: Transport,
-        link: sdk.SdkLink,
+        link: Link,
         block: Block,
         ids: Sequence[int],
         method: str,
@@ -121,18 +126,24 @@ class ReadPlan:
         self.method = method
         self._transport = transport
         self._link = link
-        self._sync: sdk.SyncReader | None = None
+        self._sync: GroupReader | None = None
         self._bulk: sdk.BulkReader | None = None
         if method in ("fast_sync_read", "sync_read"):
-            self._sync = sdk.SyncReader(link, block.address, block.size, self.ids)
+            self._sync = link.sync_reader(block.address, block.size, self.ids)
         elif method == "bulk_read":
-            self._bulk = sdk.BulkReader(link, [(i, block.address, block.size) for i in self.ids])
+            self._bulk = link.bulk_reader([(i, block.address, block.size) for i in self.ids])
         elif len(set(self.ids)) != len(self.ids):
             raise ValueError(f"servo IDs appear twice in one read: {list(self.ids)}")
         self._single_read = single
         self._unpacker = block_struct(block)
+        prefix = 0 if self._sync is None else self._sync.prefix
+        self._sync_unpacker = block_struct(block, prefix)
+        self._sync_total = (block.size + prefix) * len(self.ids)
+        # (field index, sign bit, magnitude mask) of each sign-magnitude field.
         self._magnitude = [
-            (k, f.sign_bit) for k, f in enumerate(block.fields) if f.sign_bit is not None
+            (k, f.sign_bit, (1 << f.sign_bit) - 1)
+            for k, f in enumerate(block.fields)
+            if f.sign_bit is not None
         ]
         self._total = block.size * len(self.ids)
         name = "sync read" if method == "fast_sync_read" else method.replace("_", " ")
@@ -155,26 +166,30 @@ class ReadPlan:
         if result != sdk.COMM_SUCCESS:
             self._transport.retry_or_raise(result, self.ids, self._what)
             return None
-        buffer = bytearray()
-        for servo_id in self.ids:
-            # isAvailable per ID: after a failed read the SDK hands out zeros (reference §1.7).
-            if not reader.available(servo_id):
-                return None
-            buffer.extend(reader.data(servo_id))
-        # No servo's data can be longer than the block, so the total catches any short one.
-        if len(buffer) != self._total:
+        # Every servo's row (``prefix`` status bytes, then the block), or None when one is
+        # missing: after a failed read the SDK hands out zeros (reference §1.7).
+        buffer = reader.joined()
+        # No servo's row can be longer than it should, so the total catches any short one.
+        if buffer is None or len(buffer) != self._sync_total:
             return None
-        return self._values(list(self._unpacker.iter_unpack(buffer)))
+        return self._values(list(self._sync_unpacker.iter_unpack(buffer)))
 
     def _values(self, rows: list[Row]) -> list[Row]:
-        """Rows with sign-magnitude fields turned from raw bits into values."""
+        """Rows with sign-magnitude fields turned from raw bits into values (a row whose fields
+        are all non-negative, every bit inside the magnitude, is its own value: kept as is)."""
         if not self._magnitude:
             return rows
         fields = self._magnitude
         out = []
         for row in rows:
+            for k, _, mask in fields:
+                if row[k] > mask:
+                    break
+            else:
+                out.append(row)
+                continue
             values = list(row)
-            for k, bit in fields:
+            for k, bit, _ in fields:
                 values[k] = decode_magnitude(values[k], bit)
             out.append(tuple(values))
         return out
@@ -223,12 +238,12 @@ class ReadPlan:
     def _read_each_once(self) -> list[Row] | None:
         """The servos' blocks in ID order, or None at the first that fails (no retry here)."""
         link, transport = self._link, self._transport
-        packet, port, family = link.packet, link.port, link.family
+        read, family = link.read_unguarded, link.family
         address, size, unpack = self.block.address, self.block.size, self._unpacker.unpack
         alerts, rows = transport.alerts, []
         try:  # guard() spelled out: this runs every control cycle
             for servo_id in self.ids:
-                data, result, error = packet.readTxRx(port, servo_id, address, size)
+                data, result, error = read(servo_id, address, size)
                 if result != sdk.COMM_SUCCESS or len(data) != size:
                     return None
                 if error or servo_id in alerts:
