@@ -178,7 +178,7 @@ def refresh_present(servo: VirtualServo) -> None:
         memory.set(voltage, round(state.input_voltage_v * 10.0))
     memory.set("present_temperature", round(state.temperature_c))
     memory.set("moving", int(velocity != 0))
-    if memory.has("hardware_error_status"):
-        memory.set("hardware_error_status", int(servo.hardware_error))
-    if memory.has("goal_position_trajectory"):
-        memory.set("goal_position_trajectory", memory.get("goal_position"))
+    if memory.has("status"):
+        memory.set("status", int(servo.hardware_error))
+    if memory.has("present_goal_position"):
+        memory.set("present_goal_position", memory.get("goal_position"))

@@ -103,7 +103,8 @@ class Examples:
         for scs_id in GROUP:
             available, error = reader.isAvailable(scs_id, scs.SMS_STS_PRESENT_POSITION_L, 4)
             assert available is True and error == 0
-            positions.append(reader.getData(scs_id, scs.SMS_STS_PRESENT_POSITION_L, 2))
+            position = reader.getData(scs_id, scs.SMS_STS_PRESENT_POSITION_L, 2)
+            positions.append(self.ph.scs_tohost(position, 15))  # a tick past 0 reads -1
             speed = reader.getData(scs_id, scs.SMS_STS_PRESENT_SPEED_L, 2)
             assert abs(self.ph.scs_tohost(speed, 15)) < 4096
         reader.clearParam()
@@ -170,6 +171,26 @@ def test_examples_through_the_stock_port_handler_on_a_pty(model: str) -> None:
             assert examples.ping() == {"STS3215": 777, "SCS0009": 1284}[model]
             examples.read()
             for name in STS_EXAMPLES if model == "STS3215" else SCS_EXAMPLES:
+                getattr(examples, name)()
+        finally:
+            port.closePort()
+
+
+@pytest.mark.pty
+@pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX")
+def test_sms_sts_examples_on_emulate_snake12_sts3215_pty() -> None:
+    from tests.pty_emulator import emulator
+
+    with emulator("--robot", "snake12-sts3215") as emu:
+        assert emu.first["baud"] == BAUD
+        assert {s["family"] for s in emu.first["servos"]} == {"feetech-sts"}
+        port = scs.PortHandler(emu.port)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        try:
+            examples = Examples(scs.sms_sts(port), time.sleep, patiently)
+            assert examples.ping() == 777
+            examples.read()
+            for name in STS_EXAMPLES:
                 getattr(examples, name)()
         finally:
             port.closePort()
