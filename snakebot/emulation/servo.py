@@ -306,14 +306,23 @@ class VirtualServo:
         self._alarms = 0
 
     def latch_error(self, bits: int) -> None:
-        """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off."""
+        """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off,
+        except an overload on a model with a Holding Torque (Feetech 34/37): its output drops
+        to that share of Max Torque instead (wiki memory-sts.md, Holding torque)."""
         latched = int(self.hardware_error) | bits
-        if self.memory.has("hardware_error_status"):
-            self.memory.set("hardware_error_status", latched)
+        memory = self.memory
+        if memory.has("hardware_error_status"):
+            memory.set("hardware_error_status", latched)
         else:
             self._alarms = latched
-        if bits & self.memory.get("shutdown"):
-            self.memory.set("torque_enable", 0)
+        unload = bits & memory.get("shutdown")
+        if unload & HardwareError.OVERLOAD and memory.has("holding_torque"):
+            unload &= ~HardwareError.OVERLOAD
+            if memory.has("torque_limit"):
+                held = memory.get("holding_torque") * memory.get("max_torque") // 100
+                memory.set("torque_limit", min(memory.get("torque_limit"), held))
+        if unload:
+            memory.set("torque_enable", 0)
 
     # ----------------------------------------------------------------- time
     def step(self, dt_s: float, *, judge_watchdog: bool = True) -> None:
@@ -437,9 +446,22 @@ class VirtualServo:
                 min_volts_x10=get("min_voltage_limit"),
                 max_volts_x10=get("max_voltage_limit"),
                 temperature_limit_c=get("temperature_limit"),
+                **self._overload_rule(),
             )
             self._rules = (version, rules)
         return self._rules[1]
+
+    def _overload_rule(self) -> dict[str, float]:
+        """When the load counts as an overload: a Feetech servo's Overload Torque (% of the
+        maximum) held for its Protection Time; otherwise the stall torque for OVERLOAD_AFTER_S."""
+        memory = self.memory
+        if not (memory.has("overload_torque") and memory.has("protection_time")):
+            return {}
+        after = memory.get("protection_time") * memory.by_key["protection_time"].scale
+        return {
+            "overload_effort": memory.get("overload_torque") / 100.0,
+            "overload_after_s": after,
+        }
 
     def _detect_faults(self, dt_s: float, rules: _StepRules) -> None:
         state, found = self.state, 0
@@ -448,8 +470,9 @@ class VirtualServo:
             found |= HardwareError.INPUT_VOLTAGE
         if state.temperature_c > rules.temperature_limit_c:
             found |= HardwareError.OVERHEATING
-        self._overload_s = self._overload_s + dt_s if abs(state.effort) >= 1.0 else 0.0
-        if self._overload_s > OVERLOAD_AFTER_S:
+        overloaded = abs(state.effort) >= rules.overload_effort and state.effort != 0.0
+        self._overload_s = self._overload_s + dt_s if overloaded else 0.0
+        if self._overload_s > rules.overload_after_s:
             found |= HardwareError.OVERLOAD
         if found and found & ~int(self.hardware_error):
             self.latch_error(found)
@@ -470,3 +493,5 @@ class _StepRules:
     min_volts_x10: int
     max_volts_x10: int
     temperature_limit_c: int
+    overload_effort: float = 1.0
+    overload_after_s: float = OVERLOAD_AFTER_S

@@ -7,7 +7,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from snakebot.emulation import EmulatedChain, VirtualServo, make_chain_for_ids
+from snakebot.emulation import EmulatedChain, ExternalMotion, VirtualServo, make_chain_for_ids
 from snakebot.emulation.protocol_feetech import (
     BROADCAST_ID,
     ErrorBit,
@@ -242,3 +242,19 @@ def test_feetech_and_dynamixel_p1_servos_share_one_wire() -> None:
     # An AX-12A's ping status has no parameters either; its model number reads at 0.
     assert read(chain, 2, 0, 2) == (12).to_bytes(2, "little")
     assert read(chain, 1, 3, 2) == (777).to_bytes(2, "little")
+
+
+def test_an_overload_held_past_protection_time_drops_to_holding_torque() -> None:
+    servo = VirtualServo("STS3215", 1, baud=BAUD, motion=ExternalMotion())
+    chain = EmulatedChain([servo], baud=BAUD)
+    write(chain, 1, 40, b"\x01")
+    servo.state = replace(servo.state, effort=0.85)  # above Overload Torque 80 %
+    chain.advance(1.9)  # Protection Time 200 x 10 ms = 2 s
+    (status,) = parse_packets(send(chain, 1, Instruction.PING))
+    assert status.error == 0
+    chain.advance(0.2)
+    (status,) = parse_packets(send(chain, 1, Instruction.PING))
+    assert status.error & ErrorBit.OVERLOAD
+    assert read(chain, 1, 65, 1) == bytes([ErrorBit.OVERLOAD])  # Servo status
+    assert servo.peek("torque_limit") == 200  # Holding Torque 20 % of Max Torque 1000
+    assert servo.peek("torque_enable") == 1
