@@ -258,3 +258,14 @@ def test_an_overload_held_past_protection_time_drops_to_holding_torque() -> None
     assert read(chain, 1, 65, 1) == bytes([ErrorBit.OVERLOAD])  # Servo status
     assert servo.peek("torque_limit") == 200  # Holding Torque 20 % of Max Torque 1000
     assert servo.peek("torque_enable") == 1
+
+
+def test_scramble_leaves_one_feetech_servo_answering_reads_only() -> None:
+    from snakebot.emulation.bench import scramble
+
+    chain = sts((1, 2))
+    scramble(chain, 0)
+    servo = chain.servo(2)
+    assert servo.peek("status_return_level") == 0
+    assert write(chain, 2, 41, b"\x00") == b""
+    assert read(chain, 2, 41, 1) == b"\x00"
