@@ -213,8 +213,15 @@ class VirtualServo:
         return self.memory.get(key)
 
     def poke(self, key: str, value: int) -> None:
-        """Set item `key` directly, bypassing every rule (test setup and fault injection)."""
+        """Set item `key` directly, bypassing every rule (test setup and fault injection); an
+        EEPROM item is set as saved (a power cycle keeps it, whatever the Lock)."""
         self.memory.set(key, value)
+        register = self.memory.by_key[key]
+        if register.address + register.size <= len(self._saved_eeprom):
+            start, end = register.address, register.address + register.size
+            saved = bytearray(self._saved_eeprom)
+            saved[start:end] = self.memory.data[start:end]
+            self._saved_eeprom = bytes(saved)
 
     def status_error(self, error: int = 0) -> int:
         """A status packet's error byte: `error`, plus the Alert bit while a HW error is latched."""

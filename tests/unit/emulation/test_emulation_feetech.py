@@ -269,3 +269,10 @@ def test_scramble_leaves_one_feetech_servo_answering_reads_only() -> None:
     assert servo.peek("status_return_level") == 0
     assert write(chain, 2, 41, b"\x00") == b""
     assert read(chain, 2, 41, 1) == b"\x00"
+
+
+def test_a_poked_eeprom_item_survives_a_restart() -> None:
+    chain = sts()
+    chain.servo(1).poke("homing_offset", 123)  # as a scrambled bench servo's settings
+    send(chain, 1, Instruction.RESTART)
+    assert chain.servo(1).peek("homing_offset") == 123
