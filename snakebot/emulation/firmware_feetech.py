@@ -28,6 +28,7 @@ motors/feetech; servo-families.md §2):
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
@@ -78,19 +79,28 @@ def position_ticks(memory: ControlTableMemory, state: MotorState) -> int:
     return actual_ticks(memory, state) - offset(memory)
 
 
+def goal_frame(memory: ControlTableMemory) -> tuple[int, int, int, float, float, float]:
+    """`command`'s Goal Position decode as (direction, offset, centre, rad per tick, low, high):
+    goal_rad = direction * (clamp(goal, low, high) - offset - centre) * rad per tick, the same
+    expression, so a write of Goal Position alone needs no full decode (`VirtualServo`)."""
+    ticks = memory.table.specs.ticks
+    low, high = -math.inf, math.inf
+    if not _limits_zero(memory):
+        low, high = memory.get("min_position_limit"), memory.get("max_position_limit")
+    return 1, -offset(memory), ticks.centre, ticks.rad_per_tick, low, high
+
+
 def command(servo: VirtualServo) -> ServoCommand:
     """The control table's request in SI."""
     memory, specs = servo.memory, servo.table.specs
     get = memory.get
-    ticks = specs.ticks
     no_load = specs.no_load_speed_rad_s
     speed_key = _first(memory, SPEED_KEYS)
     speed = get(speed_key) if speed_key else 0
     rad_s = memory.by_key[speed_key].scale if speed_key else 0.0
     selected = mode(memory)
-    goal = get("goal_position")
-    if not _limits_zero(memory):
-        goal = max(get("min_position_limit"), min(get("max_position_limit"), goal))
+    sign, off, centre, rad_per_tick, low, high = goal_frame(memory)
+    goal = max(low, min(high, get("goal_position")))
     acceleration = 0.0
     if memory.has("acceleration"):
         acceleration = get("acceleration") * memory.by_key["acceleration"].scale
@@ -100,7 +110,7 @@ def command(servo: VirtualServo) -> ServoCommand:
     return ServoCommand(
         torque_enabled=get("torque_enable") == 1 and not limited,
         operating_mode=selected,
-        goal_position_rad=(goal + offset(memory) - ticks.centre) * ticks.rad_per_tick,
+        goal_position_rad=sign * (goal - off - centre) * rad_per_tick,
         goal_velocity_rad_s=speed * rad_s,
         goal_current_a=0.0,
         goal_pwm=max(-1.0, min(1.0, pwm)) if selected == OperatingMode.PWM else 0.0,

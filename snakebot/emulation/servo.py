@@ -25,6 +25,7 @@ from snakebot.servo_tables import ServoTable, table_for_model
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
 P1_ALARMS = HardwareError.INPUT_VOLTAGE | HardwareError.OVERHEATING | HardwareError.OVERLOAD
 OVERLOAD_AFTER_S = 1.0
+_INF = float("inf")
 _serial_numbers = itertools.count(1)
 
 
@@ -100,7 +101,8 @@ class VirtualServo:
         self._registered: bytes | None = None
         self._registered_address = 0
         self._command: tuple[int, ServoCommand] | None = None
-        self._goal_frame = (1, 0, 0, 0.0)  # direction, homing offset, centre, rad per tick
+        # direction, homing offset, centre, rad per tick, and the goal's clamp (Feetech limits)
+        self._goal_frame: tuple[int, int, int, float, float, float] = (1, 0, 0, 0.0, -_INF, _INF)
         self._rules: tuple[int, _StepRules] | None = None
         self.case: ServoCase | None = None  # the other axes of a multi-axis servo (2XL430)
         self.memory.load_defaults()
@@ -370,7 +372,11 @@ class VirtualServo:
                 firmware.homing_offset(memory),
                 centre_tick(self.table.specs.ticks),
                 memory.by_key["goal_position"].scale,
+                -_INF,
+                _INF,
             )
+        elif self.firmware is firmware_feetech:
+            self._goal_frame = firmware_feetech.goal_frame(memory)
         return command
 
     # ----------------------------------------------------------------- internals
@@ -401,7 +407,7 @@ class VirtualServo:
         version = self.memory.version
         if len(values) != 1 or "goal_position" not in values or self._command is None:
             return None
-        if self.firmware is not firmware:  # the X-series decode only (see `command`)
+        if self.firmware is firmware_p1:  # the X-series and Feetech decodes (see `command`)
             return None
         return version if self._command[0] == version else None
 
@@ -409,8 +415,8 @@ class VirtualServo:
         """Carry the cached command and step rules over a Goal Position write: only the goal
         changed, so the rest of `firmware.command`'s work (a dozen registers) is not redone."""
         assert self._command is not None
-        sign, offset, centre, scale = self._goal_frame
-        goal = self.memory.get("goal_position")
+        sign, offset, centre, scale, low, high = self._goal_frame
+        goal = max(low, min(high, self.memory.get("goal_position")))
         # The expression of firmware.command, so the value is bit for bit the same.
         goal_rad = sign * (goal - offset - centre) * scale
         # A field-for-field copy: `dataclasses.replace` re-runs __init__ over every field, six
