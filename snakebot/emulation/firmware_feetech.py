@@ -34,10 +34,13 @@ from typing import TYPE_CHECKING
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
+from snakebot.servo_tables.table import decode_magnitude
 
 if TYPE_CHECKING:
     from snakebot.emulation.servo import VirtualServo
 
+PWM_SIGN_BIT = 10
+"""Goal Time's direction bit in motor (PWM) mode (wiki memory-sts.md, memory-scscl.md)."""
 CALIBRATE = 128
 """Torque Enable value that makes the present position the middle (2048)."""
 MIDDLE = 2048
@@ -104,7 +107,12 @@ def command(servo: VirtualServo) -> ServoCommand:
     acceleration = 0.0
     if memory.has("acceleration"):
         acceleration = get("acceleration") * memory.by_key["acceleration"].scale
-    pwm = get("goal_time") / 1000.0 if memory.has("goal_time") else 0.0
+    pwm = 0.0
+    if selected == OperatingMode.PWM and memory.has("goal_time"):
+        duty = get("goal_time")
+        if memory.by_key["goal_time"].sign_bit is None:  # an SCS's time in ms, bit 10 in PWM
+            duty = decode_magnitude(duty, PWM_SIGN_BIT)
+        pwm = duty / 1000.0
     gains = tuple(get(k) if memory.has(k) else 0 for k in PID_KEYS)
     limited = memory.has("torque_limit") and get("torque_limit") == 0
     return ServoCommand(
@@ -113,7 +121,7 @@ def command(servo: VirtualServo) -> ServoCommand:
         goal_position_rad=sign * (goal - off - centre) * rad_per_tick,
         goal_velocity_rad_s=speed * rad_s,
         goal_current_a=0.0,
-        goal_pwm=max(-1.0, min(1.0, pwm)) if selected == OperatingMode.PWM else 0.0,
+        goal_pwm=max(-1.0, min(1.0, pwm)),
         max_velocity_rad_s=min(no_load, abs(speed) * rad_s or no_load),
         max_acceleration_rad_s2=acceleration if acceleration > 0 else None,
         no_load_speed_rad_s=no_load,

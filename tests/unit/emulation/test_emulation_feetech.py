@@ -276,3 +276,16 @@ def test_a_poked_eeprom_item_survives_a_restart() -> None:
     chain.servo(1).poke("homing_offset", 123)  # as a scrambled bench servo's settings
     send(chain, 1, Instruction.RESTART)
     assert chain.servo(1).peek("homing_offset") == 123
+
+
+def test_an_scs_in_motor_mode_turns_by_goal_time_with_bit_10_the_direction() -> None:
+    chain = make_chain_for_ids("SCS0009", (1,), BAUD)
+    servo = chain.servo(1)
+    write(chain, 1, 9, bytes(4))  # both angle limits 0: motor mode
+    write(chain, 1, 40, b"\x01")
+    write(chain, 1, 44, (500 | 1 << 10).to_bytes(2, "big"))  # 50 % duty, reverse
+    chain.advance(0.2)
+    assert servo.state.velocity_rad_s < 0
+    write(chain, 1, 44, (500).to_bytes(2, "big"))
+    chain.advance(0.2)
+    assert servo.state.velocity_rad_s > 0
