@@ -313,12 +313,16 @@ class DynamixelBackend(Backend):
                     f"({family.name} has no Reboot)"
                 ),
             )
+        # The register that takes the torque off on a fault: Alarm Shutdown (Dynamixel's
+        # "Shutdown"), Feetech's Unload Condition.
+        name = self.bus.table["shutdown"].name if "shutdown" in self.bus.table else "Shutdown"
+        shutdown = "Alarm Shutdown" if name == "Shutdown" else name
         return HardwareFaultError(
             self.port,
             faults,
             decode=family.status_errors,
             remedy=(
-                f"Its torque is off where its Alarm Shutdown names the fault: {cause}, let it "
+                f"Its torque is off where its {shutdown} names the fault: {cause}, let it "
                 f"cool, then power-cycle it ({family.name} has no Reboot) and run again"
             ),
         )
@@ -332,7 +336,11 @@ class DynamixelBackend(Backend):
                 settings[servo_id].update(values)
                 self._shutdown[servo_id] = values["shutdown"]
         errors, notes = check_settings(
-            settings, self.ids, self.converter, watchdog=self.capabilities.bus_watchdog
+            settings,
+            self.ids,
+            self.converter,
+            watchdog=self.capabilities.bus_watchdog,
+            position_mode=self.bus.table.specs.position_mode,
         )
         self._position_limits = [
             (settings[i]["min_position_limit"], settings[i]["max_position_limit"]) for i in self.ids
@@ -507,10 +515,14 @@ class DynamixelBackend(Backend):
     def _set_gains(self, gains: PDGains) -> None:
         servo = self.robot.servo
         writes = servo.gain_writes(gains, position_i=self.position_i_gain)
-        keys = sorted(writes, key=lambda key: self.bus.table[key].address)  # one block
+        table = self.bus.table
+        # A P/D model (SCS0009: no Position I register) gets its P and D; the I it has not is 0.
+        keys = sorted((k for k in writes if k in table), key=lambda key: table[key].address)
         self.bus.sync_write(keys, dict.fromkeys(self.ids, tuple(writes[key] for key in keys)))
         if servo.gain_kind == "pid":
-            self.gain_registers = GainRegisters(*(writes[key] for key in PID_GAIN_KEYS))
+            self.gain_registers = GainRegisters(
+                *(writes[key] if key in table else 0 for key in PID_GAIN_KEYS)
+            )
         log.debug(
             "%s: %s for kp %.4g N·m/rad, kd %.4g N·m·s/rad",
             self.port,
