@@ -7,6 +7,8 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
 from snakebot.emulation import EmulatedChain, ExternalMotion, VirtualServo, make_chain_for_ids
 from snakebot.emulation.protocol_feetech import (
     BROADCAST_ID,
@@ -64,6 +66,29 @@ def test_wiki_write_exchange_sets_goal_time_and_speed() -> None:
         0,
         1000,
     )
+
+
+def test_wiki_sync_read_exchange_two_servos_eight_bytes_each() -> None:
+    statuses = parse_packets(
+        b"".join(
+            r.data for r in sts((1, 2)).receive(bytes.fromhex("FF FF FE 06 82 38 08 01 02 36"))
+        )
+    )
+    assert [(s.servo_id, len(s.params)) for s in statuses] == [(1, 8), (2, 8)]
+    assert statuses[0].params[:2] == (2048).to_bytes(2, "little")
+
+
+@pytest.mark.parametrize(
+    ("wire", "answer"),
+    [
+        ("FF FF 01 02 0A F2", "FF FF 01 02 00 FC"),  # reset (the turn count)
+        ("FF FF 01 02 06 F6", "FF FF 01 02 00 FC"),  # parameter recovery
+        ("FF FF 01 02 08 F4", ""),  # restart: no status packet
+    ],
+)
+def test_wiki_reset_recovery_and_restart_exchanges(wire: str, answer: str) -> None:
+    replies = sts().receive(bytes.fromhex(wire))
+    assert b"".join(r.data for r in replies) == bytes.fromhex(answer)
 
 
 def test_sync_read_answers_in_the_order_of_the_request() -> None:
