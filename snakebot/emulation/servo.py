@@ -8,10 +8,11 @@ Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Protocol
 
 from snakebot.emulation import firmware, firmware_feetech, firmware_p1
+from snakebot.emulation.alarms import StepRules, faults, step_rules
 from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
@@ -24,7 +25,6 @@ from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
 P1_ALARMS = HardwareError.INPUT_VOLTAGE | HardwareError.OVERHEATING | HardwareError.OVERLOAD
-OVERLOAD_AFTER_S = 1.0
 _INF = float("inf")
 _serial_numbers = itertools.count(1)
 
@@ -103,7 +103,7 @@ class VirtualServo:
         self._command: tuple[int, ServoCommand] | None = None
         # direction, homing offset, centre, rad per tick, and the goal's clamp (Feetech limits)
         self._goal_frame: tuple[int, int, int, float, float, float] = (1, 0, 0, 0.0, -_INF, _INF)
-        self._rules: tuple[int, _StepRules] | None = None
+        self._rules: tuple[int, StepRules] | None = None
         self.case: ServoCase | None = None  # the other axes of a multi-axis servo (2XL430)
         self.memory.load_defaults()
         self.memory.set("id", servo_id)
@@ -448,45 +448,15 @@ class VirtualServo:
         self.memory.set("goal_velocity", 0)
         self.state = replace(self.state, velocity_rad_s=0.0)
 
-    def _step_rules(self) -> _StepRules:
+    def _step_rules(self) -> StepRules:
         """The writable items `step` checks, decoded once per change of the table."""
         version = self.memory.version
         if self._rules is None or self._rules[0] != version:
-            get = self.memory.get
-            rules = _StepRules(
-                torque_enabled=get("torque_enable") == 1,
-                watchdog_s=get("bus_watchdog") * 0.02 if self.memory.has("bus_watchdog") else 0.0,
-                min_volts_x10=get("min_voltage_limit"),
-                max_volts_x10=get("max_voltage_limit"),
-                temperature_limit_c=get("temperature_limit"),
-                **self._overload_rule(),
-            )
-            self._rules = (version, rules)
+            self._rules = (version, step_rules(self.memory))
         return self._rules[1]
 
-    def _overload_rule(self) -> dict[str, float]:
-        """When the load counts as an overload: a Feetech servo's Overload Torque (% of the
-        maximum) held for its Protection Time; otherwise the stall torque for OVERLOAD_AFTER_S."""
-        memory = self.memory
-        if not (memory.has("overload_torque") and memory.has("protection_time")):
-            return {}
-        after = memory.get("protection_time") * memory.by_key["protection_time"].scale
-        return {
-            "overload_effort": memory.get("overload_torque") / 100.0,
-            "overload_after_s": after,
-        }
-
-    def _detect_faults(self, dt_s: float, rules: _StepRules) -> None:
-        state, found = self.state, 0
-        volts = state.input_voltage_v * 10.0
-        if not rules.min_volts_x10 <= volts <= rules.max_volts_x10:
-            found |= HardwareError.INPUT_VOLTAGE
-        if state.temperature_c > rules.temperature_limit_c:
-            found |= HardwareError.OVERHEATING
-        overloaded = abs(state.effort) >= rules.overload_effort and state.effort != 0.0
-        self._overload_s = self._overload_s + dt_s if overloaded else 0.0
-        if self._overload_s > rules.overload_after_s:
-            found |= HardwareError.OVERLOAD
+    def _detect_faults(self, dt_s: float, rules: StepRules) -> None:
+        found, self._overload_s = faults(self.state, rules, dt_s, self._overload_s)
         if found and found & ~int(self.hardware_error):
             self.latch_error(found)
 
@@ -495,16 +465,3 @@ def _firmware_of(table: ServoTable) -> Firmware:
     if table.family == "feetech":
         return firmware_feetech
     return firmware if "operating_mode" in table else firmware_p1
-
-
-@dataclass(frozen=True)
-class _StepRules:
-    """Torque Enable, Bus Watchdog (s) and the fault limits, as of one table version."""
-
-    torque_enabled: bool
-    watchdog_s: float
-    min_volts_x10: int
-    max_volts_x10: int
-    temperature_limit_c: int
-    overload_effort: float = 1.0
-    overload_after_s: float = OVERLOAD_AFTER_S
