@@ -1,8 +1,9 @@
-"""`VirtualServo`: an X-series servo's control table with the firmware's rules and a motion model.
+"""`VirtualServo`: a servo's control table with the firmware's rules and a motion model.
 
 Register semantics follow the e-Manual control-table pages (reference/dynamixel.md §2.2-2.4): EEPROM
 locked while torque is on, read-only items, ranges and limits, Drive Mode reverse, Homing Offset,
-Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset.
+Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset; the AX/MX
+Protocol 1.0 tables' in `firmware_p1`, Feetech's (Lock, offset, byte order) in `firmware_feetech`.
 """
 
 from __future__ import annotations
