@@ -120,6 +120,8 @@ class ServoFamily(ABC):
     eeprom_lock: EepromLock | None = None
     """The lock an EEPROM write must open first and close after (None: no such lock; a
     Dynamixel P1 Lock only ever closes, until power-off)."""
+    restart_replies: bool = True
+    """Whether a Reboot/Restart instruction is answered (Feetech's Restart 0x08 is not)."""
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ServoFamily) and other.name == self.name

@@ -51,6 +51,7 @@ class _Feetech(ServoFamily):
     access_error = None
     factory_reset_takes_option = False  # 0x06 always keeps the ID and restores the rest
     eeprom_lock = _LOCK
+    restart_replies = False
     has_sync_read = True
     """Whether the family has SYNC_READ (0x82): STS yes, SCS no."""
 

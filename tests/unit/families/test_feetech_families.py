@@ -62,7 +62,7 @@ def test_lock_and_byte_order_come_with_the_family_and_agree_with_each_model() ->
     for family in (FeetechSTS(), FeetechSCS()):
         assert family.eeprom_lock is not None
         assert (family.eeprom_lock.unlocked, family.eeprom_lock.locked) == (0, 1)
-        assert not family.broadcast_ping
+        assert not family.restart_replies and not family.broadcast_ping
     for name in supported_models():
         table = table_for_model(name)
         family = family_for(table)
