@@ -7,7 +7,13 @@ servo can do; ``FAMILIES`` lists every family snakebot speaks.
 from __future__ import annotations
 
 from snakebot.errors import ConfigError
-from snakebot.families.base import READ_METHODS, Capabilities, ServoFamily, WireCost
+from snakebot.families.base import (
+    READ_METHODS,
+    Capabilities,
+    EepromLock,
+    ServoFamily,
+    WireCost,
+)
 from snakebot.families.dynamixel import DynamixelProtocol1, DynamixelProtocol2
 from snakebot.servo_tables import ServoTable
 
@@ -53,6 +59,7 @@ __all__ = [
     "Capabilities",
     "DynamixelProtocol1",
     "DynamixelProtocol2",
+    "EepromLock",
     "ServoFamily",
     "WireCost",
     "families_of",

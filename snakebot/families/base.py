@@ -66,6 +66,16 @@ class WireCost(NamedTuple):
     round_trips: int
 
 
+class EepromLock(NamedTuple):
+    """A write lock setup opens around EEPROM writes and closes after: register role ``key``,
+    its ``unlocked`` and ``locked`` values (Feetech Lock: 0 = EEPROM writes are saved, 1 = they
+    act until power-off only)."""
+
+    key: str
+    unlocked: int
+    locked: int
+
+
 class ServoFamily(ABC):
     """One servo family's protocol: identity, instruction set, error byte and timing.
 
@@ -104,6 +114,18 @@ class ServoFamily(ABC):
     """The error of a write the servo refused for its state (EEPROM with torque on), if any."""
     factory_reset_takes_option: bool
     """Whether Factory Reset carries a what-to-keep option (else it always resets everything)."""
+    eeprom_lock: EepromLock | None = None
+    """The lock setup opens before an EEPROM write and closes after (None: EEPROM writes need
+    torque off only; Dynamixel's own Lock, once set, holds until a power cycle)."""
+    calibrates_homing_offset: bool = False
+    """Whether ``calibrate`` zeroes each servo itself, writing its Homing Offset so a straight
+    joint reads the centre tick (Feetech STS: the position wraps at 0/4095 and the angle limits
+    cannot span the wrap). False: the Homing Offset stays 0, the offset lives in the robot file."""
+
+    @property
+    def label(self) -> str:
+        """How messages name the family's protocol, e.g. "Protocol 1.0"."""
+        return f"Protocol {self.protocol:.1f}"
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ServoFamily) and other.name == self.name

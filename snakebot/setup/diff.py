@@ -20,7 +20,8 @@ from snakebot.setup.settings import ChainSettings, Setting
 
 STATE_KEYS = ("torque_enable", "hardware_error_status", "lock")
 """Read beside the settings where the model has them (an AX has no Hardware Error Status, an X
-no Lock)."""
+no Lock). A family's own EEPROM lock (Feetech, :attr:`ServoFamily.eeprom_lock`) is not a lock
+that holds until a power cycle: setup opens it around its writes."""
 
 
 @dataclass(frozen=True)
@@ -153,13 +154,14 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
             "Its Status Return Level may be 0: `snakebot servo reset` or Dynamixel Wizard fixes it"
         ) from exc
     state = {k: values.pop(k) for k in state_keys}
+    sticky_lock = link.family.eeprom_lock is None
     return ServoState(
         servo_id,
         baud,
         values,
         bool(state["torque_enable"]),
         state.get("hardware_error_status", 0),
-        bool(state.get("lock", 0)),
+        sticky_lock and bool(state.get("lock", 0)),
     )
 
 

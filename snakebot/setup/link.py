@@ -20,6 +20,7 @@ from snakebot.errors import BusError
 from snakebot.families import ServoFamily, family_for
 from snakebot.servo import FACTORY_BAUD
 from snakebot.servo_tables import table_for_model
+from snakebot.setup.errors import VerifyError
 
 SEARCH_BAUDS = (FACTORY_BAUD, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 """Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
@@ -212,6 +213,27 @@ class Link:
             for i in range(self.family.max_id + 1)
             if (probe := self.probe(i, baud, tries=1)).models or probe.corrupt
         }
+
+    def unlock(self, servo_id: int, baud: int) -> None:
+        """Open the family's EEPROM lock on one servo, so the EEPROM writes that follow are
+        saved (Feetech Lock 0); nothing where the family has no such lock. Verified."""
+        lock = self.family.eeprom_lock
+        if lock is not None and lock.key in self.bus.table:
+            self._write_lock(servo_id, baud, lock.key, lock.unlocked)
+
+    def relock(self, servo_id: int, baud: int) -> None:
+        """Close the family's EEPROM lock again (Feetech Lock 1, its power-on value), after the
+        EEPROM writes that :meth:`unlock` opened it for; nothing where there is none."""
+        lock = self.family.eeprom_lock
+        if lock is not None and lock.key in self.bus.table:
+            self._write_lock(servo_id, baud, lock.key, lock.locked)
+
+    def _write_lock(self, servo_id: int, baud: int, key: str, value: int) -> None:
+        bus = self.at(baud)
+        bus.write(servo_id, key, value)
+        back = bus.read(servo_id, key)
+        if back != value:
+            raise VerifyError(self.port, servo_id, key, value, back)
 
     def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
         """One Read without retries: (data, SDK result code); for collision checks."""
