@@ -5,8 +5,10 @@ wrong and huge lengths, stuffing edge cases, bad CRCs, splices) goes to a chain 
 servos (IDs 1-3), followed by 1024 zero bytes whenever it could leave a packet half-received.
 With `--protocol 1` the inputs are Protocol 1.0 ones (tools/fuzz_packets1.py: the same families
 with checksums instead of CRCs and Protocol 2.0 packets mixed in instead of stuffing cases), sent
-to two AX-12As and an XL430 in Protocol 1.0 mode, followed by 256 zero bytes. Then the campaign
-checks:
+to two AX-12As and an XL430 in Protocol 1.0 mode, followed by 256 zero bytes. With `--protocol
+feetech` they are Feetech FT-SCS ones (tools/fuzz_packets_feetech.py: Protocol 1.0's framing with
+Feetech's instruction set and items) sent to two STS3215s and an SCS0009, probed over the pty
+through the stock `scservo_sdk`. Then the campaign checks:
 
 - crash: the chain raised (in-process) or the pty server thread died;
 - hang: the chain spent over 1 s of CPU on one input, or answered nothing (input or probe) for
@@ -18,13 +20,14 @@ checks:
   packet got a reply (in Protocol 1.0, other than a Checksum-error status from the servo a
   damaged frame names); a reply packet outgrew 1024 bytes (250 in Protocol 1.0); a lone
   unicast Write the servo rejected changed its table, or one it accepted is not in its table
-  (in-process, where the replies are seen).
+  (in-process, where the replies are seen); a Feetech status cannot say a write was refused, so
+  there a lone Write must be stored whole or not at all.
 
 State a valid input changed legitimately is put back (fresh servos) before the probe. "Valid"
 is judged by tools/fuzz_packets.candidates, which uses the SDK's CRC, not the emulator's.
 
 Usage: python tools/fuzz_emulator.py [--packets 100000] [--seed 1] [--transport inproc|pty|both]
-       [--protocol 2|1] [--pty-packets N] [--json] [--replay INDEX]
+       [--protocol 2|1|feetech] [--pty-packets N] [--json] [--replay INDEX]
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import fuzz_packets1
+import fuzz_packets_feetech
 from fuzz_packets import (
     BROADCAST,
     READ_ONLY,
@@ -52,6 +56,7 @@ from fuzz_packets import (
     may_leave_partial,
 )
 from fuzz_targets import (
+    FEETECH,
     IDS,
     CrashError,
     HangError,
@@ -79,9 +84,11 @@ VOLATILE = (
     "position_trajectory",
     "present_input_voltage",
     "present_temperature",
+    "goal_position_trajectory",
 )
 IDENTITY = (7, 8, 12, 13, 68)  # ID, baud, secondary ID, protocol, status return level
 IDENTITY_P1 = (3, 4, 16, *IDENTITY)  # AX-12A ID, baud, status return level; and the X table's
+IDENTITY_FEETECH = (5, 6, 8)  # ID, baud, response status level
 GOAL_ITEMS = ("goal_pwm", "goal_current", "goal_velocity", "goal_position")
 P1_REJECTIONS = 0x02 | 0x08 | 0x40  # angle limit, range, instruction bits
 
@@ -99,6 +106,13 @@ class Dialect:
     identity: tuple[int, ...]
     address_bytes: int
     max_reply: int
+    reports_rejection: bool = True
+    """Whether a status says a write was refused (a Feetech status byte cannot)."""
+
+    @property
+    def name(self) -> str:
+        """How reports name the protocol."""
+        return "Feetech" if self.protocol == FEETECH else f"Protocol {self.protocol}"
 
     def write_target(self, params: bytes) -> tuple[int, bytes]:
         """(address, data) of a Write's parameters."""
@@ -113,13 +127,28 @@ class Dialect:
 
     def rejected(self, status: Candidate) -> int:
         """The error a status reports for the instruction (not the alarms it carries)."""
+        if self.protocol == FEETECH:
+            return 0
         if self.protocol == 1:
             return status.instruction & P1_REJECTIONS
         return status.params[0] & 0x7F if status.params else 0
 
 
 def dialect(protocol: int) -> Dialect:
-    """The packets of Protocol `protocol` (2 or 1)."""
+    """The packets of Protocol `protocol` (2 or 1, or FEETECH)."""
+    if protocol == FEETECH:
+        return Dialect(
+            FEETECH,
+            fuzz_packets_feetech.InputsFeetech(IDS),
+            fuzz_packets1.candidates,
+            fuzz_packets1.may_leave_partial,
+            bytes(256),
+            fuzz_packets_feetech.READ_ONLY,
+            IDENTITY_FEETECH,
+            1,
+            fuzz_packets1.MAX_PACKET,
+            reports_rejection=False,
+        )
     if protocol == 1:
         return Dialect(
             1,
@@ -218,6 +247,7 @@ class Report:
             "transport": self.transport,
             "seed": self.seed,
             "protocol": self.protocol,
+            "family": "feetech" if self.protocol == FEETECH else "dynamixel",
             "packets": self.packets,
             "seconds": round(self.seconds, 2),
             "packets_per_s": round(rate),
@@ -371,6 +401,8 @@ class Campaign:
         keys = {layout.owner[a] for a in range(address, address + len(data)) if a < layout.size}
         skip = {"torque_enable"} if keys & set(GOAL_ITEMS) else set()
         skip |= set(MODE_RESETS) if "operating_mode" in keys else set()
+        if not self.dialect.reports_rejection:
+            return self._whole_or_nothing(address, data, layout, before[number], after[number])
         wrong = [
             a
             for a, byte in zip(range(address, address + len(data)), data, strict=False)
@@ -381,6 +413,26 @@ class Campaign:
             and after[number][a] != byte
         ]
         return [("accepted write not stored", f"addresses {wrong}")] if wrong else []
+
+    @staticmethod
+    def _whole_or_nothing(
+        address: int, data: bytes, layout: Layout, before: bytes, after: bytes
+    ) -> list[tuple[str, str]]:
+        """A write no status can call refused: its item bytes all stored, or none changed
+        (Torque Enable aside: 128 calibrates and reads 0, a goal turns the torque on)."""
+        spots = [
+            (a, byte)
+            for a, byte in zip(range(address, address + len(data)), data, strict=False)
+            if a < layout.size
+            and layout.owner[a] not in (None, "torque_enable")
+            and not layout.volatile[a]
+        ]
+        stored = all(after[a] == byte for a, byte in spots)
+        untouched = all(after[a] == before[a] for a, _ in spots)
+        if stored or untouched:
+            return []
+        partial = [a for a, byte in spots if after[a] != byte]
+        return [("write stored in part", f"addresses {partial} not as written")]
 
 
 def _addressed(
@@ -438,14 +490,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--transport", choices=("inproc", "pty", "both"), default="both")
     parser.add_argument(
         "--protocol",
-        type=int,
-        choices=(2, 1),
-        default=2,
-        help="the protocol of the inputs and the servos (default 2)",
+        choices=("2", "1", "feetech"),
+        default="2",
+        help="the protocol of the inputs and the servos (default 2; feetech: Feetech FT-SCS)",
     )
     parser.add_argument("--replay", type=int, metavar="INDEX", help="run only input INDEX")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
+    protocol = FEETECH if args.protocol == "feetech" else int(args.protocol)
     transports = ("inproc", "pty") if args.transport == "both" else (args.transport,)
     reports = []
     for transport in transports:
@@ -453,7 +505,7 @@ def main(argv: list[str] | None = None) -> int:
         first = 0
         if args.replay is not None:
             count, first = 1, args.replay
-        reports.append(run_campaign(transport, args.seed, count, first, args.protocol))
+        reports.append(run_campaign(transport, args.seed, count, first, protocol))
     summary = {
         "command": "python tools/fuzz_emulator.py " + " ".join(argv or sys.argv[1:]),
         "python": platform.python_version(),
@@ -467,7 +519,7 @@ def main(argv: list[str] | None = None) -> int:
         for r in reports:
             d = r.as_dict()
             print(
-                f"{d['transport']:>6}: {d['packets']} Protocol {d['protocol']} inputs "
+                f"{d['transport']:>6}: {d['packets']} {dialect(d['protocol']).name} inputs "
                 f"(seed {d['seed']}) in "
                 f"{d['seconds']} s, {d['packets_per_s']}/s: {d['crashes']} crashes, "
                 f"{d['hangs']} hangs, {d['corruptions']} corruptions {d['kinds'] or ''}"

@@ -1,7 +1,9 @@
 """Ways into an emulated chain for tools/fuzz_emulator.py: in-process, and over a real pty.
 
 Both start from the same three servos (IDs 1-3, return delay 0): XL430s for Protocol 2.0; for
-Protocol 1.0 two AX-12As and an XL430 with Protocol Type 1 (the two P1 control tables). The pty
+Protocol 1.0 two AX-12As and an XL430 with Protocol Type 1 (the two P1 control tables); for
+Feetech (`FEETECH`, the SDK's protocol_end 0 of the STS) two STS3215s and an SCS0009 (both byte
+orders), probed through the stock `scservo_sdk` over the pty. The pty
 target runs the chain and its `PtyServer` in a child process, as `snakebot emulate` does, and
 probes it through the unmodified SDK; the child says an input was taken in once its parser has
 counted the bytes and no reply is left in flight, and sends the control tables back over a pipe.
@@ -27,6 +29,11 @@ from snakebot.emulation import EmulatedChain, VirtualServo
 
 MODEL, MODEL_NUMBER, IDS = "XL430-W250", 1060, (1, 2, 3)
 P1_MODELS = {1: ("AX-12A", 12), 2: ("AX-12A", 12), 3: ("XL430-W250", 1060)}
+FEETECH = 0
+"""The `protocol` value of the Feetech campaign."""
+FEETECH_MODELS = {1: ("STS3215", 777), 2: ("STS3215", 777), 3: ("SCS0009", 1284)}
+FEETECH_BIG_ENDIAN = frozenset({3})
+"""IDs of the SCS servos, whose words are big-endian."""
 HANG_S = 1.0
 """CPU time the emulator may spend on one input before it counts as hung."""
 STALL_S = 30.0
@@ -52,6 +59,8 @@ class Tables:
 
 def model_number(servo_id: int, protocol: int) -> int:
     """The Model Number the servo with `servo_id` reports."""
+    if protocol == FEETECH:
+        return FEETECH_MODELS[servo_id][1]
     return MODEL_NUMBER if protocol == 2 else P1_MODELS[servo_id][1]
 
 
@@ -59,7 +68,8 @@ def make_servos(baud: int, protocol: int = 2) -> list[VirtualServo]:
     """The three servos every input starts from (return delay 0, so the pty runs fast)."""
     servos = []
     for serial, servo_id in enumerate(IDS, start=1):
-        model = MODEL if protocol == 2 else P1_MODELS[servo_id][0]
+        models = FEETECH_MODELS if protocol == FEETECH else P1_MODELS
+        model = MODEL if protocol == 2 else models[servo_id][0]
         servo = VirtualServo(model, servo_id, baud=baud, processing_time_s=20e-6 + 4e-6 * serial)
         servo.poke("return_delay_time", 0)
         if protocol == 1 and servo.memory.has("protocol_type"):
@@ -130,7 +140,17 @@ class InProcess:
         self.chain = EmulatedChain(make_servos(self.BAUD, self.protocol), baud=self.BAUD)
         self._probes = {}
         for servo, servo_id in zip(self.chain.servos, IDS, strict=True):
-            model = model_number(servo_id, self.protocol).to_bytes(2, "little")
+            order = (
+                "big" if self.protocol == FEETECH and servo_id in FEETECH_BIG_ENDIAN else "little"
+            )
+            model = model_number(servo_id, self.protocol).to_bytes(2, order)
+            if self.protocol == FEETECH:  # Model Number at 3, after ID-free ping status
+                p1 = fuzz_packets1.packet
+                self._probes[servo_id] = [
+                    (p1(servo_id, 0x01, b""), p1(servo_id, 0x00, b"")),
+                    (p1(servo_id, 0x02, b"\x03\x02"), p1(servo_id, 0x00, model)),
+                ]
+                continue
             if self.protocol == 1:  # status = an instruction packet with the error byte
                 p1 = fuzz_packets1.packet
                 self._probes[servo_id] = [
@@ -229,17 +249,29 @@ class OverPty:
     def _start(self) -> None:
         import dynamixel_sdk as dxl
 
+        self._feetech: dict[int, Any] = {}
+        if self.protocol == FEETECH:
+            import scservo_sdk as sdk
+
+            self._dxl: Any = sdk
+        else:
+            self._dxl = dxl
         self._conn, child = multiprocessing.get_context("fork").Pipe()
         self._process = multiprocessing.get_context("fork").Process(
             target=_serve, args=(child, self.BAUD, self.protocol), daemon=True
         )
         self._process.start()
         device = self._conn.recv()
-        self.port = dxl.PortHandler(device)
+        self.port = self._dxl.PortHandler(device)
         if not (self.port.openPort() and self.port.setBaudRate(self.BAUD)):
             raise RuntimeError(f"cannot open {device}")
-        self.packets = dxl.PacketHandler(float(self.protocol))
-        self._dxl = dxl
+        if self.protocol == FEETECH:
+            sdk = self._dxl
+            for servo_id in IDS:
+                big = servo_id in FEETECH_BIG_ENDIAN
+                self._feetech[servo_id] = (sdk.scscl if big else sdk.sms_sts)(self.port)
+        else:
+            self.packets = dxl.PacketHandler(float(self.protocol))
         self._received = 0
 
     def _ask(self, command: str, argument: Any = None) -> Any:
@@ -273,10 +305,18 @@ class OverPty:
         # wrong answer asked again rather than counted.
         dxl, deadline = self._dxl, time.monotonic() + STALL_S
         timed_out = False
-        questions: tuple[Callable[[], tuple[int, int, int]], ...] = (
-            lambda: self.packets.ping(self.port, servo_id),
-            lambda: self.packets.read2ByteTxRx(self.port, servo_id, 0),
-        )
+        questions: tuple[Callable[[], tuple[int, int, int]], ...]
+        if self.protocol == FEETECH:  # the SDK's ping reads Model Number (3) itself
+            feetech = self._feetech[servo_id]
+            questions = (
+                lambda: feetech.ping(servo_id),
+                lambda: feetech.read2ByteTxRx(servo_id, 3),
+            )
+        else:
+            questions = (
+                lambda: self.packets.ping(self.port, servo_id),
+                lambda: self.packets.read2ByteTxRx(self.port, servo_id, 0),
+            )
         for ask in questions:
             while True:
                 try:

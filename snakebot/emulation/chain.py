@@ -16,9 +16,15 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 
-from snakebot.emulation import instructions, instructions1, protocol, protocol1
+from snakebot.emulation import (
+    instructions,
+    instructions1,
+    instructions_feetech,
+    protocol,
+    protocol1,
+)
 from snakebot.emulation.case import cases_of
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
@@ -37,10 +43,27 @@ Target = int | VirtualServo
 SETTLE_AFTER_S = 0.01
 
 
+_ONE_FRAMING: dict[str, Callable[[protocol1.Packet, Sequence[VirtualServo]], list[Slot]]] = {
+    "dynamixel": instructions1.execute,
+    "feetech": instructions_feetech.execute,
+}
+"""The instruction set that serves a Protocol 1.0-framed packet, by the servo's vendor."""
+
+
+def _by_vendor(servos: list[VirtualServo]) -> dict[str, list[VirtualServo]]:
+    grouped: dict[str, list[VirtualServo]] = {}
+    for servo in servos:
+        grouped.setdefault(servo.vendor, []).append(servo)
+    return grouped
+
+
 class EmulatedChain:
     """Several `VirtualServo`s sharing one bus at line rate `baud` (bit/s).
 
-    A servo whose Baud Rate register gives another rate hears nothing. Both protocols share the
+    A servo whose Baud Rate register gives another rate hears nothing. Feetech servos share
+    Protocol 1.0's framing: its packets are served by each servo's vendor's instruction set
+    (`VirtualServo.vendor`), so Dynamixel and Feetech servos may share a wire as they share
+    the packet format. Both Dynamixel protocols share the
     wire: each servo answers only the packets of the protocol it speaks (`VirtualServo.protocol`:
     an X servo's Protocol Type, an AX always 1.0), so one chain may hold both kinds. Servos may
     share an ID: all of them execute what is sent to it and their replies
@@ -170,7 +193,7 @@ class EmulatedChain:
         with self.lock:
             replies: list[BusReply] = []
             offset = 0.0
-            speaks = {s.protocol for s in self._servos}
+            speaks = {2.0 if s.speaks_protocol_2 else 1.0 for s in self._servos}
             # Each receiver sees every byte; one that no servo on the bus speaks is skipped (its
             # servos could only appear by an `add` or a Protocol Type write, which resets it).
             # Within one call, Protocol 2.0 packets are served before Protocol 1.0 ones: a host
@@ -188,8 +211,10 @@ class EmulatedChain:
             if 1.0 in speaks:
                 for packet1 in self._parser1.feed(data, self.now_s, idle_s=idle_s):
                     self.settle()
-                    hearing = self._hearing(1.0)
-                    timed = self._timed(instructions1.execute(packet1, hearing), offset)
+                    slots: list[Slot] = []
+                    for vendor, hearing in _by_vendor(self._hearing(1.0)).items():
+                        slots += _ONE_FRAMING[vendor](packet1, hearing)
+                    timed = self._timed(slots, offset)
                     replies += timed
                     offset = max([offset, *(r.end_s(self.baud) for r in timed)])
             else:
@@ -201,7 +226,9 @@ class EmulatedChain:
         return [
             s
             for s in self._servos
-            if s.baud == self.baud and s.protocol == version and self.faults.hears(s)
+            if s.baud == self.baud
+            and (2.0 if s.speaks_protocol_2 else 1.0) == version
+            and self.faults.hears(s)
         ]
 
     def _timed(self, slots: list[Slot], offset: float) -> list[BusReply]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
+from typing import Literal
 
 from snakebot.emulation.protocol import StatusError
 from snakebot.servo_tables import Register, ServoTable
@@ -49,6 +50,21 @@ def _indirect_items(table: ServoTable) -> list[Register]:
     return items
 
 
+ByteOrder = Literal["little", "big"]
+END_ADDRESS = 2
+"""Feetech's END register: 0 = little-endian words (STS/SMS), 1 = big-endian (SCS); wiki
+memory-sts.md / memory-scscl.md."""
+
+
+def byte_order(table: ServoTable) -> ByteOrder:
+    """How the model stores two-byte items: little-endian, except a Feetech model whose END
+    register (2) reads 1 (the SCS series)."""
+    end = table.by_address(END_ADDRESS)
+    if table.family == "feetech" and end is not None and end.default == 1:
+        return "big"
+    return "little"
+
+
 @dataclass(frozen=True)
 class _Layout:
     """Where every item of one model lives, and the factory-default image (built once per model)."""
@@ -58,6 +74,7 @@ class _Layout:
     owner: tuple[int, ...]
     indirect: dict[int, int]
     defaults: bytes
+    order: ByteOrder
     # key: (start, end, signed, writable, the register itself where it is sign-magnitude)
     spans: dict[str, tuple[int, int, bool, bool, Register | None]]
 
@@ -76,9 +93,11 @@ def _layout(table: ServoTable) -> _Layout:
     by_key.update(table.registers)
     owner = [-1] * table.size
     image = bytearray(table.size)
+    order = byte_order(table)
     for address, register in items.items():
         owner[address : address + register.size] = [address] * register.size
-        image[address : address + register.size] = register.encode(register.default)
+        raw = register.raw_of(register.default)
+        image[address : address + register.size] = raw.to_bytes(register.size, order)
     indirect = {
         register.address: by_key["indirect_address_" + register.key.rsplit("_", 1)[1]].address
         for register in items.values()
@@ -94,7 +113,7 @@ def _layout(table: ServoTable) -> _Layout:
         )
         for key, r in by_key.items()
     }
-    layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image), spans)
+    layout = _Layout(items, by_key, tuple(owner), indirect, bytes(image), order, spans)
     _layouts[table] = layout
     return layout
 
@@ -109,6 +128,7 @@ class ControlTableMemory:
         self.items, self.by_key = layout.items, layout.by_key
         self._owner, self._indirect = layout.owner, layout.indirect
         self._spans = layout.spans
+        self.order: ByteOrder = layout.order
         self._indirect_span = (min(self._indirect, default=0), max(self._indirect, default=0))
         self.data = bytearray(layout.defaults)
         self.version = 0
@@ -118,8 +138,8 @@ class ControlTableMemory:
         """Decode the item `key` from memory (signed where the item is)."""
         start, end, signed, _, magnitude = self._spans[key]  # per packet per servo: kept lean
         if magnitude is not None:
-            return magnitude.decode(self.data[start:end])
-        return int.from_bytes(self.data[start:end], "little", signed=signed)
+            return magnitude.value_of(int.from_bytes(self.data[start:end], self.order))
+        return int.from_bytes(self.data[start:end], self.order, signed=signed)
 
     def set(self, key: str, value: int) -> None:
         """Store `value` in item `key` without any rule; values are wrapped to the item's size."""
@@ -131,7 +151,7 @@ class ControlTableMemory:
             # Sign-magnitude (P1 Present Speed/Load): clipped to what the magnitude bits hold.
             limit = (1 << magnitude.sign_bit) - 1
             value = magnitude.raw_of(max(-limit, min(limit, value)))
-        self.data[start:end] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
+        self.data[start:end] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, self.order)
 
     def has(self, key: str) -> bool:
         """Whether the model has item `key`."""
@@ -190,7 +210,8 @@ class ControlTableMemory:
         for start, register in touched.items():
             if register.access != "RW":
                 return WritePlan(StatusError.ACCESS, {}, (), ())
-            value = register.decode(shadow[start : start + register.size])
+            raw = int.from_bytes(shadow[start : start + register.size], self.order)
+            value = register.value_of(raw)
             if not register.minimum <= value <= register.maximum:
                 return WritePlan(StatusError.DATA_RANGE, {}, (), ())
             values[register.key] = value

@@ -11,7 +11,7 @@ import itertools
 from dataclasses import dataclass, replace
 from typing import Protocol
 
-from snakebot.emulation import firmware, firmware_p1
+from snakebot.emulation import firmware, firmware_feetech, firmware_p1
 from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
@@ -29,8 +29,9 @@ _serial_numbers = itertools.count(1)
 
 
 class Firmware(Protocol):
-    """The register semantics of one control-table layout: `firmware` (X series) and
-    `firmware_p1` (AX, MX with Protocol 1.0 firmware) are the two modules that provide it."""
+    """The register semantics of one control-table layout: `firmware` (X series),
+    `firmware_p1` (AX, MX with Protocol 1.0 firmware) and `firmware_feetech` (STS, SCS) are the
+    modules that provide it."""
 
     def position_ticks(self, memory: ControlTableMemory, state: MotorState) -> int:
         """Present Position for a motor state."""
@@ -79,8 +80,9 @@ class VirtualServo:
         self._baud_address = self.memory.by_key["baud_rate"].address
         protocol_type = self.memory.by_key.get("protocol_type")  # one byte, where the model has it
         self._protocol_address = None if protocol_type is None else protocol_type.address
-        # X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX Protocol 1.0 layout.
-        self.firmware: Firmware = firmware if "operating_mode" in self.table else firmware_p1
+        # Feetech tables, X-series tables (Operating Mode, Drive Mode, ...) or the AX/MX
+        # Protocol 1.0 layout.
+        self.firmware: Firmware = _firmware_of(self.table)
         self._alarms = 0  # latched faults, on tables without Hardware Error Status
         self.motion: MotionModel = motion if motion is not None else ProfileMotion()
         self.serial_number = next(_serial_numbers)
@@ -104,6 +106,8 @@ class VirtualServo:
         self.memory.load_defaults()
         self.memory.set("id", servo_id)
         self.memory.set("baud_rate", self.table.baud_index(baud))
+        self._saved_eeprom = bytes(self.memory.data[: self.table.specs.eeprom_end])
+        self._backup: bytes | None = None
         self._boot()
 
     # ----------------------------------------------------------------- facts the bus needs
@@ -111,6 +115,43 @@ class VirtualServo:
     def servo_id(self) -> int:
         """ID(7)."""
         return self.memory.data[self._id_address]
+
+    @property
+    def vendor(self) -> str:
+        """The model data's family ("dynamixel", "feetech"): which codec serves the servo."""
+        return self.table.family
+
+    @property
+    def saved_eeprom(self) -> bytes:
+        """The EEPROM a power cycle brings back: what is in memory now, except on a model whose
+        Lock decides what is saved (Feetech: only writes made while Lock reads 0)."""
+        if self.firmware is firmware_feetech:
+            return self._saved_eeprom
+        return bytes(self.memory.data[: self.table.specs.eeprom_end])
+
+    def save_eeprom(self) -> None:
+        """Save the EEPROM as it is now: a later power cycle brings it back."""
+        self._saved_eeprom = bytes(self.memory.data[: self.table.specs.eeprom_end])
+
+    def backup_parameters(self) -> None:
+        """Keep the EEPROM as it is now for a later `recover_parameters` (Feetech 0x09)."""
+        self._backup = bytes(self.memory.data[: self.table.specs.eeprom_end])
+
+    def recover_parameters(self) -> None:
+        """EEPROM back to the last backup, or to the factory values when there is none
+        (Feetech 0x06; the caller keeps what the instruction keeps)."""
+        if self._backup is None:
+            self.memory.load_defaults()
+        else:
+            self.memory.data[: len(self._backup)] = self._backup
+            self.memory.version += 1
+
+    def power_cycle(self) -> None:
+        """Power off and on: the saved EEPROM (see `saved_eeprom`) and RAM at its defaults."""
+        end = self.table.specs.eeprom_end
+        self.memory.data[:end] = self.saved_eeprom
+        self.memory.version += 1
+        self._boot()
 
     @property
     def baud(self) -> int:
@@ -219,7 +260,8 @@ class VirtualServo:
         error = plan.error or self.firmware.check_write(self, plan) or self._check_case(plan)
         if not error:
             self._registered, self._registered_address = bytes(data), address
-            self.memory.set("registered_instruction", 1)
+            if self.memory.has("registered_instruction"):
+                self.memory.set("registered_instruction", 1)
         return error
 
     def action(self) -> int:
@@ -227,7 +269,8 @@ class VirtualServo:
         if self._registered is None:
             return StatusError.INSTRUCTION
         data, self._registered = self._registered, None
-        self.memory.set("registered_instruction", 0)
+        if self.memory.has("registered_instruction"):
+            self.memory.set("registered_instruction", 0)
         return self.write(self._registered_address, data)
 
     def reboot(self) -> None:
@@ -410,6 +453,12 @@ class VirtualServo:
             found |= HardwareError.OVERLOAD
         if found and found & ~int(self.hardware_error):
             self.latch_error(found)
+
+
+def _firmware_of(table: ServoTable) -> Firmware:
+    if table.family == "feetech":
+        return firmware_feetech
+    return firmware if "operating_mode" in table else firmware_p1
 
 
 @dataclass(frozen=True)

@@ -5,8 +5,10 @@ Format (``version`` 1)::
     {"format": "snakebot-emulator-state", "version": 1,
      "servos": {"3": {"model_number": 1060, "eeprom": "<hex of control-table bytes 0..63>"}}}
 
-Only EEPROM (addresses below the model's ``eeprom_end``) is kept; RAM comes back at its power-up
-defaults, as on a real servo. Files are replaced atomically (temporary file, fsync, rename).
+Only EEPROM (addresses below the model's ``eeprom_end``) is kept, as a power cycle would bring
+it back (a Feetech servo keeps only what was written while its Lock read 0); RAM comes back at
+its power-up defaults, as on a real servo. Files are replaced atomically (temporary file,
+fsync, rename).
 """
 
 from __future__ import annotations
@@ -35,9 +37,9 @@ class SavedServo:
 
 
 def eeprom_image(servo: VirtualServo) -> SavedServo:
-    """The servo's EEPROM bytes as they are now."""
-    end = servo.table.specs.eeprom_end
-    return SavedServo(servo.table.model_number, bytes(servo.memory.data[:end]))
+    """The servo's EEPROM bytes as a power cycle would bring them back (on a Feetech servo only
+    what was written while Lock read 0)."""
+    return SavedServo(servo.table.model_number, servo.saved_eeprom)
 
 
 MAX_STATE_BYTES = 16 << 20
@@ -132,4 +134,5 @@ def restore(servo: VirtualServo, saved: SavedServo) -> None:
         )
     servo.memory.data[:end] = saved.eeprom
     servo.memory.version += 1
+    servo.save_eeprom()
     servo.reboot()

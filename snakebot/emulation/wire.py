@@ -6,14 +6,18 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 BITS_PER_BYTE = 10
-# Serial line rates (bit/s) a host may set on the emulated port; 4.5 Mbps is the X-series top.
+# Serial line rates (bit/s) a host may set on the emulated port; 4.5 Mbps is the X-series top,
+# 76 800, 128 000 and 250 000 are Feetech's (wiki memory-sts.md baud table).
 LINE_RATES = (
     9600,
     19200,
     38400,
     57600,
+    76800,
     115200,
+    128000,
     230400,
+    250000,
     460800,
     500000,
     576000,
