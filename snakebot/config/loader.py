@@ -136,9 +136,7 @@ def load_robot(name_or_path: str | Path) -> RobotConfig:
         ),
         protocol=bus_t.number("protocol", control_table.protocol),
     )
-    if bus.protocol not in (1.0, 2.0):
-        raise bus_t.error("protocol", f"expected 1.0 or 2.0, got {bus.protocol}")
-    try:
+    try:  # the model's protocols: Dynamixel 1.0/2.0, Feetech STS 0.0 (SDK protocol_end)
         family_for(control_table, bus.protocol)
     except ConfigError as exc:
         raise bus_t.error("protocol", exc.reason) from exc

@@ -210,10 +210,10 @@ def _refuse_table_facts(root: Table, table: ServoTable) -> None:
 
 def default_gains(table: ServoTable) -> GainRegisters:
     """The factory Position P/I/D Gain register values of a model (its control table; all 0
-    on a compliance model, which has none)."""
+    on a compliance model, which has none; I 0 on a P/D model such as the SCS0009)."""
     if table.specs.gains != "pid":
         return GainRegisters(0, 0, 0)
-    return GainRegisters(*(table[key].default for key in PID_GAIN_KEYS))
+    return GainRegisters(*(table[key].default if key in table else 0 for key in PID_GAIN_KEYS))
 
 
 def gain_maxima(table: ServoTable) -> GainRegisters:
@@ -221,7 +221,7 @@ def gain_maxima(table: ServoTable) -> GainRegisters:
     0 on a compliance model)."""
     if table.specs.gains != "pid":
         return GainRegisters(0, 0, 0)
-    return GainRegisters(*(table[key].maximum for key in PID_GAIN_KEYS))
+    return GainRegisters(*(table[key].maximum if key in table else 0 for key in PID_GAIN_KEYS))
 
 
 def output_full_scale(table: ServoTable) -> tuple[str, int]:

@@ -7,21 +7,22 @@ servo can do; ``FAMILIES`` lists every family snakebot speaks.
 from __future__ import annotations
 
 from snakebot.errors import ConfigError
-from snakebot.families.base import (
-    READ_METHODS,
-    Capabilities,
-    EepromLock,
-    ServoFamily,
-    WireCost,
-)
+from snakebot.families.base import READ_METHODS, Capabilities, EepromLock, ServoFamily, WireCost
 from snakebot.families.dynamixel import DynamixelProtocol1, DynamixelProtocol2
+from snakebot.families.feetech import FeetechSCS, FeetechSTS
 from snakebot.servo_tables import ServoTable
 
-FAMILIES: tuple[ServoFamily, ...] = (DynamixelProtocol2(), DynamixelProtocol1())
+FAMILIES: tuple[ServoFamily, ...] = (
+    DynamixelProtocol2(),
+    DynamixelProtocol1(),
+    FeetechSTS(),
+    FeetechSCS(),
+)
 
 
 def family_named(name: str) -> ServoFamily:
-    """The family called ``name`` ("dynamixel-p1"); ConfigError listing the names otherwise."""
+    """The family called ``name`` ("dynamixel-p1", "feetech-sts"); ConfigError listing the
+    names otherwise."""
     for family in FAMILIES:
         if family.name == name:
             return family
@@ -30,7 +31,8 @@ def family_named(name: str) -> ServoFamily:
 
 
 def families_of(vendor: str) -> tuple[ServoFamily, ...]:
-    """Every family of one vendor's model data (``"dynamixel"``), newest protocol first."""
+    """Every family of one vendor's model data (``"dynamixel"``, ``"feetech"``), newest
+    protocol first."""
     return tuple(f for f in FAMILIES if f.vendor == vendor)
 
 
@@ -60,6 +62,8 @@ __all__ = [
     "DynamixelProtocol1",
     "DynamixelProtocol2",
     "EepromLock",
+    "FeetechSCS",
+    "FeetechSTS",
     "ServoFamily",
     "WireCost",
     "families_of",

@@ -67,9 +67,9 @@ class WireCost(NamedTuple):
 
 
 class EepromLock(NamedTuple):
-    """A write lock setup opens around EEPROM writes and closes after: register role ``key``,
-    its ``unlocked`` and ``locked`` values (Feetech Lock: 0 = EEPROM writes are saved, 1 = they
-    act until power-off only)."""
+    """A write lock in front of a family's EEPROM: the register ``key`` and the values that open
+    (``unlocked``) and close (``locked``) it. Feetech's Lock (55 on STS, 48 on SCS): 0 = EEPROM
+    writes persist after power-off, 1 (its power-on value) = they are not saved."""
 
     key: str
     unlocked: int
@@ -114,9 +114,14 @@ class ServoFamily(ABC):
     """The error of a write the servo refused for its state (EEPROM with torque on), if any."""
     factory_reset_takes_option: bool
     """Whether Factory Reset carries a what-to-keep option (else it always resets everything)."""
+    byte_order: str = "little"
+    """How the family's servos order the bytes of a word on the wire: "little" (Dynamixel,
+    Feetech STS) or "big" (Feetech SCS)."""
     eeprom_lock: EepromLock | None = None
-    """The lock setup opens before an EEPROM write and closes after (None: EEPROM writes need
-    torque off only; Dynamixel's own Lock, once set, holds until a power cycle)."""
+    """The lock an EEPROM write must open first and close after (None: no such lock; a
+    Dynamixel P1 Lock only ever closes, until power-off)."""
+    restart_replies: bool = True
+    """Whether a Reboot/Restart instruction is answered (Feetech's Restart 0x08 is not)."""
     calibrates_homing_offset: bool = False
     """Whether ``calibrate`` zeroes each servo itself, writing its Homing Offset so a straight
     joint reads the centre tick (Feetech STS: the position wraps at 0/4095 and the angle limits

@@ -53,6 +53,7 @@ _SPEC_FIELDS = {
     "stall_torque_nm",
     "stall_current_a",
     "axes",
+    "position_mode",
 }
 
 
@@ -267,6 +268,7 @@ def _specs(source: Path, model: dict[str, Any]) -> ServoSpecs:
         stall_torque_nm=float(model.get("stall_torque_nm", 1.0)),
         stall_current_a=float(model.get("stall_current_a", 1.0)),
         axes=_axes(source, model),
+        position_mode=int(model.get("position_mode", 3)),
     )
 
 
@@ -297,14 +299,21 @@ def _model_file_rows(
     return rows
 
 
+PROTOCOLS = {"dynamixel": (1.0, 2.0), "feetech": (0.0, 1.0)}
+"""The protocol numbers each vendor's model data may list: Dynamixel Protocol 1.0/2.0; Feetech's
+SDK protocol_end, 0 for STS/SMS (little-endian words) and 1 for SCS (big-endian)."""
+
+
 def _protocols(source: Path, model: dict[str, Any]) -> tuple[float, ...]:
+    vendor = str(model.get("family", "dynamixel"))
+    allowed = PROTOCOLS.get(vendor)
+    if allowed is None:
+        known = ", ".join(PROTOCOLS)
+        raise ConfigError(source, "model.family", f"unknown vendor {vendor!r}; known: {known}")
     protocols = model.get("protocols", [model.get("protocol", 2.0)])
-    if (
-        not isinstance(protocols, list)
-        or not protocols
-        or any(p not in (1.0, 2.0) for p in protocols)
-    ):
-        raise ConfigError(source, "model.protocols", f"must list 1.0 and/or 2.0, not {protocols!r}")
+    if not isinstance(protocols, list) or not protocols or any(p not in allowed for p in protocols):
+        have = " and/or ".join(f"{p:.1f}" for p in allowed)
+        raise ConfigError(source, "model.protocols", f"must list {have}, not {protocols!r}")
     return tuple(float(p) for p in protocols)
 
 
@@ -321,7 +330,7 @@ def build_table(source: Path) -> ServoTable:
     unknown = (
         set(model)
         - _SPEC_FIELDS
-        - {"name", "model_number", "protocol", "protocols", "family", "model_file"}
+        - {"name", "model_number", "protocol", "protocols", "family", "model_file", "variant_of"}
     )
     if unknown:
         raise ConfigError(source, "model", f"unknown field(s) {sorted(unknown)}")

@@ -24,11 +24,16 @@ _added: list[Path] = []
 
 @dataclass(frozen=True)
 class ModelEntry:
-    """One model's data file: its name, model number and where the file is."""
+    """One model's data file: its name, model number and where the file is.
+
+    ``variant_of`` names the model whose number this one shares (the STS3215's 12 V version
+    reports the 7.4 V version's 777): a variant is found by name only, never by number.
+    """
 
     name: str
     model_number: int
     path: Path
+    variant_of: str | None = None
 
     @property
     def shipped(self) -> bool:
@@ -65,7 +70,7 @@ def model_dirs() -> tuple[Path, ...]:
     return tuple(dict.fromkeys(folders))
 
 
-def _header(path: Path) -> tuple[str, int]:
+def _header(path: Path) -> tuple[str, int, str | None]:
     try:
         with path.open("rb") as handle:
             model = tomllib.load(handle).get("model", {})
@@ -77,7 +82,8 @@ def _header(path: Path) -> tuple[str, int]:
     number = model["model_number"]
     if isinstance(number, bool) or not isinstance(number, int):
         raise ConfigError(path, "model.model_number", f"must be a whole number, not {number!r}")
-    return str(model["name"]), number
+    variant = model.get("variant_of")
+    return str(model["name"]), number, None if variant is None else str(variant)
 
 
 @functools.cache
@@ -88,11 +94,20 @@ def _catalogue(folders: tuple[Path, ...]) -> dict[str, ModelEntry]:
         for path in sorted(folder.glob("*.toml")):
             if path.stem.startswith("_"):
                 continue
-            name, number = _header(path)
-            found[name] = ModelEntry(name, number, path)
+            name, number, variant = _header(path)
+            found[name] = ModelEntry(name, number, path, variant)
         entries.update(found)
     by_number: dict[int, ModelEntry] = {}
     for entry in entries.values():
+        if entry.variant_of is not None:
+            base = entries.get(entry.variant_of)
+            if base is None or base.model_number != entry.model_number:
+                raise ConfigError(
+                    entry.path,
+                    "model.variant_of",
+                    f"names {entry.variant_of!r}, which is no model of number {entry.model_number}",
+                )
+            continue
         other = by_number.setdefault(entry.model_number, entry)
         if other is not entry:
             raise ConfigError(
@@ -130,7 +145,7 @@ def table_for_model(model: str | int) -> ServoTable:
     """
     entries = model_entries()
     for entry in entries:
-        if isinstance(model, int) and model == entry.model_number:
+        if isinstance(model, int) and model == entry.model_number and entry.variant_of is None:
             return _table(entry)
     if not isinstance(model, int):
         wanted = register_key(model)

@@ -164,7 +164,8 @@ class ServoSpecs:
     reads (the family decides whether its protocol has them at all); `gains` how its position
     loop is set: "pid" (Position P/D Gain registers) or "compliance" (AX compliance slope);
     `axes` how many motors share one case and its one communication module (2 on a 2XL430),
-    each with its own ID and control table.
+    each with its own ID and control table; `position_mode` the Operating Mode value of
+    position control (3 on Dynamixel, 0 on Feetech STS).
     """
 
     firmware_version: int = 46
@@ -181,6 +182,7 @@ class ServoSpecs:
     stall_torque_nm: float = 1.0
     stall_current_a: float = 1.0
     axes: int = 1
+    position_mode: int = 3
 
     @property
     def resolution(self) -> int:

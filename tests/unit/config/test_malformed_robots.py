@@ -185,7 +185,13 @@ CASES = [
     ),
     robot("odd baud", "baud = 1000000", "baud = 1000001", "bus.baud", "expected one of"),
     robot("baud as text", "baud = 1000000", 'baud = "fast"', "bus.baud", "expected an integer"),
-    robot("protocol 3", "protocol = 2.0", "protocol = 3.0", "bus.protocol", "expected 1.0 or 2.0"),
+    robot(
+        "protocol 3",
+        "protocol = 2.0",
+        "protocol = 3.0",
+        "bus.protocol",
+        "speak Protocol 2.0, 1.0 only",
+    ),
     Case(
         "protocol 1 on servos without it",
         ROBOT_FILE,

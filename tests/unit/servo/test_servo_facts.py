@@ -124,17 +124,18 @@ def test_the_datasheet_facts_come_from_the_control_table(model: str) -> None:
     assert physics.no_load_speed_rad_s == table.specs.no_load_speed_rad_s
     assert physics.nominal_voltage_v == table.specs.nominal_voltage_v
     assert physics.ticks == table.specs.ticks
-    # 4096 a turn centred at 2048 (X, MX); 1024 over 300 deg centred at 512 (AX).
-    assert centre_tick(physics.ticks) == (512 if model.startswith("AX") else 2048)
+    # 4096 a turn centred at 2048 (X, MX, STS); 1024 over 300 deg centred at 512 (AX, SCS0009).
+    assert centre_tick(physics.ticks) == (512 if model.startswith(("AX", "SCS")) else 2048)
     # The position registers' SI scale (what the emulator and the bus tables use) is the same
     # tick as the tick <-> radian formula's (the P1 tables write it to 8 digits).
     for key in ("goal_position", "present_position", "homing_offset", "multi_turn_offset"):
         if key in table:
             assert table[key].scale == pytest.approx(rad_per_tick(physics.ticks), rel=1e-7)
     # What a servo answers as from the factory: the ID and Baud Rate registers' defaults (an AX
-    # leaves the factory at 1 Mbps, e-Manual ax-12a.md).
+    # leaves the factory at 1 Mbps, e-Manual ax-12a.md; a Feetech servo too, memory-sts.md).
     assert table["id"].default == FACTORY_ID
-    factory_baud = 1_000_000 if model.startswith("AX") else FACTORY_BAUD
+    one_mbps = model.startswith("AX") or table.family == "feetech"
+    factory_baud = 1_000_000 if one_mbps else FACTORY_BAUD
     assert table.baud_rates[table["baud_rate"].default] == factory_baud
 
 
