@@ -37,6 +37,7 @@ class _Feetech(ServoFamily):
     """What STS and SCS share: the FT-SCS packets, status byte and timing."""
 
     vendor = "feetech"
+    framing = "dynamixel-1.0"  # FF FF ID LEN INST params CHK, the same checksum (ft-scs.md)
     broadcast_id = 0xFE
     max_id = 253  # 0x00..0xFD (ft-scs.md); the SDK's MAX_ID is 0xFC
     broadcast_ping = False

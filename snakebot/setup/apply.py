@@ -22,7 +22,7 @@ from typing import Literal
 
 from snakebot.families import family_for
 from snakebot.servo.ticks import ticks_to_rad
-from snakebot.setup.bauds import port_rate
+from snakebot.setup.bauds import port_bauds, port_rate
 from snakebot.setup.diff import ChainDiff, Difference, survey
 from snakebot.setup.errors import SetupError, VerifyError
 from snakebot.setup.link import Link, unanswered_ok
@@ -80,7 +80,8 @@ class ApplyPlan:
 def _refusals(chain: ChainSettings, diff: ChainDiff) -> list[str]:
     """Why the plan cannot be carried out by any order of writes: a locked EEPROM (AX/MX Lock,
     which snakebot never sets) or a latched error in a family without Reboot."""
-    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(chain.table).reboot
+    family = family_for(chain.table, chain.robot.bus.protocol)
+    can_reboot = family.capabilities(chain.table).reboot
     out = []
     for wanted in chain.servos:
         state = diff.servos[wanted.servo_id]
@@ -92,8 +93,8 @@ def _refusals(chain: ChainSettings, diff: ChainDiff) -> list[str]:
             )
         if state.hardware_error and not can_reboot:
             out.append(
-                f"servo {wanted.servo_id} has a latched hardware error and Protocol "
-                f"{chain.robot.bus.protocol:.1f} has no Reboot: power-cycle it"
+                f"servo {wanted.servo_id} has a latched hardware error and "
+                f"{family.label} has no Reboot: power-cycle it"
             )
     return out
 
@@ -224,7 +225,7 @@ class Applier:
     def _change_baud(self, servo_id: int, index: int) -> None:
         old = self.where[servo_id]
         rate = self.link.bus.table.baud_rates[index]
-        new = port_rate(rate) or rate
+        new = port_rate(rate, port_bauds(self.link.bus.table)) or rate
         other = self.link.probe(servo_id, new, tries=1)
         if other.models or other.corrupt:
             raise SetupError(

@@ -100,7 +100,7 @@ def _lone(link: Link, found: list[Found], from_id: int | None, bauds: Sequence[i
     if not found:
         raise SetupError(
             f"{link.port}: {who} answered at any baud rate ({', '.join(map(str, bauds))}) in "
-            f"Protocol {link.family.protocol:.1f}. Check the servo's power (its LED blinks once "
+            f"{link.family.label}. Check the servo's power (its LED blinks once "
             "at power-up) and cable"
         )
     if len(found) > 1:

@@ -187,7 +187,11 @@ def refusals(
     robot = with_offsets(chain.robot, [z.new_offset_rad for z in zeros])
     values = {s.servo_id: {x.key: x.raw for x in s.settings} for s in chain.servos}
     errors, _ = check_settings(
-        values, robot.servo_ids, TickConverter.for_robot(robot), watchdog=has_watchdog(chain)
+        values,
+        robot.servo_ids,
+        TickConverter.for_robot(robot),
+        watchdog=has_watchdog(chain),
+        position_mode=chain.table.specs.position_mode,
     )
     return [f"{e}: widen the Position Limits in the settings" for e in errors]
 

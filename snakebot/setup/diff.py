@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from snakebot.backends.dynamixel.faults import decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.servo_tables import table_for_model
-from snakebot.setup.bauds import model_bauds, preferred
+from snakebot.setup.bauds import factory_baud, model_bauds, preferred
 from snakebot.setup.errors import DuplicateIdError, SetupError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings, Setting
@@ -117,8 +117,9 @@ def locate(link: Link, ids: Sequence[int], model_number: int, first_baud: int) -
     if remaining:
         problems.append(
             f"no servo answers as ID {', '.join(map(str, remaining))} at any baud rate (check "
-            "power and cables; `snakebot scan --all-bauds` lists who is there; a new servo is "
-            "ID 1 at 57600: give it its ID with `snakebot config assign-id`)"
+            "power and cables; `snakebot scan --all-bauds` lists who is there; a new "
+            f"{link.bus.table.model} is ID {link.bus.table['id'].default} at "
+            f"{factory_baud(link.bus.table)}: give it its ID with `snakebot config assign-id`)"
         )
     if problems:
         expected = _model_name(model_number)

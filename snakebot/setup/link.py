@@ -19,11 +19,20 @@ from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.errors import BusError
 from snakebot.families import ServoFamily, family_for
 from snakebot.servo import FACTORY_BAUD
-from snakebot.servo_tables import table_for_model
+from snakebot.servo_tables import supported_models, table_for_model
 from snakebot.setup.errors import VerifyError
 
 SEARCH_BAUDS = (FACTORY_BAUD, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 """Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
+
+
+def model_of(family: ServoFamily) -> str:
+    """A model that speaks ``family`` (its control table names the registers a search reads):
+    the XL430-W250 where it can, else the first by name of the models snakebot has data for."""
+    for name in ("XL430-W250", *sorted(supported_models())):
+        if family.speaks(table_for_model(name)):
+            return name
+    raise LookupError(f"no servo model speaks {family.name}")  # every family ships one
 
 
 def search_order(first: int) -> tuple[int, ...]:
@@ -67,9 +76,10 @@ class Probe:
 class Link:
     """A port opened for setup: ``bus`` (registers by name, typed errors) at a switchable rate.
 
-    ``model`` picks the control table register names resolve in (X-series servos share it);
-    ``protocol`` the family spoken (None: the model's default; ConfigError if the model cannot
-    speak it). :meth:`speak` switches the family on the same open port (``scan`` tries both).
+    ``model`` picks the control table register names resolve in (X-series servos share it;
+    default: a model ``family`` speaks, else the XL430-W250); ``protocol`` the family spoken
+    (None: the model's default; ConfigError if the model cannot speak it), or ``family`` names
+    it. :meth:`speak` switches the family on the same open port (``scan`` tries each).
     """
 
     def __init__(
@@ -77,12 +87,17 @@ class Link:
         port: str,
         baud: int,
         *,
-        model: str | int = "XL430-W250",
+        model: str | int | None = None,
         protocol: float | None = None,
+        family: ServoFamily | None = None,
         retries: int = 2,
     ) -> None:
         self.port = port
         self.handler: sdk.PortHandlerLike
+        if model is None:
+            model = "XL430-W250" if family is None else model_of(family)
+        if family is not None:
+            protocol = family.protocol
         self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
         self.bus = DynamixelBus(
@@ -98,15 +113,16 @@ class Link:
 
     def speak(self, family: ServoFamily) -> None:
         """Talk ``family``'s protocol from now on, on the same port at the same rate (the
-        bus keeps its control table and retries)."""
+        bus keeps its retries, and its control table where ``family`` speaks the model)."""
         if family == self.family:
             return
         old = self.bus
+        model = old.table.model if family.speaks(old.table) else model_of(family)
         self.bus = DynamixelBus(
             self.port,
             old.baud,
             family=family,
-            model=old.table.model,
+            model=model,
             retries=old.retries,
             port_handler_factory=lambda _port: self.handler,
         )

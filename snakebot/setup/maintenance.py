@@ -40,7 +40,7 @@ def wait_for_boot(link: Link, servo_id: int, baud: int, timeout_s: float = BOOT_
 
 
 def _protocol(link: Link) -> str:
-    return f"{link.bus.table.model} on Protocol {link.family.protocol:.1f}"
+    return f"{link.bus.table.model} on {link.family.label}"
 
 
 def check_reboot(link: Link, servo_id: int | None = None) -> None:

@@ -122,7 +122,11 @@ def _checked(
         )
     ids = [j.servo_id for j in joints]
     errors, notes = check_settings(
-        values, ids, TickConverter.for_robot(chain.robot), watchdog=watchdog
+        values,
+        ids,
+        TickConverter.for_robot(chain.robot),
+        watchdog=watchdog,
+        position_mode=chain.table.specs.position_mode,
     )
     if errors:
         raise ConfigError(

@@ -332,7 +332,11 @@ class DynamixelBackend(Backend):
                 settings[servo_id].update(values)
                 self._shutdown[servo_id] = values["shutdown"]
         errors, notes = check_settings(
-            settings, self.ids, self.converter, watchdog=self.capabilities.bus_watchdog
+            settings,
+            self.ids,
+            self.converter,
+            watchdog=self.capabilities.bus_watchdog,
+            position_mode=self.bus.table.specs.position_mode,
         )
         self._position_limits = [
             (settings[i]["min_position_limit"], settings[i]["max_position_limit"]) for i in self.ids

@@ -117,22 +117,25 @@ def check_settings(
     converter: TickConverter,
     *,
     watchdog: bool = True,
+    position_mode: int = POSITION_MODE,
 ) -> tuple[list[str], list[str]]:
     """(errors, warnings) for EEPROM ``settings`` ({id: {key: value}}) against the joints.
 
     ``ids`` are head to tail, in the converter's joint order. Keys a model has no register for
     are left out of ``settings`` and not checked; ``watchdog=False`` (no Bus Watchdog) makes an
-    Alarm Shutdown (``shutdown``) without the overload and overheating bits an error.
+    Alarm Shutdown (``shutdown``) without the overload and overheating bits an error;
+    ``position_mode`` is the model's Operating Mode value of position control (3 on Dynamixel,
+    0 on Feetech STS: ``ServoSpecs.position_mode``).
     """
     errors: list[str] = []
     warnings: list[str] = []
     slow = sorted(i for i in ids if settings[i]["return_delay_time"] > 0)
     for joint, servo_id in enumerate(ids):
         values = settings[servo_id]
-        mode, drive = values.get("operating_mode", POSITION_MODE), values.get("drive_mode", 0)
-        if mode != POSITION_MODE:
+        mode, drive = values.get("operating_mode", position_mode), values.get("drive_mode", 0)
+        if mode != position_mode:
             errors.append(
-                f"servo {servo_id}: Operating Mode is {mode}, needs {POSITION_MODE} "
+                f"servo {servo_id}: Operating Mode is {mode}, needs {position_mode} "
                 "(position control)"
             )
         shutdown = values.get("shutdown")
