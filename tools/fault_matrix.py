@@ -230,10 +230,13 @@ class GoalAudit:
                 robot.servo_ids, converter.lower_ticks, converter.upper_ticks, strict=True
             )
         }
-        self.p1 = family_for(table, robot.bus.protocol).protocol == 1.0
+        family = family_for(table, robot.bus.protocol)
+        # Feetech frames its packets as Protocol 1.0 does (one-byte addresses and lengths).
+        self.p1 = family.framing == "dynamixel-1.0"
         self.parser: Any = (protocol1 if self.p1 else protocol2).StreamParser(stale_after_s=None)
-        goal = table["goal_position"]
-        self.goal, self.size, self.signed = goal.address, goal.size, goal.signed
+        self.register = table["goal_position"]
+        self.goal, self.size = self.register.address, self.register.size
+        self.big_endian = family.byte_order == "big"  # Feetech SCS words
         self.address_bytes = 1 if self.p1 else 2
         self.sync_write = protocol2.Instruction.SYNC_WRITE  # 0x83 in both protocols
         self.write = protocol2.Instruction.WRITE
@@ -241,7 +244,9 @@ class GoalAudit:
         self.out_of_limits: list[tuple[int, int]] = []
 
     def _value(self, data: bytes) -> int:
-        return int.from_bytes(data, "little", signed=self.signed)
+        """The goal as the servo reads it: the model data's decoding (two's complement or
+        sign-magnitude) of the word in the family's byte order."""
+        return self.register.decode(data[::-1] if self.big_endian else data)
 
     def feed(self, data: bytes) -> None:
         fmt = "<BB" if self.p1 else "<HH"

@@ -3,9 +3,8 @@
 A model's table (``snakebot.servo_tables``) lists the rates its Baud Rate register selects. Protocol
 1.0 models count them as 2 000 000 / (value + 1) bit/s, so an AX-12A at value 34 runs 57 143 bit/s,
 which a host UART opened at 57 600 hears (0.8 % apart; a UART frame tolerates a few per cent). The
-rates here are the ones each vendor SDK's ``PortHandler`` can open: ``dynamixel_sdk``'s, and
-``scservo_sdk``'s (which refuses Feetech's own 76 800, index 5: a servo left there is out of
-the stock SDK's reach).
+rates here are the ones each vendor's port handler can open: ``dynamixel_sdk``'s, and
+``scservo_sdk``'s with Feetech's own 76 800 (index 5), which the stock SDK refuses.
 """
 
 from __future__ import annotations
@@ -42,13 +41,16 @@ FEETECH_PORT_BAUDS = (
     19200,
     38400,
     57600,
+    76800,
     115200,
     128000,
     250000,
     500000,
     1_000_000,
 )
-"""Rates scservo_sdk's PortHandler opens (ftservo-python-sdk 2.0.1 ``getCFlagBaud``)."""
+"""Rates snakebot's Feetech port handler opens: scservo_sdk's own list (ftservo-python-sdk 2.0.1
+``getCFlagBaud``) and Feetech's 76 800 (baud index 5), which the stock list lacks
+(``snakebot.backends.feetech.sdk``)."""
 VENDOR_PORT_BAUDS = {"dynamixel": PORT_BAUDS, "feetech": FEETECH_PORT_BAUDS}
 """The rates the port handler of each vendor's SDK opens, by the model data's ``family``."""
 TOLERANCE = 0.03

@@ -1,7 +1,9 @@
 """One serial port for the setup tools: a DynamixelBus whose baud rate they switch, raw probes.
 
-Device paths (``/dev/ttyUSB0``, ``COM3``) open through the SDK's own port handler, the emulator's
-``dxlemu://NAME`` URLs through pyserial's ``serial_for_url``. Any other URL is refused before
+The link under it is the family's vendor's (``snakebot.backends.dynamixel.links``: the Dynamixel
+SDK, or Feetech's ``scservo_sdk``). Device paths (``/dev/ttyUSB0``, ``COM3``) open through the
+vendor SDK's port handler, the emulator's ``dxlemu://NAME`` URLs through pyserial's
+``serial_for_url``. Any other URL is refused before
 anything opens (snakebot.config.ports, checked by DynamixelBus): ``socket://`` would connect to a
 host, ``spy://...?file=`` truncate a file.
 """
@@ -12,8 +14,9 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from types import TracebackType
+from typing import Any
 
-from snakebot.backends.dynamixel import sdk
+from snakebot.backends.dynamixel import links, sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.errors import BusError
@@ -93,7 +96,7 @@ class Link:
         retries: int = 2,
     ) -> None:
         self.port = port
-        self.handler: sdk.PortHandlerLike
+        self.handler: Any
         if model is None:
             model = "XL430-W250" if family is None else model_of(family)
         if family is not None:
@@ -108,29 +111,34 @@ class Link:
             retries=retries,
             port_handler_factory=self._make_handler,
         )
-        self._raw = sdk.SdkLink(self.handler, self.family)
+        self._raw: links.Link = links.link_for(self.handler, self.family)
         self._open = False
 
     def speak(self, family: ServoFamily) -> None:
         """Talk ``family``'s protocol from now on, on the same port at the same rate (the
-        bus keeps its retries, and its control table where ``family`` speaks the model)."""
+        bus keeps its retries, and its control table where ``family`` speaks the model). A
+        family of another vendor has its own SDK: the port is reopened through its handler."""
         if family == self.family:
             return
         old = self.bus
         model = old.table.model if family.speaks(old.table) else model_of(family)
+        same_sdk = family.vendor == self.family.vendor
+        if not same_sdk:
+            old.close()
+            self._open = False
+        self.family = family
         self.bus = DynamixelBus(
             self.port,
             old.baud,
             family=family,
             model=model,
             retries=old.retries,
-            port_handler_factory=lambda _port: self.handler,
+            port_handler_factory=(lambda _port: self.handler) if same_sdk else self._make_handler,
         )
-        self._raw = sdk.SdkLink(self.handler, family)
-        self.family = family
+        self._raw = links.link_for(self.handler, family)
 
-    def _make_handler(self, port: str) -> sdk.PortHandlerLike:
-        self.handler = sdk.port_handler_for(port)
+    def _make_handler(self, port: str) -> Any:
+        self.handler = links.port_handler_for(port, self.family)
         return self.handler
 
     def __enter__(self) -> Link:
