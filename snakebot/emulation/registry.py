@@ -24,13 +24,17 @@ _lock = threading.Lock()
 
 
 def install_url_handler() -> None:
-    """Let `serial.serial_for_url` open `dxlemu://` URLs and the Dynamixel bus open them with
-    `EmulatedPortHandler` (idempotent)."""
+    """Let `serial.serial_for_url` open `dxlemu://` URLs and the chain's links open them: the
+    Dynamixel link with `EmulatedPortHandler`, the Feetech link with `EmulatedScsPortHandler`
+    (one scheme; idempotent)."""
     if HANDLER_PACKAGE not in serial.protocol_handler_packages:
         serial.protocol_handler_packages.append(HANDLER_PACKAGE)
+    from snakebot.backends.feetech import sdk as feetech_sdk  # imports scservo_sdk
     from snakebot.emulation.port import EmulatedPortHandler  # imports dynamixel_sdk
+    from snakebot.emulation.port_feetech import EmulatedScsPortHandler
 
     register_url_port_handler(SCHEME, EmulatedPortHandler)
+    feetech_sdk.register_url_port_handler(SCHEME, EmulatedScsPortHandler)
 
 
 def chain_url(name: str, *, time: str = "virtual") -> str:

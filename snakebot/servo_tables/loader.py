@@ -160,7 +160,9 @@ def _sign(source: Path, key: str, facts: dict[str, Any], size: int) -> tuple[str
     return sign, sign_bit
 
 
-def _register(source: Path, key: str, facts: dict[str, Any], eeprom_end: int) -> Register:
+def _register(
+    source: Path, key: str, facts: dict[str, Any], eeprom_end: int, byteorder: str
+) -> Register:
     where = f"registers.{key}"
     unknown = set(facts) - _REGISTER_FIELDS
     if unknown:
@@ -189,6 +191,7 @@ def _register(source: Path, key: str, facts: dict[str, Any], eeprom_end: int) ->
         scale=float(facts.get("scale", 1.0)),
         signed=sign == "twos",
         sign_bit=sign_bit,
+        byteorder=byteorder,
     )
     if register.access not in ACCESS_MODES:
         raise ConfigError(source, f"{where}.access", f"must be R or RW, not {register.access!r}")
@@ -317,6 +320,13 @@ def _protocols(source: Path, model: dict[str, Any]) -> tuple[float, ...]:
     return tuple(float(p) for p in protocols)
 
 
+def _byteorder(facts_by_key: dict[str, dict[str, Any]]) -> str:
+    """How the model's words go on the wire: big-endian where its END register (key
+    ``byte_order``, Feetech address 2) powers up 1 (the SCS series), else little-endian."""
+    end = facts_by_key.get("byte_order", {})
+    return "big" if end.get("default") == 1 else "little"
+
+
 def build_table(source: Path) -> ServoTable:
     """Build the `ServoTable` of one model data file (`[model]` + `[registers]`).
 
@@ -348,9 +358,11 @@ def build_table(source: Path) -> ServoTable:
         if "model_file" in model
         else {}
     )
+    merged = {**rows, **facts_by_key}
+    byteorder = _byteorder(merged)
     registers = {
-        key: _register(source, key, facts, specs.eeprom_end)
-        for key, facts in {**rows, **facts_by_key}.items()
+        key: _register(source, key, facts, specs.eeprom_end, byteorder)
+        for key, facts in merged.items()
     }
     _check_overlaps(source, registers)
     protocols = _protocols(source, model)

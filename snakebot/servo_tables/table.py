@@ -7,6 +7,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Literal
 
 from snakebot.errors import SnakebotError
 from snakebot.servo.ticks import X_SERIES_TICKS, TickModel
@@ -90,6 +91,9 @@ class Register:
     bit as the sign (P1 Present Speed/Load: bit 10), and then `signed` is False, so a raw reader
     sees the unsigned bits and :meth:`value_of` turns them into the value. `minimum`/`maximum`/
     `default` are values (negative where the register can be), not raw bit patterns.
+    `byteorder` is how the item's bytes go on the wire: "little" (Dynamixel, Feetech STS) or
+    "big" (Feetech SCS, whose END register reads 1); `value_of`/`raw_of` work on the integer and
+    do not depend on it, `decode`/`encode` on bytes do.
     """
 
     name: str
@@ -105,6 +109,7 @@ class Register:
     scale: float
     signed: bool
     sign_bit: int | None = None
+    byteorder: str = "little"
 
     @property
     def sign(self) -> str:
@@ -114,7 +119,7 @@ class Register:
         return "twos" if self.signed else "unsigned"
 
     def value_of(self, raw: int) -> int:
-        """The value of the unsigned little-endian integer `raw` read from this item."""
+        """The value of the unsigned integer `raw` (the item's bits) read from this item."""
         raw &= (1 << (8 * self.size)) - 1
         if self.sign_bit is not None:
             return decode_magnitude(raw, self.sign_bit)
@@ -130,15 +135,16 @@ class Register:
         return int.from_bytes(encode_value(value, self.size), "little")
 
     def decode(self, data: bytes | bytearray) -> int:
-        """Decode the item's little-endian bytes into its value (two's complement or
+        """Decode the item's bytes (in its byte order) into its value (two's complement or
         sign-magnitude where the item is)."""
-        return self.value_of(int.from_bytes(bytes(data[: self.size]), "little"))
+        order: Literal["little", "big"] = "big" if self.byteorder == "big" else "little"
+        return self.value_of(int.from_bytes(bytes(data[: self.size]), order))
 
     def encode(self, value: int) -> bytes:
-        """Encode a value into the item's little-endian bytes (RegisterValueError if too big)."""
-        if self.sign_bit is not None:
-            return encode_magnitude(value, self.sign_bit).to_bytes(self.size, "little")
-        return encode_value(value, self.size)
+        """Encode a value into the item's bytes, in its byte order (RegisterValueError if too
+        big)."""
+        order: Literal["little", "big"] = "big" if self.byteorder == "big" else "little"
+        return self.raw_of(value).to_bytes(self.size, order)
 
     def to_si(self, value: int) -> float:
         """Convert a register value into SI (`unit`), e.g. ticks to radians."""

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -19,19 +20,19 @@ from snakebot.servo_tables.table import decode_magnitude
 class Field:
     """One register inside a block: its key, byte offset from the block start, size and sign
     (``signed``: two's complement; ``sign_bit``: sign-magnitude with that bit the sign, as
-    Protocol 1.0's Present Speed/Load, bit 10)."""
+    Protocol 1.0's Present Speed/Load, bit 10), and its byte order ("big" on Feetech SCS)."""
 
     key: str
     offset: int
     size: int
     signed: bool
     sign_bit: int | None = None
+    byteorder: str = "little"
 
     def decode(self, data: bytes) -> int:
         """The field's value from the block's bytes."""
-        raw = int.from_bytes(
-            data[self.offset : self.offset + self.size], "little", signed=self.signed
-        )
+        order: Literal["little", "big"] = "big" if self.byteorder == "big" else "little"
+        raw = int.from_bytes(data[self.offset : self.offset + self.size], order, signed=self.signed)
         return raw if self.sign_bit is None else decode_magnitude(raw, self.sign_bit)
 
 
@@ -74,7 +75,9 @@ def resolve_block(table: ServoTable, keys: str | Sequence[str]) -> Block:
     ordered = sorted(registers.values(), key=lambda r: r.address)
     start = ordered[0].address
     end = max(r.address + r.size for r in ordered)
-    fields = tuple(Field(r.key, r.address - start, r.size, r.signed, r.sign_bit) for r in ordered)
+    fields = tuple(
+        Field(r.key, r.address - start, r.size, r.signed, r.sign_bit, r.byteorder) for r in ordered
+    )
     return Block(start, end - start, fields)
 
 

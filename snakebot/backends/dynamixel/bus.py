@@ -10,9 +10,9 @@ import time
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from types import TracebackType
-from typing import TypeVar
+from typing import Any, TypeVar
 
-from snakebot.backends.dynamixel import sdk
+from snakebot.backends.dynamixel import links, sdk
 from snakebot.backends.dynamixel.blocks import Block, encode_checked, encode_rows, resolve_block
 from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.backends.dynamixel.plans import ReadPlan, SyncWritePlan
@@ -37,7 +37,9 @@ class DynamixelBus:
     bus does per cycle follows the pair's :attr:`capabilities`: group reads go out by its
     ``read_method`` (Fast Sync / Sync / Bulk Read, or one Read per servo).
     ``port_handler_factory`` builds the SDK port handler from the port name, e.g. the emulator's
-    ``EmulatedPortHandler``; default ``dynamixel_sdk.PortHandler``. ``clock`` (s) stamps
+    ``EmulatedPortHandler``; default: the family's vendor SDK's (``links.port_handler_for``).
+    The link follows the family's vendor (``links.link_for``): the Dynamixel SDK, or Feetech's
+    ``scservo_sdk`` for a Feetech servo; everything above it is the same. ``clock`` (s) stamps
     ``last_instruction_s``. ``port`` must pass ``snakebot.config.ports.check_port`` (a device path
     or a ``dxlemu://`` URL), else ConfigError before anything is opened.
     """
@@ -50,7 +52,7 @@ class DynamixelBus:
         protocol: float | None = None,
         model: str | int = "XL430-W250",
         family: ServoFamily | None = None,
-        port_handler_factory: sdk.PortHandlerFactory | None = None,
+        port_handler_factory: Callable[[str], Any] | None = None,
         retries: int = 2,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
@@ -62,8 +64,13 @@ class DynamixelBus:
         self.capabilities: Capabilities = self.family.capabilities(self.table)
         """What this model can do on this family's bus (read method, watchdog, ...)."""
         check_port(port)  # device paths and dxlemu:// only: no socket://, spy://?file=, ...
-        factory = port_handler_factory or sdk.port_handler_for
-        self._link = sdk.SdkLink(factory(port), self.family)
+        family = self.family
+        handler = (
+            port_handler_factory(port)
+            if port_handler_factory
+            else links.port_handler_for(port, family)
+        )
+        self._link: links.Link = links.link_for(handler, family)
         self.transport = Transport(port, self._link, retries, clock)
         self._read_plans: dict[tuple[Block, tuple[int, ...], str], ReadPlan] = {}
 
@@ -135,8 +142,9 @@ class DynamixelBus:
             raise BusError(
                 self.port,
                 [],
-                f"dynamixel_sdk refuses {self.baud} bit/s (it supports up to "
-                "4 Mbps; 4.5 Mbps needs a custom port handler)",
+                f"the {self.family.vendor} SDK refuses {self.baud} bit/s (dynamixel_sdk "
+                "supports up to 4 Mbps, 4.5 Mbps needs a custom port handler; Feetech's baud "
+                "table ends at 1 Mbps)",
             )
 
     def close(self) -> None:
@@ -259,7 +267,7 @@ class DynamixelBus:
         """One Sync Write of the registers ``keys`` (contiguous) to ``{id: value(s)}``; no reply."""
         block = resolve_block(self.table, keys)
         rows = encode_rows(block, self.table, values)
-        writer = sdk.SyncWriter(self._link, block.address, block.size, rows)
+        writer = self._link.sync_writer(block.address, block.size, rows)
         ids, what = [i for i, _ in rows], f"sync write {','.join(block.keys)}"
         self.transport.check_sent(self.transport.run(ids, what, writer.send), ids, what)
 
@@ -277,7 +285,7 @@ class DynamixelBus:
     def bulk_read(self, requests: Mapping[int, Keys]) -> dict[int, dict[str, int]]:
         """One Bulk Read of a different block per servo: ``{id: {key: value}}``."""
         blocks = {i: resolve_block(self.table, k) for i, k in requests.items()}
-        reader = sdk.BulkReader(self._link, [(i, b.address, b.size) for i, b in blocks.items()])
+        reader = self._link.bulk_reader([(i, b.address, b.size) for i, b in blocks.items()])
         ids = list(blocks)
 
         def attempt() -> dict[int, dict[str, int]] | None:

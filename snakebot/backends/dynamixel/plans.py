@@ -17,6 +17,7 @@ import numpy as np
 
 from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.blocks import Block
+from snakebot.backends.dynamixel.links import GroupReader, Link
 from snakebot.families import READ_METHODS
 from snakebot.servo_tables import Register, RegisterValueError
 from snakebot.servo_tables.table import decode_magnitude
@@ -37,8 +38,10 @@ Row = tuple[int, ...]
 
 
 def block_struct(block: Block) -> struct.Struct:
-    """Little-endian struct of one servo's block: one code per field, pad bytes for gaps."""
-    codes, at = ["<"], 0
+    """Struct of one servo's block in its byte order (little-endian but on Feetech SCS): one
+    code per field, pad bytes for gaps."""
+    big = any(f.byteorder == "big" for f in block.fields)
+    codes, at = [">" if big else "<"], 0
     for f in block.fields:
         codes.append("x" * (f.offset - at) + _STRUCT_CODES[(f.size, f.signed)])
         at = f.offset + f.size
@@ -58,7 +61,8 @@ class SyncWritePlan:
         self.ids = tuple(ids)
         self._transport = transport
         code = _STRUCT_CODES[(register.size, register.signed)]
-        self._packer = struct.Struct("<" + ("B" + code) * len(ids))
+        order = ">" if register.byteorder == "big" else "<"
+        self._packer = struct.Struct(order + ("B" + code) * len(ids))
         self._args: list[int] = [v for i in ids for v in (i, 0)]  # [id, value] per servo
         self._what = f"sync write {register.key}"
 
@@ -107,7 +111,7 @@ class ReadPlan:
     def __init__(
         self,
         transport: Transport,
-        link: sdk.SdkLink,
+        link: Link,
         block: Block,
         ids: Sequence[int],
         method: str,
@@ -121,12 +125,12 @@ class ReadPlan:
         self.method = method
         self._transport = transport
         self._link = link
-        self._sync: sdk.SyncReader | None = None
+        self._sync: GroupReader | None = None
         self._bulk: sdk.BulkReader | None = None
         if method in ("fast_sync_read", "sync_read"):
-            self._sync = sdk.SyncReader(link, block.address, block.size, self.ids)
+            self._sync = link.sync_reader(block.address, block.size, self.ids)
         elif method == "bulk_read":
-            self._bulk = sdk.BulkReader(link, [(i, block.address, block.size) for i in self.ids])
+            self._bulk = link.bulk_reader([(i, block.address, block.size) for i in self.ids])
         elif len(set(self.ids)) != len(self.ids):
             raise ValueError(f"servo IDs appear twice in one read: {list(self.ids)}")
         self._single_read = single
@@ -223,12 +227,12 @@ class ReadPlan:
     def _read_each_once(self) -> list[Row] | None:
         """The servos' blocks in ID order, or None at the first that fails (no retry here)."""
         link, transport = self._link, self._transport
-        packet, port, family = link.packet, link.port, link.family
+        read, family = link.read_unguarded, link.family
         address, size, unpack = self.block.address, self.block.size, self._unpacker.unpack
         alerts, rows = transport.alerts, []
         try:  # guard() spelled out: this runs every control cycle
             for servo_id in self.ids:
-                data, result, error = packet.readTxRx(port, servo_id, address, size)
+                data, result, error = read(servo_id, address, size)
                 if result != sdk.COMM_SUCCESS or len(data) != size:
                     return None
                 if error or servo_id in alerts:

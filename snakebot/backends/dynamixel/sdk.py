@@ -33,6 +33,8 @@ COMM_SUCCESS: int = _sdk.COMM_SUCCESS
 COMM_PORT_BUSY: int = _sdk.COMM_PORT_BUSY
 COMM_TX_FAIL: int = _sdk.COMM_TX_FAIL
 COMM_RX_FAIL: int = _sdk.COMM_RX_FAIL
+COMM_TX_ERROR: int = _sdk.COMM_TX_ERROR
+COMM_RX_WAITING: int = _sdk.COMM_RX_WAITING
 COMM_RX_TIMEOUT: int = _sdk.COMM_RX_TIMEOUT
 COMM_RX_CORRUPT: int = _sdk.COMM_RX_CORRUPT
 COMM_NOT_AVAILABLE: int = _sdk.COMM_NOT_AVAILABLE
@@ -333,6 +335,11 @@ class SdkLink:
         with self.guard():
             return self.packet.readTxRx(self.port, dxl_id, address, length)
 
+    def read_unguarded(self, dxl_id: int, address: int, length: int) -> tuple[list[int], int, int]:
+        """:meth:`read` without :meth:`guard`, for a loop that guards itself (one Read per servo
+        every control cycle)."""
+        return self.packet.readTxRx(self.port, dxl_id, address, length)
+
     def write(self, dxl_id: int, address: int, data: bytes) -> tuple[int, int]:
         """(result, error byte); broadcast writes get no reply."""
         with self.guard():
@@ -345,6 +352,23 @@ class SdkLink:
         except BaseException:
             self.port.is_using = False
             raise
+
+    def sync_writer(self, address: int, size: int, rows: Sequence[tuple[int, bytes]]) -> SyncWriter:
+        """A Sync Write of one block to ``rows`` (``(id, block bytes)``)."""
+        return SyncWriter(self, address, size, rows)
+
+    def sync_reader(self, address: int, size: int, ids: Sequence[int]) -> SyncReader:
+        """A reusable Sync Read of one block from ``ids``."""
+        return SyncReader(self, address, size, ids)
+
+    def bulk_reader(self, blocks: Sequence[tuple[int, int, int]]) -> BulkReader:
+        """A reusable Bulk Read of one ``(id, address, size)`` block per servo."""
+        return BulkReader(self, blocks)
+
+
+def link(handler: PortHandlerLike, family: ServoFamily) -> SdkLink:
+    """The Dynamixel link over ``handler`` (``snakebot.backends.dynamixel.links.link_for``)."""
+    return SdkLink(handler, family)
 
 
 class SyncWriter:

@@ -15,6 +15,7 @@ from typing import TypeVar
 
 from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.faults import ServoStatusError, SyncReadError
+from snakebot.backends.dynamixel.links import Link
 from snakebot.errors import BusError
 
 RETRYABLE = frozenset({sdk.COMM_RX_TIMEOUT, sdk.COMM_RX_CORRUPT, sdk.COMM_RX_FAIL})
@@ -31,7 +32,7 @@ class Transport:
     def __init__(
         self,
         port: str,
-        link: sdk.SdkLink,
+        link: Link,
         retries: int,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:

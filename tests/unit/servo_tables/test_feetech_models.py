@@ -84,7 +84,8 @@ def test_scs0009_is_a_big_endian_table_without_sync_read_or_current() -> None:
 def test_datasheet_figures() -> None:
     rpm = 2 * math.pi / 60
     figures = {  # model: (stall N·m, no-load rpm, volts, model number)
-        "STS3215": (1.91, 42.0, 6.0, 777),  # 19.5 kg·cm, 0.238 s/60° at 6 V (ST-3215-C001)
+        # 19.5 kg·cm, 0.238 s/60° at 6 V (ST-3215-C001), at its rated 7.4 V (x 7.4 / 6): 52 rpm
+        "STS3215": (2.36, 52.0, 7.4, 777),
         "STS3215-12V": (2.94, 45.0, 12.0, 777),  # 30 kg·cm at 12 V (ST-3215-C018)
         "STS3250": (4.9, 75.0, 12.0, 2825),  # 50 kg·cm at 12 V
         "SCS0009": (0.23, 100.0, 6.0, 1284),  # 2.3 kg·cm, 0.1 s/60° at 6 V
