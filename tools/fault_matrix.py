@@ -1,8 +1,9 @@
 """Every fault the emulated bus can inject, at several rates, under both stop policies.
 
 Each case runs the real DynamixelBackend and runner (snake12 by default, ``--robot`` another:
-snake12-ax12a for Protocol 1.0; sidewinding, 100 Hz) through the unmodified dynamixel_sdk on the
-in-process emulator (``dxlemu://``, virtual time), the servos speaking the robot's protocol,
+snake12-ax12a for Protocol 1.0, snake12-sts3215 for Feetech; sidewinding, 100 Hz) through the
+unmodified vendor SDK (dynamixel_sdk, scservo_sdk) on the in-process emulator (``dxlemu://``,
+virtual time), the servos speaking the robot's protocol,
 injects one fault through the emulated chain, lets the run end however it ends, then checks:
 
 - how it ended: completed, a typed error (a SnakebotError subclass, exit 1 in the CLI), or an
@@ -51,6 +52,7 @@ from snakebot.emulation import (
 )
 from snakebot.emulation import protocol as protocol2
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.emulation.port_feetech import EmulatedScsPortHandler
 from snakebot.errors import SnakebotError
 from snakebot.families import family_for
 from snakebot.gaits import make_gait
@@ -272,8 +274,17 @@ class GoalAudit:
             self.out_of_limits.append((servo_id, ticks))
 
 
-def audited_port(audit: GoalAudit) -> Callable[[str], EmulatedPortHandler]:
-    class AuditedPortHandler(EmulatedPortHandler):  # type: ignore[misc]
+PORT_HANDLERS: dict[str, type[Any]] = {
+    "dynamixel": EmulatedPortHandler,
+    "feetech": EmulatedScsPortHandler,
+}
+"""The emulator's port handler for each vendor's SDK (both open ``dxlemu://`` URLs)."""
+
+
+def audited_port(audit: GoalAudit, vendor: str = "dynamixel") -> Callable[[str], Any]:
+    """The vendor SDK's emulated port handler, feeding every packet the host sends to ``audit``."""
+
+    class AuditedPortHandler(PORT_HANDLERS[vendor]):  # type: ignore[misc]
         def writePort(self, packet: Any) -> int:  # noqa: N802 - the SDK's name
             audit.feed(bytes(packet))
             return int(super().writePort(packet))
@@ -332,7 +343,7 @@ def run_case(
         backend = DynamixelBackend(
             robot,
             port=url,
-            port_handler_factory=audited_port(audit),
+            port_handler_factory=audited_port(audit, table.family),
             clock=clock,
             sleep=chain.advance,
         )
