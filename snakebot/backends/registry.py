@@ -191,7 +191,7 @@ SOFTBODY = BackendSpec(
 
 DYNAMIXEL = BackendSpec(
     name="dynamixel",
-    summary="the servo chain on a serial port (Dynamixel Protocol 2.0)",
+    summary="the Dynamixel servo chain on a serial port (Protocol 2.0 or 1.0)",
     factory="snakebot.backends.dynamixel.factory:make_dynamixel",
     options=(
         BackendOption("port", "serial port (default: the robot file's bus.port)", metavar="PORT"),
@@ -209,14 +209,34 @@ DYNAMIXEL = BackendSpec(
     hardware=True,
 )
 
+FEETECH = BackendSpec(
+    name="feetech",
+    summary="the Feetech servo chain on a serial port (STS/SCS, scservo_sdk)",
+    factory="snakebot.backends.dynamixel.factory:make_feetech",
+    options=(
+        BackendOption("port", "serial port (default: the robot file's bus.port)", metavar="PORT"),
+        BackendOption("baud", "baud rate (default: the robot file's bus.baud)", metavar="BAUD"),
+        BackendOption(
+            "allow_extra_servos",
+            "servos on the bus that the robot file does not name are expected (left alone); "
+            "without it connecting refuses, naming them",
+            flag=True,
+        ),
+        BackendOption("port_handler_factory", "a scservo_sdk PortHandler class (tests, tools)"),
+        BackendOption("clock", "a monotonic clock in s (tests, tools)"),
+        BackendOption("sleep", "a sleep in s (tests, tools)"),
+    ),
+    hardware=True,
+)
+
 BACKENDS: Registry[BackendSpec] = Registry(
     "backend",
     ENTRY_POINT_GROUP,
     error=BackendError,
     check=_check_spec,
     builtins={
-        **{spec.name: spec for spec in (TWIN, SOFTBODY, DYNAMIXEL)},
-        **{alias: spec for spec in (TWIN, SOFTBODY, DYNAMIXEL) for alias in spec.aliases},
+        **{spec.name: spec for spec in (TWIN, SOFTBODY, DYNAMIXEL, FEETECH)},
+        **{alias: spec for spec in (TWIN, SOFTBODY, DYNAMIXEL, FEETECH) for alias in spec.aliases},
     },
 )
 

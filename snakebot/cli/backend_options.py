@@ -19,7 +19,7 @@ from snakebot.backends.registry import (
     backend_names,
     get_backend_spec,
 )
-from snakebot.cli.common import baud_arg, port_arg
+from snakebot.cli.common import baud_arg, port_arg, robot_name
 from snakebot.errors import BackendOptionError, ConfigError, UsageError
 from snakebot.session import DEFAULT_BACKEND
 
@@ -43,10 +43,11 @@ def add_backend_argument(parser: argparse.ArgumentParser, *, help_prefix: str = 
     parser.add_argument(
         "--backend",
         choices=names,
-        default=DEFAULT_BACKEND,
+        default=None,
         metavar="{" + ",".join(names) + "}",
         help=f"{help_prefix}where to run: twin (alias sim, the MuJoCo twin; default), dynamixel "
-        "(the servo chain), softbody, or a plugin's backend",
+        "or feetech (the servo chain; --port alone picks the robot's servo vendor's), "
+        "softbody, or a plugin's backend",
     )
 
 
@@ -72,8 +73,24 @@ def add_option_flags(
 
 
 def backend_spec(args: argparse.Namespace) -> BackendSpec:
-    """The spec ``--backend`` names."""
+    """The spec ``--backend`` names; without ``--backend`` (``args.backend`` None) the one
+    :func:`implied_backend` picks, written back to ``args.backend``."""
+    if getattr(args, "backend", None) is None:
+        args.backend = implied_backend(args)
     return get_backend_spec(args.backend)
+
+
+def implied_backend(args: argparse.Namespace) -> str:
+    """The backend a command line without ``--backend`` means: the twin, unless ``--port``
+    names a serial port, which means the servo chain of the robot's servo vendor (``feetech``
+    for an STS3215 snake, ``dynamixel`` for an XL430 one): the robot must be named."""
+    if getattr(args, "port", None) is None:
+        return DEFAULT_BACKEND
+    from snakebot.config import load_robot  # the robot file says which servos it has
+    from snakebot.servo_tables import table_for_model
+
+    robot = load_robot(robot_name(args, hardware=True, what=f"--port {args.port}"))
+    return table_for_model(robot.servo.name).family
 
 
 def given_options(

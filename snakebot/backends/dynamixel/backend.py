@@ -318,12 +318,16 @@ class DynamixelBackend(Backend):
                     f"({family.name} has no Reboot)"
                 ),
             )
+        # The register that takes the torque off on a fault: Alarm Shutdown (Dynamixel's
+        # "Shutdown"), Feetech's Unload Condition.
+        name = self.bus.table["shutdown"].name if "shutdown" in self.bus.table else "Shutdown"
+        shutdown = "Alarm Shutdown" if name == "Shutdown" else name
         return HardwareFaultError(
             self.port,
             faults,
             decode=family.status_errors,
             remedy=(
-                f"Its torque is off where its Alarm Shutdown names the fault: {cause}, let it "
+                f"Its torque is off where its {shutdown} names the fault: {cause}, let it "
                 f"cool, then power-cycle it ({family.name} has no Reboot) and run again"
             ),
         )

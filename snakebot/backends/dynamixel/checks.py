@@ -123,9 +123,9 @@ def check_settings(
 
     ``ids`` are head to tail, in the converter's joint order. Keys a model has no register for
     are left out of ``settings`` and not checked; ``watchdog=False`` (no Bus Watchdog) makes an
-    Alarm Shutdown (``shutdown``) without the overload and overheating bits an error;
-    ``position_mode`` is the model's Operating Mode value of position control (3 on Dynamixel,
-    0 on Feetech STS: ``ServoSpecs.position_mode``).
+    Alarm Shutdown (``shutdown``; Feetech's Unload Condition, the same bits) without the
+    overload and overheating bits an error. ``position_mode`` is the Operating Mode of
+    position control on the model (``table.specs.position_mode``: 3 Dynamixel, 0 Feetech STS).
     """
     errors: list[str] = []
     warnings: list[str] = []

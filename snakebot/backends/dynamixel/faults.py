@@ -121,7 +121,8 @@ class ServoSettingsError(BackendError):
         lines = "\n  - ".join(self.problems)
         super().__init__(
             f"{port}: servo settings do not match the robot config:\n  - {lines}\n"
-            "Write them with `snakebot config apply` (torque off) or Dynamixel Wizard 2.0."
+            "Write them with `snakebot config apply` (torque off), Dynamixel Wizard 2.0 or "
+            "Feetech's FD tool."
         )
 
 

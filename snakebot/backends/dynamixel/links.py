@@ -37,6 +37,12 @@ class GroupReader(Protocol):
     def data(self, servo_id: int) -> Sequence[int]:
         """Raw block bytes of ``servo_id`` from the last read."""
 
+    prefix: int
+    """Bytes in front of each servo's block in :meth:`joined` (Feetech: the status byte)."""
+
+    def joined(self) -> bytearray | None:
+        """Every servo's row of the last read in ID order, or None when one is missing."""
+
 
 class GroupWriter(Protocol):
     """A Sync Write of one block (the SDK's GroupSyncWrite)."""

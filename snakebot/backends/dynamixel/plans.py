@@ -37,11 +37,12 @@ _STRUCT_CODES = {
 Row = tuple[int, ...]
 
 
-def block_struct(block: Block) -> struct.Struct:
+def block_struct(block: Block, prefix: int = 0) -> struct.Struct:
     """Struct of one servo's block in its byte order (little-endian but on Feetech SCS): one
-    code per field, pad bytes for gaps."""
+    code per field, pad bytes for gaps and for ``prefix`` bytes before the block (the status
+    byte a Feetech Sync Read keeps in front of each servo's data)."""
     big = any(f.byteorder == "big" for f in block.fields)
-    codes, at = [">" if big else "<"], 0
+    codes, at = [">" if big else "<", "x" * prefix], 0
     for f in block.fields:
         codes.append("x" * (f.offset - at) + _STRUCT_CODES[(f.size, f.signed)])
         at = f.offset + f.size
@@ -135,8 +136,14 @@ class ReadPlan:
             raise ValueError(f"servo IDs appear twice in one read: {list(self.ids)}")
         self._single_read = single
         self._unpacker = block_struct(block)
+        prefix = 0 if self._sync is None else self._sync.prefix
+        self._sync_unpacker = block_struct(block, prefix)
+        self._sync_total = (block.size + prefix) * len(self.ids)
+        # (field index, sign bit, magnitude mask) of each sign-magnitude field.
         self._magnitude = [
-            (k, f.sign_bit) for k, f in enumerate(block.fields) if f.sign_bit is not None
+            (k, f.sign_bit, (1 << f.sign_bit) - 1)
+            for k, f in enumerate(block.fields)
+            if f.sign_bit is not None
         ]
         self._total = block.size * len(self.ids)
         name = "sync read" if method == "fast_sync_read" else method.replace("_", " ")
@@ -159,26 +166,30 @@ class ReadPlan:
         if result != sdk.COMM_SUCCESS:
             self._transport.retry_or_raise(result, self.ids, self._what)
             return None
-        buffer = bytearray()
-        for servo_id in self.ids:
-            # isAvailable per ID: after a failed read the SDK hands out zeros (reference §1.7).
-            if not reader.available(servo_id):
-                return None
-            buffer.extend(reader.data(servo_id))
-        # No servo's data can be longer than the block, so the total catches any short one.
-        if len(buffer) != self._total:
+        # Every servo's row (``prefix`` status bytes, then the block), or None when one is
+        # missing: after a failed read the SDK hands out zeros (reference §1.7).
+        buffer = reader.joined()
+        # No servo's row can be longer than it should, so the total catches any short one.
+        if buffer is None or len(buffer) != self._sync_total:
             return None
-        return self._values(list(self._unpacker.iter_unpack(buffer)))
+        return self._values(list(self._sync_unpacker.iter_unpack(buffer)))
 
     def _values(self, rows: list[Row]) -> list[Row]:
-        """Rows with sign-magnitude fields turned from raw bits into values."""
+        """Rows with sign-magnitude fields turned from raw bits into values (a row whose fields
+        are all non-negative, every bit inside the magnitude, is its own value: kept as is)."""
         if not self._magnitude:
             return rows
         fields = self._magnitude
         out = []
         for row in rows:
+            for k, _, mask in fields:
+                if row[k] > mask:
+                    break
+            else:
+                out.append(row)
+                continue
             values = list(row)
-            for k, bit in fields:
+            for k, bit, _ in fields:
                 values[k] = decode_magnitude(values[k], bit)
             out.append(tuple(values))
         return out

@@ -426,6 +426,20 @@ class SyncReader:
         """Raw block bytes of ``dxl_id`` from the last read; check :meth:`available` first."""
         return self._group.data_dict[dxl_id]
 
+    prefix = 0
+    """Bytes in front of each servo's block in :meth:`joined` (none: the SDK keeps the data)."""
+
+    def joined(self) -> bytearray | None:
+        """Every servo's block of the last read in ID order, or None when one is not there
+        (``isAvailable`` per ID: after a failed read the SDK hands out zeros)."""
+        buffer = bytearray()
+        group = self._group
+        for dxl_id in self.ids:
+            if not group.isAvailable(dxl_id, self.address, self.size):
+                return None
+            buffer.extend(group.data_dict[dxl_id])
+        return buffer
+
 
 class BulkReader:
     """A ``GroupBulkRead``: one (address, size) block per ID, built once and reused.

@@ -306,11 +306,10 @@ class FeetechSyncReader:
 
     def transact(self, fast: bool) -> int:
         """Run one SYNC_READ (``fast`` is ignored: Feetech has no Fast Sync Read)."""
-        group = self._group
-        for servo_id in self.ids:  # the SDK keeps the last read's data otherwise
-            group.data_dict[servo_id] = []
+        # No stale data survives: a reply shorter than one status packet is a failed result,
+        # and otherwise the SDK sets every ID's entry (None for a servo it did not find).
         try:  # guard() spelled out: this runs every control cycle
-            result = group.txRxPacket()
+            result = self._group.txRxPacket()
         except BaseException:
             self._link.release()
             raise
@@ -325,6 +324,21 @@ class FeetechSyncReader:
         """The status byte of this servo's reply in the last read."""
         data = self._group.data_dict.get(servo_id) or [0]
         return int(data[0])
+
+    prefix = 1
+    """Bytes in front of each servo's block in :meth:`joined`: its status byte."""
+
+    def joined(self) -> bytearray | None:
+        """Every servo's row of the last read in ID order, its status byte first, or None when
+        one is missing (the SDK's entry empty or None)."""
+        buffer = bytearray()
+        entries, want = self._group.data_dict, self.size + 1
+        for servo_id in self.ids:
+            row = entries.get(servo_id)
+            if not row or len(row) != want:
+                return None
+            buffer.extend(row)
+        return buffer
 
     def data(self, servo_id: int) -> list[int]:
         """This servo's block bytes from the last read; check :meth:`available` first."""

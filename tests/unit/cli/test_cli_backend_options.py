@@ -11,7 +11,10 @@ from snakebot.cli.main import main
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["run", "--port", "/dev/ttyUSB0"], "--port does nothing with the twin backend"),
+        (
+            ["run", "--backend", "twin", "--port", "/dev/ttyUSB0"],
+            "--port does nothing with the twin",
+        ),
         (["run", "--backend", "sim", "--baud", "57600"], "--baud does nothing with the twin"),
         (["run", "--allow-extra-servos"], "--allow-extra-servos does nothing with the twin"),
         (
@@ -23,11 +26,19 @@ from snakebot.cli.main import main
             "--realtime does nothing with the dynamixel backend",
         ),
         (
-            ["drive", "--port", "/dev/ttyUSB0", "--script", "keys.txt"],
+            ["drive", "--backend", "sim", "--port", "/dev/ttyUSB0", "--script", "keys.txt"],
             "--port does nothing with the twin backend",
         ),
-        (["tune", "gains", "--port", "/dev/ttyUSB0"], "--port does nothing with the twin"),
-        (["sysid", "--record", "x.csv", "--port", "/dev/ttyUSB0"], "--port does nothing"),
+        (
+            ["tune", "gains", "--backend", "twin", "--port", "/dev/ttyUSB0"],
+            "--port does nothing with the twin",
+        ),
+        (
+            ["sysid", "--record", "x.csv", "--backend", "twin", "--port", "/dev/ttyUSB0"],
+            "--port does nothing",
+        ),
+        # --port alone means the servo chain of the robot's vendor: it needs the robot named.
+        (["run", "--port", "/dev/ttyUSB0"], "drives real servos: name their robot with --robot"),
     ],
 )
 def test_a_flag_the_backend_does_not_take_is_a_usage_error(
@@ -59,3 +70,24 @@ def test_a_viewer_on_hardware_is_refused_for_what_it_is(capsys: pytest.CaptureFi
     err = capsys.readouterr().err
     assert "--viewer: renders the simulation: it needs a simulated backend" in err
     assert "--realtime" not in err
+
+
+@pytest.mark.parametrize(
+    ("robot", "backend"), [("snake12-sts3215", "feetech"), ("snake12", "dynamixel")]
+)
+def test_port_alone_picks_the_backend_of_the_robots_servo_vendor(
+    robot: str, backend: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", "--robot", robot, "--port", "/dev/ttyUSB0", "--dry-run", "--json"]
+    assert main(argv) == 0
+    assert f'"backend": "{backend}"' in capsys.readouterr().out
+
+
+def test_the_dynamixel_backend_refuses_a_feetech_robot_naming_the_right_one(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = ["run", "--robot", "snake12-sts3215", "--backend", "dynamixel", "--port", "/dev/null"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "snake12-sts3215.toml: servo: STS3215 is a Feetech servo, not a Dynamixel one" in err
+    assert "runs on the feetech backend" in err

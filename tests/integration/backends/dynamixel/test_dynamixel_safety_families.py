@@ -3,8 +3,9 @@
 Each test runs once per family bench (``FAMILIES``): X-series on Protocol 2.0 (Fast Sync Read,
 Bus Watchdog), X-series switched to Protocol 1.0 (Bulk Read; its watchdog and Hardware Error
 Status registers sit below address 256, so it keeps them), and the models without a watchdog or
-Hardware Error Status: AX-12A (no group read: one Read per servo) and MX-28 with its Protocol 1.0
-firmware (Bulk Read).
+Hardware Error Status: AX-12A (no group read: one Read per servo), MX-28 with its Protocol 1.0
+firmware (Bulk Read) and the Feetech STS3215 (SYNC_READ through scservo_sdk, no watchdog, no
+hardware error register: its status byte's bits).
 A failed connect ends in the stop policy, a second Ctrl-C during the stop ramp too, a joint found
 outside its limits comes in at the slew limit, and a port that vanishes is a BusError saying what
 the servos do now.
@@ -32,6 +33,7 @@ from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.emulation import EmulatedChain, make_chain_for_ids, registered
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.emulation.port_feetech import EmulatedScsPortHandler
 from snakebot.errors import BusError
 from snakebot.gaits import make_gait
 from snakebot.types import JointCommand
@@ -127,7 +129,10 @@ FAMILIES = [
     Family("x-p1", "XL430-W250", 1.0, x_series(1.0)),
     Family("ax12a", "AX-12A", 1.0, shipped("snake12-ax12a")),
     Family("mx28", "MX-28", 1.0, mx28),
+    Family("sts3215", "STS3215", 0.0, shipped("snake12-sts3215")),
 ]
+# The vendor SDK's port handler that opens the emulator's dxlemu:// URL.
+HANDLERS = {"dynamixel": EmulatedPortHandler, "feetech": EmulatedScsPortHandler}
 
 
 @dataclass
@@ -145,7 +150,7 @@ class FamilyBench:
         options: dict[str, Any] = {
             "clock": lambda: chain.now_s,
             "sleep": chain.advance,
-            "port_handler_factory": EmulatedPortHandler,
+            "port_handler_factory": HANDLERS[chain.servos[0].vendor],
         }
         options.update(kwargs)
         return DynamixelBackend(robot, port=self.url, baud=BAUD, **options)
@@ -182,6 +187,7 @@ def test_each_family_reads_by_its_own_method(fbench: FamilyBench) -> None:
         "x-p1": "bulk_read",
         "ax12a": "read",
         "mx28": "bulk_read",
+        "sts3215": "sync_read",
     }[fbench.family.name]
     assert backend.bus.capabilities.read_method == expected
     with backend:
@@ -340,7 +346,7 @@ def test_an_overload_mid_run_stops_it_naming_the_servo(fbench: FamilyBench) -> N
     if backend.capabilities.reboot:
         assert "snakebot servo reboot" in str(info.value)
     else:
-        assert "power-cycle it (dynamixel-p1 has no Reboot)" in str(info.value)
+        assert f"power-cycle it ({backend.bus.family.name} has no Reboot)" in str(info.value)
 
 
 def test_a_servo_in_overload_at_connect_refuses_it(fbench: FamilyBench) -> None:

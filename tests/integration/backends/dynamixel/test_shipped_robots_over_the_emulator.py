@@ -1,10 +1,12 @@
 """The robots of other servo families run every gait their axes allow over the emulator and in
 hardware-in-the-loop, not only on the twin.
 
-snake12-ax12a (12 x AX-12A on Protocol 1.0: one Read per servo a cycle, compliance loop) and
-snake8-2xl430 (four 2XL430 cases on Protocol 2.0) drive the real ``DynamixelBackend`` and runner
-through the unmodified SDK against the in-process emulator, in virtual time: once with the
-emulator's own motion model, once with every servo's shaft a joint of the twin (``--physics``).
+snake12-ax12a (12 x AX-12A on Protocol 1.0: one Read per servo a cycle, compliance loop),
+snake8-2xl430 (four 2XL430 cases on Protocol 2.0) and snake12-sts3215 (12 x Feetech STS3215:
+SYNC_READ, sign-magnitude registers, through scservo_sdk) drive the real ``DynamixelBackend`` and
+runner through the unmodified vendor SDK against the in-process emulator, in virtual time: once
+with the emulator's own motion model, once with every servo's shaft a joint of the twin
+(``--physics``).
 Every Goal Position a servo receives lies inside its joint's limits, and the servos move with it.
 """
 
@@ -24,10 +26,13 @@ from snakebot.control.safety import SafetyLayer
 from snakebot.emulation import EmulatedChain, make_chain_for_ids, registered
 from snakebot.emulation.physics import make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.emulation.port_feetech import EmulatedScsPortHandler
 from snakebot.gaits import gait_names
 from snakebot.session import resolve_gait
 
-ROBOTS = ("snake12-ax12a", "snake8-2xl430")
+ROBOTS = ("snake12-ax12a", "snake8-2xl430", "snake12-sts3215")
+# The vendor SDK's port handler that opens the emulator's dxlemu:// URL.
+HANDLERS = {"dynamixel": EmulatedPortHandler, "feetech": EmulatedScsPortHandler}
 CHANNEL_GAITS = ("miller_sidewinding", "undulation")
 # rectilinear drives an axial channel no servo snake has: the twin test checks it is refused.
 GAITS = [g for g in gait_names() if g != "rectilinear"]
@@ -71,7 +76,7 @@ def test_every_gait_its_axes_allow_runs_over_the_emulator(
         backend = DynamixelBackend(
             robot,
             port=url,
-            port_handler_factory=EmulatedPortHandler,
+            port_handler_factory=HANDLERS[chain.servos[0].vendor],
             clock=lambda: chain.now_s,
             sleep=chain.advance,
         )

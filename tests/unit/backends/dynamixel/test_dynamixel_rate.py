@@ -125,3 +125,34 @@ def test_a_pty_or_emulator_port_has_no_usb_tail() -> None:
         os.close(primary)
         os.close(secondary)
     assert usb_tail_s("/dev/ttyUSB9") == (0.001, True)
+
+
+STS = family_named("feetech-sts")
+SCS = family_named("feetech-scs")
+
+
+def test_sts_sync_read_costs_what_the_reference_note_counts() -> None:
+    # §5: SYNC_READ request N + 8 = 20 B, 12 replies of 6 + 6 = 144 B; SYNC_WRITE 44 B.
+    budget = cycle_budget(STS, "sync_read", 12, 6, 2, 1_000_000, 0.0)
+    assert budget.wire_s == pytest.approx((20 + 144 + 44) * 10e-6)
+    assert (budget.turnarounds, budget.round_trips) == (12, 1)
+    assert budget.max_rate_hz == pytest.approx(1 / 3.08e-3, rel=1e-3)  # §5: ≈ 3 ms, ≈ 330 Hz
+    factory = cycle_budget(STS, "sync_read", 12, 6, 2, 1_000_000, 500e-6)
+    assert factory.cycle_s == pytest.approx(9.08e-3)  # LeRobot's factory 500 µs a reply
+    # SCS has no SYNC_READ: one READ per servo, a USB tail each, as an AX-12A.
+    with pytest.raises(ValueError, match="feetech-scs has no sync read"):
+        cycle_budget(SCS, "sync_read", 12, 6, 2, 1_000_000, 0.0)
+    assert cycle_budget(SCS, "read", 12, 6, 2, 1_000_000, 0.0).round_trips == 12
+
+
+def test_the_sts3215_snake_is_budgeted_from_its_own_read_and_settings() -> None:
+    robot = load_robot("snake12-sts3215")
+    budget = DynamixelBackend(robot, port="/dev/ttyUSB0").rate_budget()
+    # Present Position, Speed and Current: one 15-byte block (56..70) by one Sync Read, no
+    # Return Delay (the servo file writes 0), one assumed 1 ms USB tail.
+    assert (budget.family, budget.method, budget.return_delay_s) == (STS, "sync_read", 0.0)
+    assert budget.wire_s == pytest.approx((20 + 12 * 21 + 44) * 10e-6)
+    assert budget.max_rate_hz == pytest.approx(240.4, abs=0.1)
+    check_rate(budget, 200.0)
+    with pytest.raises(RateTooHighError, match="at most 240 Hz"):
+        check_rate(budget, 500.0)
