@@ -79,7 +79,7 @@ def add_parser(subparsers: Any) -> None:
         action="store_true",
         help="try every rate the family's models can be set to (X series: 57600, 1000000, "
         "115200, 2000000, 3000000, 4000000, 9600; AX/MX also 500000, 2500000, 19200; Feetech "
-        "1000000, 500000, 250000, 128000, 115200, 76800, 57600, 38400)",
+        f"{', '.join(map(str, family_bauds(FAMILIES[2])))})",
     )
     which = parser.add_mutually_exclusive_group()
     which.add_argument(

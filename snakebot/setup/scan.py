@@ -173,16 +173,19 @@ def scan(
 
 
 def _one_family_each(entries: list[ScanEntry]) -> list[ScanEntry]:
-    """Drop an entry whose model number its family does not know where the same ID at the same
-    rate answered in another family that does (a Feetech servo answers a Dynamixel 1.0 ping)."""
-    known = {(e.servo_id, e.baud) for e in entries if e.known_model}
-    return [
-        e
-        for e in entries
-        if e.known_model
-        or (e.servo_id, e.baud) not in known
-        or e.verdict.kind is not Kind.ONE_SERVO
-    ]
+    """One entry per servo where an ID at a rate answered in several families of one framing (a
+    Feetech servo answers a Dynamixel 1.0 ping): the ones whose model number their family knows,
+    else the first searched (a model snakebot has no data for reads as such in every family)."""
+    groups: dict[tuple[int, int, str], list[ScanEntry]] = {}
+    for entry in entries:
+        if entry.verdict.kind is Kind.ONE_SERVO and entry.family.framing:
+            key = (entry.servo_id, entry.baud, entry.family.framing)
+            groups.setdefault(key, []).append(entry)
+    dropped: set[int] = set()
+    for group in groups.values():
+        known = [e for e in group if e.known_model] or group[:1]
+        dropped |= {id(e) for e in group if e not in known}
+    return [e for e in entries if id(e) not in dropped]
 
 
 def _first_pass(

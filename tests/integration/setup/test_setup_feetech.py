@@ -220,3 +220,26 @@ def test_the_servo_settings_may_not_set_the_offset_calibrate_owns(config_dir: Pa
         load_settings(load_robot(config_dir / "robots" / f"{ROBOT}.toml"))
     assert "`snakebot calibrate` writes each one's Homing Offset" in str(caught.value)
     assert table_for_model(MODEL)["homing_offset"].sign_bit == 11
+
+
+def test_feetech_and_dynamixel_servos_on_one_wire_are_each_named_once_in_their_family(
+    cli: Cli,
+) -> None:
+    # Both answer a ping of the other's (the same framing); each names a model in its own only.
+    servos = [VirtualServo(MODEL, i, baud=BAUD) for i in (1, 2)]
+    servos += [VirtualServo("AX-12A", i, baud=BAUD) for i in (10, 11)]
+    chain = EmulatedChain(servos, baud=BAUD)
+    with registered(chain) as url:
+        code, out, err = cli("scan", "--port", url, "--ids", "0-12", "--json")
+    assert code == 0, err
+    report = first_json(out)
+    found = sorted((s["id"], s["model"], s["family"]) for s in report["servos"])
+    assert found == [
+        (1, MODEL, "feetech-sts"),
+        (2, MODEL, "feetech-sts"),
+        (10, "AX-12A", "dynamixel-p1"),
+        (11, "AX-12A", "dynamixel-p1"),
+    ]
+    assert report["mixed"] is True
+    assert "give each family its own port" in err
+    assert err.count("one by one") == 1  # one ping sweep serves both families of that framing
