@@ -243,3 +243,22 @@ def test_feetech_and_dynamixel_servos_on_one_wire_are_each_named_once_in_their_f
     assert report["mixed"] is True
     assert "give each family its own port" in err
     assert err.count("one by one") == 1  # one ping sweep serves both families of that framing
+
+
+def test_servo_reset_on_feetech_keeps_the_id_as_its_one_reset_does_and_says_so(
+    sts_snake: Bus, cli: Cli
+) -> None:
+    three = sts_snake.servo(3)
+    three.poke("return_delay_time", 0)
+    three.save_eeprom()  # as if set up before: saved, so a power cycle keeps it
+    args = ("servo", "reset", "--robot", ROBOT, "--port", sts_snake.url, "--id", "3", "--yes")
+    code, _, err = cli(*args)
+    assert code == 1
+    assert "its one reset (parameter recovery, 0x06) keeps the ID" in err
+    assert "use --keep-id alone" in err and three.peek("return_delay_time") == 0  # nothing sent
+    code, out, err = cli(*args, "--keep-id")
+    assert code == 0, err
+    assert out.strip() == "servo 3: factory reset; it now answers as ID 3 at 1000000 baud"
+    assert three.peek("return_delay_time") == 250 and three.peek("lock") == 1
+    three.power_cycle()  # the restored values were saved: the EEPROM was unlocked for them
+    assert three.peek("return_delay_time") == 250
