@@ -35,6 +35,7 @@ from snakebot.config import load_robot
 from snakebot.config.schema import JointConfig, RobotConfig
 from snakebot.errors import ConfigError, OutputError
 from snakebot.servo.ticks import TickModel, ticks_to_rad
+from snakebot.setup.diff import condition_note
 from snakebot.setup.errors import SetupError, VerifyError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings, has_watchdog
@@ -121,6 +122,13 @@ def measure(link: Link, chain: ChainSettings) -> list[JointZero]:
         ticks = bus.sync_read("present_position", robot.servo_ids)
     else:  # no Sync Read: one Read per servo is quick enough once
         ticks = {i: bus.read_block(i, ("present_position",)) for i in robot.servo_ids}
+    if not link.family.capabilities(bus.table).hardware_error_status:
+        faulted = [(i, b) for i, b in sorted(bus.conditions.items()) if i in robot.servo_ids and b]
+        if faulted:
+            raise SetupError(
+                f"{link.port}: calibration refused, nothing written: "
+                + "; ".join(condition_note(link, i, b) for i, b in faulted)
+            )
     tpr = robot.servo.physics.ticks
     zeros = []
     for index, joint in enumerate(robot.joints):

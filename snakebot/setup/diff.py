@@ -166,6 +166,28 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
     )
 
 
+VOLTAGE_KEYS = ("present_input_voltage", "min_voltage_limit", "max_voltage_limit")
+
+
+def condition_note(link: Link, servo_id: int, bits: int) -> str:
+    """What a status byte's condition bits say about one servo (a family without a Hardware
+    Error Status register reports the servo's faults in every reply), with the supply's reading
+    where the input voltage is out of range."""
+    faults = link.family.status_errors(bits)
+    text = f"servo {servo_id} reports {', '.join(faults)} in its status"
+    table = link.bus.table
+    if "input voltage" in faults and all(k in table for k in VOLTAGE_KEYS):
+        volts, low, high = (link.bus.read(servo_id, k) * 0.1 for k in VOLTAGE_KEYS)
+        text += f": its supply reads {volts:.1f} V, outside its limits {low:.1f}..{high:.1f} V"
+        if volts > high:
+            text += (
+                f". A {table.model} made for a lower voltage is damaged by this one (a 7.4 V "
+                "servo on 12 V: huggingface/lerobot#1010): switch the supply off and use the "
+                "servo's own voltage, or the robot file of the model made for it"
+            )
+    return text
+
+
 def survey(link: Link, chain: ChainSettings) -> ChainDiff:
     """Find every servo of ``chain`` and compare what it holds with what the chain wants."""
     robot = chain.robot
@@ -189,6 +211,9 @@ def survey(link: Link, chain: ChainSettings) -> ChainDiff:
                 else "a power cycle clears it (no Reboot in this protocol)"
             )
             notes.append(f"servo {servo_id} has a latched hardware error ({flags}); {fix}")
+        bits = link.bus.conditions.get(servo_id, 0)
+        if bits and not link.family.capabilities(link.bus.table).hardware_error_status:
+            notes.append(condition_note(link, servo_id, bits))
         if state.locked:
             notes.append(
                 f"servo {servo_id} has its EEPROM locked (Lock = 1): it takes no EEPROM "

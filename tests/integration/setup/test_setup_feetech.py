@@ -262,3 +262,23 @@ def test_servo_reset_on_feetech_keeps_the_id_as_its_one_reset_does_and_says_so(
     assert three.peek("return_delay_time") == 250 and three.peek("lock") == 1
     three.power_cycle()  # the restored values were saved: the EEPROM was unlocked for them
     assert three.peek("return_delay_time") == 250
+
+
+def test_a_7v4_servo_on_12_volts_is_named_with_its_supply_and_calibration_refused(
+    sts_snake: Bus, cli: Cli, robot_file: Path
+) -> None:
+    # huggingface/lerobot#1010: "Incorrect status packet" on calibrate, from 12 V on 7.4 V servos.
+    assert (
+        cli("config", "apply", "--robot", str(robot_file), "--port", sts_snake.url, "--yes")[0] == 0
+    )
+    four = sts_snake.servo(4)
+    four.state = replace(four.state, input_voltage_v=12.0)
+    sts_snake.chain.advance(0.05)  # the firmware sees it
+    code, _, err = cli("config", "diff", "--robot", str(robot_file), "--port", sts_snake.url)
+    assert code == 0, err
+    note = "servo 4 reports input voltage in its status: its supply reads 12.0 V, outside its limits 4.0..8.4 V"
+    assert note in err and "huggingface/lerobot#1010" in err
+    code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", sts_snake.url, "--yes")
+    assert code == 1
+    assert "calibration refused, nothing written: " + note in err
+    assert all(s.peek("homing_offset") == 0 for s in sts_snake.chain.servos)
