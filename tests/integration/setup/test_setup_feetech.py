@@ -276,7 +276,10 @@ def test_a_7v4_servo_on_12_volts_is_named_with_its_supply_and_calibration_refuse
     sts_snake.chain.advance(0.05)  # the firmware sees it
     code, _, err = cli("config", "diff", "--robot", str(robot_file), "--port", sts_snake.url)
     assert code == 0, err
-    note = "servo 4 reports input voltage in its status: its supply reads 12.0 V, outside its limits 4.0..8.4 V"
+    note = (
+        "servo 4 reports input voltage in its status: its supply reads 12.0 V, outside its "
+        "limits 4.0..8.4 V"
+    )
     assert note in err and "huggingface/lerobot#1010" in err
     code, _, err = cli("calibrate", "--robot", str(robot_file), "--port", sts_snake.url, "--yes")
     assert code == 1
