@@ -180,11 +180,23 @@ def test_an_offset_another_tool_left_is_measured_through_not_added_to(
     assert (
         cli("config", "apply", "--robot", str(robot_file), "--port", sts_snake.url, "--yes")[0] == 0
     )
-    two = sts_snake.servo(2)
+    two, three = sts_snake.servo(2), sts_snake.servo(3)
     two.poke("homing_offset", -1500)  # e.g. a LeRobot calibration of another mounting
     at_actual(two, 2100)
+    three.poke("homing_offset", 1500)
+    at_actual(three, 1000)  # Present = 1000 - 1500: negative, sign-magnitude (bit 15)
+    assert three.peek("present_position") == -500
+    assert raw(three, "present_position") == 0x8000 | 500  # not 65036, not 32268
     code, out, err = cli(
-        "calibrate", "--robot", str(robot_file), "--port", sts_snake.url, "--yes", "--json"
+        "calibrate",
+        "--robot",
+        str(robot_file),
+        "--port",
+        sts_snake.url,
+        "--max-offset-deg",
+        "95",
+        "--yes",
+        "--json",
     )
     assert code == 0, err
     joint = first_json(out)["joints"][1]
@@ -194,6 +206,13 @@ def test_an_offset_another_tool_left_is_measured_through_not_added_to(
         52,
     )
     assert two.peek("present_position") == 2048
+    joint = first_json(out)["joints"][2]
+    assert (joint["present_ticks"], joint["actual_ticks"], joint["homing_offset"]) == (
+        -500,
+        1000,
+        -1048,
+    )
+    assert three.peek("present_position") == 2048
 
 
 def test_calibrate_refuses_multi_turn_feedback_naming_the_phase_bit(
