@@ -1,7 +1,10 @@
-"""Dynamixel hardware backend: a bus layer over dynamixel_sdk and the Backend contract in SI units.
+"""The servo-chain backend: a bus layer over a vendor SDK and the Backend contract in SI units.
 
 ``DynamixelBackend(robot)`` drives a configured servo chain; ``DynamixelBus`` is the register-level
-bus (also for tools). Only ``sdk.py`` imports ``dynamixel_sdk``.
+bus (also for tools). The link under the bus follows the servo family's vendor (``links.py``):
+Dynamixel servos through ``sdk.py``, the only importer of ``dynamixel_sdk``; Feetech servos
+through ``snakebot.backends.feetech.sdk``, the only importer of ``scservo_sdk``. The backend
+names ``dynamixel`` and ``feetech`` are this chain, each for its vendor's robots.
 """
 
 from snakebot.backends.dynamixel.backend import DynamixelBackend

@@ -544,10 +544,14 @@ class DynamixelBackend(Backend):
     def _set_gains(self, gains: PDGains) -> None:
         servo = self.robot.servo
         writes = servo.gain_writes(gains, position_i=self.position_i_gain)
-        keys = sorted(writes, key=lambda key: self.bus.table[key].address)  # one block
+        table = self.bus.table
+        # A P/D model (SCS0009: no Position I register) gets its P and D; the I it has not is 0.
+        keys = sorted((k for k in writes if k in table), key=lambda key: table[key].address)
         self.bus.sync_write(keys, dict.fromkeys(self.ids, tuple(writes[key] for key in keys)))
         if servo.gain_kind == "pid":
-            self.gain_registers = GainRegisters(*(writes[key] for key in PID_GAIN_KEYS))
+            self.gain_registers = GainRegisters(
+                *(writes[key] if key in table else 0 for key in PID_GAIN_KEYS)
+            )
         log.debug(
             "%s: %s for kp %.4g N·m/rad, kd %.4g N·m·s/rad",
             self.port,

@@ -1,9 +1,10 @@
 """The robots of other servo families run every gait their axes allow on the twin.
 
-snake12-ax12a (12 x AX-12A, compliance loop, Protocol 1.0) and snake8-2xl430 (four 2XL430 cases)
-go through ``snakebot run`` for every gait ``snakebot gaits`` lists: exit 0, every command inside
-the joint limits, the joints following them. Miller's mass-spring gaits read the joints as
-yaw/pitch/axial segments, which 8 joints are not: they are refused with the fix, and run with it,
+snake12-ax12a (12 x AX-12A, compliance loop, Protocol 1.0), snake8-2xl430 (four 2XL430 cases)
+and snake12-sts3215 (12 x Feetech STS3215 in printed modules) go through ``snakebot run`` for
+every gait ``snakebot gaits`` lists: exit 0, every command inside the joint limits, the joints
+following them. Miller's mass-spring gaits read the joints as yaw/pitch/axial segments, which 8
+joints are not: they are refused with the fix, and run with it,
 except rectilinear, which needs an axial channel no servo snake has.
 """
 
@@ -18,7 +19,7 @@ from snakebot.cli.main import main
 from snakebot.config import load_robot
 from snakebot.gaits import gait_names
 
-ROBOTS = ("snake12-ax12a", "snake8-2xl430")
+ROBOTS = ("snake12-ax12a", "snake8-2xl430", "snake12-sts3215")
 CHANNEL_GAITS = ("miller_sidewinding", "rectilinear", "undulation")
 
 

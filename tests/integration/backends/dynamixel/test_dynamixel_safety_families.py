@@ -5,7 +5,8 @@ Bus Watchdog), X-series switched to Protocol 1.0 (Bulk Read; its watchdog and Ha
 Status registers sit below address 256, so it keeps them), and the models without a watchdog or
 Hardware Error Status: AX-12A (no group read: one Read per servo), MX-28 with its Protocol 1.0
 firmware (Bulk Read) and the Feetech STS3215 (SYNC_READ through scservo_sdk, no watchdog, no
-hardware error register: its status byte's bits).
+hardware error register: its status byte's bits) and the SCS0009 (big-endian words, no Sync
+Read: one Read per servo).
 A failed connect ends in the stop policy, a second Ctrl-C during the stop ramp too, a joint found
 outside its limits comes in at the slew limit, and a port that vanishes is a BusError saying what
 the servos do now.
@@ -124,12 +125,31 @@ def mx28(folder: Path, **safety: Any) -> RobotConfig:
     return dataclasses.replace(base, safety=dataclasses.replace(base.safety, **safety))
 
 
+def scs0009(folder: Path, **safety: Any) -> RobotConfig:
+    """A 12-joint SCS0009 snake (big-endian words, one Read per servo, P/D without I): the
+    shipped STS3215 snake with its servo swapped, at the SCS0009's factory gains."""
+    path = folder / "robots" / "snake12-scs0009.toml"
+    if not path.exists():
+        path.parent.mkdir(parents=True)
+        shutil.copytree(CONFIGS / "servos", folder / "servos")
+        text = (CONFIGS / "robots" / "snake12-sts3215.toml").read_text()
+        path.write_text(
+            text.replace('servo = "STS3215"', 'servo = "SCS0009"')
+            .replace('name = "snake12-sts3215"', 'name = "snake12-scs0009"')
+            .replace("[gains]", "")
+            .replace("position_p = 32\nposition_i = 0\nposition_d = 32\n", "")
+        )
+    base = load_robot(path)
+    return dataclasses.replace(base, safety=dataclasses.replace(base.safety, **safety))
+
+
 FAMILIES = [
     Family("x-p2", "XL430-W250", 2.0, x_series(2.0)),
     Family("x-p1", "XL430-W250", 1.0, x_series(1.0)),
     Family("ax12a", "AX-12A", 1.0, shipped("snake12-ax12a")),
     Family("mx28", "MX-28", 1.0, mx28),
     Family("sts3215", "STS3215", 0.0, shipped("snake12-sts3215")),
+    Family("scs0009", "SCS0009", 1.0, scs0009),
 ]
 # The vendor SDK's port handler that opens the emulator's dxlemu:// URL.
 HANDLERS = {"dynamixel": EmulatedPortHandler, "feetech": EmulatedScsPortHandler}
@@ -188,6 +208,7 @@ def test_each_family_reads_by_its_own_method(fbench: FamilyBench) -> None:
         "ax12a": "read",
         "mx28": "bulk_read",
         "sts3215": "sync_read",
+        "scs0009": "read",
     }[fbench.family.name]
     assert backend.bus.capabilities.read_method == expected
     with backend:
