@@ -84,7 +84,7 @@ VOLATILE = (
     "position_trajectory",
     "present_input_voltage",
     "present_temperature",
-    "goal_position_trajectory",
+    "present_goal_position",
 )
 IDENTITY = (7, 8, 12, 13, 68)  # ID, baud, secondary ID, protocol, status return level
 IDENTITY_P1 = (3, 4, 16, *IDENTITY)  # AX-12A ID, baud, status return level; and the X table's

@@ -373,7 +373,13 @@ def _announce(
     ids = sorted({s.servo_id for s in servos})
     if args.json:
         listed = [
-            {"id": s.servo_id, "model": s.table.model, "protocol": s.protocol} for s in servos
+            {
+                "id": s.servo_id,
+                "model": s.table.model,
+                "protocol": s.protocol,
+                "family": _family_name(s),
+            }
+            for s in servos
         ]
         print_json(
             {
@@ -386,12 +392,12 @@ def _announce(
         )
         return
     print(port, flush=True)
-    groups: dict[tuple[str, float], list[int]] = {}
+    groups: dict[tuple[str, str], list[int]] = {}
     for servo in servos:
-        groups.setdefault((servo.table.model, servo.protocol), []).append(servo.servo_id)
+        groups.setdefault((servo.table.model, _family_name(servo)), []).append(servo.servo_id)
     chain = ", ".join(
-        f"{len(g)} x {model} (IDs {min(g)}..{max(g)}, Protocol {protocol:.1f})"
-        for (model, protocol), g in groups.items()
+        f"{len(g)} x {model} (IDs {min(g)}..{max(g)}, {family})"
+        for (model, family), g in groups.items()
     )
     what = (
         (
@@ -402,6 +408,13 @@ def _announce(
         else (f"{robot.name}: {chain} at {baud} baud" + (", twin physics" if motion else ""))
     )
     print(f"{what}; Ctrl-C to stop", file=sys.stderr, flush=True)
+
+
+def _family_name(servo: VirtualServo) -> str:
+    """The servo family the emulated servo speaks now ("dynamixel-p1", "feetech-sts")."""
+    from snakebot.families import family_for
+
+    return family_for(servo.table, servo.protocol).name
 
 
 def _command(args: argparse.Namespace, bench: ServoBench, command: str) -> None:

@@ -1,11 +1,13 @@
-"""A byte-level Dynamixel bus emulator (Protocol 2.0 and 1.0 on one wire) that serves the
-unmodified ROBOTIS SDK.
+"""A byte-level servo bus emulator that serves the unmodified vendor SDKs: Dynamixel Protocol 2.0
+and 1.0 (ROBOTIS's SDK) and Feetech FT-SCS (Feetech's `scservo_sdk`), all on one wire; each
+servo's packets are served by its model's vendor.
 
 Core (no transport): `VirtualServo` (control table + firmware rules + motion model) and
 `EmulatedChain` (servos on one bus, bytes in, timed bytes out, fault injection). Ways in:
 `dxlemu://<name>` URLs for pyserial (`register_chain`, and `snakebot.emulation.port.
-EmulatedPortHandler` for the SDK) and a pseudo-terminal (`snakebot.emulation.pty_server.PtyServer`).
-Those two import the SDK and termios respectively, so they are not imported here.
+EmulatedPortHandler` / `snakebot.emulation.port_feetech.EmulatedScsPortHandler` for the SDKs) and
+a pseudo-terminal (`snakebot.emulation.pty_server.PtyServer`). Those import the SDKs and termios,
+so they are not imported here.
 """
 
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids

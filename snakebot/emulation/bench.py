@@ -135,8 +135,9 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
     """Give every servo wrong settings, deterministically from ``seed``.
 
     Return delay, operating and drive modes, position limits, shutdown mask, temperature limit,
-    homing offset, gains, one servo with Status Return Level 1, one that powers up with torque on,
-    and two mid-chain servos at other baud rates. IDs are left alone.
+    homing offset, gains, one servo that answers reads only (Status Return Level 1, Feetech's 0),
+    one that powers up with torque on, and two mid-chain servos at other baud rates. IDs are left
+    alone.
     """
     rng = random.Random(seed)
     servos = chain.servos
@@ -164,8 +165,8 @@ def scramble(chain: EmulatedChain, seed: int = 0) -> None:
                 poke("max_position_limit", round(0.635 * count))
             if index % 5 == 3:
                 poke("homing_offset", rng.randint(-200, 200))
-            if index == 1:
-                poke("status_return_level", 1)
+            if index == 1:  # one level short of "every instruction": 1 of 2, or Feetech's 0 of 1
+                poke("status_return_level", servo.table["status_return_level"].maximum - 1)
             if index == len(servos) - 1 and servo.memory.has("startup_configuration"):
                 poke("startup_configuration", 1)
                 poke("torque_enable", 1)

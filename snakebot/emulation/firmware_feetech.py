@@ -28,15 +28,19 @@ motors/feetech; servo-families.md §2):
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
+from snakebot.servo_tables.table import decode_magnitude
 
 if TYPE_CHECKING:
     from snakebot.emulation.servo import VirtualServo
 
+PWM_SIGN_BIT = 10
+"""Goal Time's direction bit in motor (PWM) mode (wiki memory-sts.md, memory-scscl.md)."""
 CALIBRATE = 128
 """Torque Enable value that makes the present position the middle (2048)."""
 MIDDLE = 2048
@@ -78,32 +82,46 @@ def position_ticks(memory: ControlTableMemory, state: MotorState) -> int:
     return actual_ticks(memory, state) - offset(memory)
 
 
+def goal_frame(memory: ControlTableMemory) -> tuple[int, int, int, float, float, float]:
+    """`command`'s Goal Position decode as (direction, offset, centre, rad per tick, low, high):
+    goal_rad = direction * (clamp(goal, low, high) - offset - centre) * rad per tick, the same
+    expression, so a write of Goal Position alone needs no full decode (`VirtualServo`)."""
+    ticks = memory.table.specs.ticks
+    low, high = -math.inf, math.inf
+    if not _limits_zero(memory):
+        low, high = memory.get("min_position_limit"), memory.get("max_position_limit")
+    return 1, -offset(memory), ticks.centre, ticks.rad_per_tick, low, high
+
+
 def command(servo: VirtualServo) -> ServoCommand:
     """The control table's request in SI."""
     memory, specs = servo.memory, servo.table.specs
     get = memory.get
-    ticks = specs.ticks
     no_load = specs.no_load_speed_rad_s
     speed_key = _first(memory, SPEED_KEYS)
     speed = get(speed_key) if speed_key else 0
     rad_s = memory.by_key[speed_key].scale if speed_key else 0.0
     selected = mode(memory)
-    goal = get("goal_position")
-    if not _limits_zero(memory):
-        goal = max(get("min_position_limit"), min(get("max_position_limit"), goal))
+    sign, off, centre, rad_per_tick, low, high = goal_frame(memory)
+    goal = max(low, min(high, get("goal_position")))
     acceleration = 0.0
     if memory.has("acceleration"):
         acceleration = get("acceleration") * memory.by_key["acceleration"].scale
-    pwm = get("goal_time") / 1000.0 if memory.has("goal_time") else 0.0
+    pwm = 0.0
+    if selected == OperatingMode.PWM and memory.has("goal_time"):
+        duty = get("goal_time")
+        if memory.by_key["goal_time"].sign_bit is None:  # an SCS's time in ms, bit 10 in PWM
+            duty = decode_magnitude(duty, PWM_SIGN_BIT)
+        pwm = duty / 1000.0
     gains = tuple(get(k) if memory.has(k) else 0 for k in PID_KEYS)
     limited = memory.has("torque_limit") and get("torque_limit") == 0
     return ServoCommand(
         torque_enabled=get("torque_enable") == 1 and not limited,
         operating_mode=selected,
-        goal_position_rad=(goal + offset(memory) - ticks.centre) * ticks.rad_per_tick,
+        goal_position_rad=sign * (goal - off - centre) * rad_per_tick,
         goal_velocity_rad_s=speed * rad_s,
         goal_current_a=0.0,
-        goal_pwm=max(-1.0, min(1.0, pwm)) if selected == OperatingMode.PWM else 0.0,
+        goal_pwm=max(-1.0, min(1.0, pwm)),
         max_velocity_rad_s=min(no_load, abs(speed) * rad_s or no_load),
         max_acceleration_rad_s2=acceleration if acceleration > 0 else None,
         no_load_speed_rad_s=no_load,
@@ -178,7 +196,7 @@ def refresh_present(servo: VirtualServo) -> None:
         memory.set(voltage, round(state.input_voltage_v * 10.0))
     memory.set("present_temperature", round(state.temperature_c))
     memory.set("moving", int(velocity != 0))
-    if memory.has("hardware_error_status"):
-        memory.set("hardware_error_status", int(servo.hardware_error))
-    if memory.has("goal_position_trajectory"):
-        memory.set("goal_position_trajectory", memory.get("goal_position"))
+    if memory.has("status"):
+        memory.set("status", int(servo.hardware_error))
+    if memory.has("present_goal_position"):
+        memory.set("present_goal_position", memory.get("goal_position"))

@@ -51,18 +51,13 @@ def _indirect_items(table: ServoTable) -> list[Register]:
 
 
 ByteOrder = Literal["little", "big"]
-END_ADDRESS = 2
-"""Feetech's END register: 0 = little-endian words (STS/SMS), 1 = big-endian (SCS); wiki
-memory-sts.md / memory-scscl.md."""
 
 
 def byte_order(table: ServoTable) -> ByteOrder:
-    """How the model stores two-byte items: little-endian, except a Feetech model whose END
-    register (2) reads 1 (the SCS series)."""
-    end = table.by_address(END_ADDRESS)
-    if table.family == "feetech" and end is not None and end.default == 1:
-        return "big"
-    return "little"
+    """How the model stores two-byte items: the model data's byte order (big-endian only on a
+    Feetech SCS, whose END register (2) reads 1; wiki memory-scscl.md)."""
+    orders = {register.byteorder for register in table.registers.values()}
+    return "big" if orders == {"big"} else "little"
 
 
 @dataclass(frozen=True)

@@ -1,17 +1,19 @@
-"""`VirtualServo`: an X-series servo's control table with the firmware's rules and a motion model.
+"""`VirtualServo`: a servo's control table with the firmware's rules and a motion model.
 
 Register semantics follow the e-Manual control-table pages (reference/dynamixel.md §2.2-2.4): EEPROM
 locked while torque is on, read-only items, ranges and limits, Drive Mode reverse, Homing Offset,
-Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset.
+Shutdown and latched hardware errors, the Bus Watchdog, reboot and factory reset; the AX/MX
+Protocol 1.0 tables' in `firmware_p1`, Feetech's (Lock, offset, byte order) in `firmware_feetech`.
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Protocol
 
 from snakebot.emulation import firmware, firmware_feetech, firmware_p1
+from snakebot.emulation.alarms import StepRules, faults, step_rules
 from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
@@ -24,7 +26,7 @@ from snakebot.servo_tables import ServoTable, table_for_model
 
 CLEAR_MULTI_TURN = b"\x01\x44\x58\x4c\x22"
 P1_ALARMS = HardwareError.INPUT_VOLTAGE | HardwareError.OVERHEATING | HardwareError.OVERLOAD
-OVERLOAD_AFTER_S = 1.0
+_INF = float("inf")
 _serial_numbers = itertools.count(1)
 
 
@@ -100,8 +102,9 @@ class VirtualServo:
         self._registered: bytes | None = None
         self._registered_address = 0
         self._command: tuple[int, ServoCommand] | None = None
-        self._goal_frame = (1, 0, 0, 0.0)  # direction, homing offset, centre, rad per tick
-        self._rules: tuple[int, _StepRules] | None = None
+        # direction, homing offset, centre, rad per tick, and the goal's clamp (Feetech limits)
+        self._goal_frame: tuple[int, int, int, float, float, float] = (1, 0, 0, 0.0, -_INF, _INF)
+        self._rules: tuple[int, StepRules] | None = None
         self.case: ServoCase | None = None  # the other axes of a multi-axis servo (2XL430)
         self.memory.load_defaults()
         self.memory.set("id", servo_id)
@@ -213,8 +216,15 @@ class VirtualServo:
         return self.memory.get(key)
 
     def poke(self, key: str, value: int) -> None:
-        """Set item `key` directly, bypassing every rule (test setup and fault injection)."""
+        """Set item `key` directly, bypassing every rule (test setup and fault injection); an
+        EEPROM item is set as saved (a power cycle keeps it, whatever the Lock)."""
         self.memory.set(key, value)
+        register = self.memory.by_key[key]
+        if register.address + register.size <= len(self._saved_eeprom):
+            start, end = register.address, register.address + register.size
+            saved = bytearray(self._saved_eeprom)
+            saved[start:end] = self.memory.data[start:end]
+            self._saved_eeprom = bytes(saved)
 
     def status_error(self, error: int = 0) -> int:
         """A status packet's error byte: `error`, plus the Alert bit while a HW error is latched."""
@@ -306,14 +316,23 @@ class VirtualServo:
         self._alarms = 0
 
     def latch_error(self, bits: int) -> None:
-        """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off."""
+        """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off,
+        except an overload on a model with a Holding Torque (Feetech 34/37): its output drops
+        to that share of Max Torque instead (wiki memory-sts.md, Holding torque)."""
         latched = int(self.hardware_error) | bits
-        if self.memory.has("hardware_error_status"):
-            self.memory.set("hardware_error_status", latched)
+        memory = self.memory
+        if memory.has("hardware_error_status"):
+            memory.set("hardware_error_status", latched)
         else:
             self._alarms = latched
-        if bits & self.memory.get("shutdown"):
-            self.memory.set("torque_enable", 0)
+        unload = bits & memory.get("shutdown")
+        if unload & HardwareError.OVERLOAD and memory.has("holding_torque"):
+            unload &= ~HardwareError.OVERLOAD
+            if memory.has("torque_limit"):
+                held = memory.get("holding_torque") * memory.get("max_torque") // 100
+                memory.set("torque_limit", min(memory.get("torque_limit"), held))
+        if unload:
+            memory.set("torque_enable", 0)
 
     # ----------------------------------------------------------------- time
     def step(self, dt_s: float, *, judge_watchdog: bool = True) -> None:
@@ -354,7 +373,11 @@ class VirtualServo:
                 firmware.homing_offset(memory),
                 centre_tick(self.table.specs.ticks),
                 memory.by_key["goal_position"].scale,
+                -_INF,
+                _INF,
             )
+        elif self.firmware is firmware_feetech:
+            self._goal_frame = firmware_feetech.goal_frame(memory)
         return command
 
     # ----------------------------------------------------------------- internals
@@ -385,7 +408,7 @@ class VirtualServo:
         version = self.memory.version
         if len(values) != 1 or "goal_position" not in values or self._command is None:
             return None
-        if self.firmware is not firmware:  # the X-series decode only (see `command`)
+        if self.firmware is firmware_p1:  # the X-series and Feetech decodes (see `command`)
             return None
         return version if self._command[0] == version else None
 
@@ -393,8 +416,8 @@ class VirtualServo:
         """Carry the cached command and step rules over a Goal Position write: only the goal
         changed, so the rest of `firmware.command`'s work (a dozen registers) is not redone."""
         assert self._command is not None
-        sign, offset, centre, scale = self._goal_frame
-        goal = self.memory.get("goal_position")
+        sign, offset, centre, scale, low, high = self._goal_frame
+        goal = max(low, min(high, self.memory.get("goal_position")))
         # The expression of firmware.command, so the value is bit for bit the same.
         goal_rad = sign * (goal - offset - centre) * scale
         # A field-for-field copy: `dataclasses.replace` re-runs __init__ over every field, six
@@ -426,31 +449,15 @@ class VirtualServo:
         self.memory.set("goal_velocity", 0)
         self.state = replace(self.state, velocity_rad_s=0.0)
 
-    def _step_rules(self) -> _StepRules:
+    def _step_rules(self) -> StepRules:
         """The writable items `step` checks, decoded once per change of the table."""
         version = self.memory.version
         if self._rules is None or self._rules[0] != version:
-            get = self.memory.get
-            rules = _StepRules(
-                torque_enabled=get("torque_enable") == 1,
-                watchdog_s=get("bus_watchdog") * 0.02 if self.memory.has("bus_watchdog") else 0.0,
-                min_volts_x10=get("min_voltage_limit"),
-                max_volts_x10=get("max_voltage_limit"),
-                temperature_limit_c=get("temperature_limit"),
-            )
-            self._rules = (version, rules)
+            self._rules = (version, step_rules(self.memory))
         return self._rules[1]
 
-    def _detect_faults(self, dt_s: float, rules: _StepRules) -> None:
-        state, found = self.state, 0
-        volts = state.input_voltage_v * 10.0
-        if not rules.min_volts_x10 <= volts <= rules.max_volts_x10:
-            found |= HardwareError.INPUT_VOLTAGE
-        if state.temperature_c > rules.temperature_limit_c:
-            found |= HardwareError.OVERHEATING
-        self._overload_s = self._overload_s + dt_s if abs(state.effort) >= 1.0 else 0.0
-        if self._overload_s > OVERLOAD_AFTER_S:
-            found |= HardwareError.OVERLOAD
+    def _detect_faults(self, dt_s: float, rules: StepRules) -> None:
+        found, self._overload_s = faults(self.state, rules, dt_s, self._overload_s)
         if found and found & ~int(self.hardware_error):
             self.latch_error(found)
 
@@ -459,14 +466,3 @@ def _firmware_of(table: ServoTable) -> Firmware:
     if table.family == "feetech":
         return firmware_feetech
     return firmware if "operating_mode" in table else firmware_p1
-
-
-@dataclass(frozen=True)
-class _StepRules:
-    """Torque Enable, Bus Watchdog (s) and the fault limits, as of one table version."""
-
-    torque_enabled: bool
-    watchdog_s: float
-    min_volts_x10: int
-    max_volts_x10: int
-    temperature_limit_c: int

@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -103,7 +104,8 @@ class Examples:
         for scs_id in GROUP:
             available, error = reader.isAvailable(scs_id, scs.SMS_STS_PRESENT_POSITION_L, 4)
             assert available is True and error == 0
-            positions.append(reader.getData(scs_id, scs.SMS_STS_PRESENT_POSITION_L, 2))
+            position = reader.getData(scs_id, scs.SMS_STS_PRESENT_POSITION_L, 2)
+            positions.append(self.ph.scs_tohost(position, 15))  # a tick past 0 reads -1
             speed = reader.getData(scs_id, scs.SMS_STS_PRESENT_SPEED_L, 2)
             assert abs(self.ph.scs_tohost(speed, 15)) < 4096
         reader.clearParam()
@@ -173,3 +175,55 @@ def test_examples_through_the_stock_port_handler_on_a_pty(model: str) -> None:
                 getattr(examples, name)()
         finally:
             port.closePort()
+
+
+@pytest.mark.pty
+@pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX")
+def test_sms_sts_examples_on_emulate_snake12_sts3215_pty() -> None:
+    from tests.pty_emulator import emulator
+
+    with emulator("--robot", "snake12-sts3215") as emu:
+        assert emu.first["baud"] == BAUD
+        assert {s["family"] for s in emu.first["servos"]} == {"feetech-sts"}
+        port = scs.PortHandler(emu.port)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        try:
+            examples = Examples(scs.sms_sts(port), time.sleep, patiently)
+            assert examples.ping() == 777
+            examples.read()
+            for name in STS_EXAMPLES:
+                getattr(examples, name)()
+        finally:
+            port.closePort()
+
+
+@pytest.mark.pty
+@pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX")
+def test_emulate_state_file_keeps_what_lock_0_saved_and_not_what_lock_1_left(
+    tmp_path: Path,
+) -> None:
+    """The EEPROM lock as a user meets it: an ID written between unLockEprom and LockEprom is
+    there after the emulator restarts from its state file; a limit written while locked is not."""
+    from tests.pty_emulator import emulator
+
+    state = tmp_path / "servos.json"
+    args = ("--robot", "snake12-sts3215", "--state-file", str(state))
+    with emulator(*args) as emu:
+        port = scs.PortHandler(emu.port)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        ph = scs.sms_sts(port)
+        ok = Examples(ph, time.sleep, patiently).ok
+        ok(lambda: ph.unLockEprom(12))
+        ok(lambda: ph.write1ByteTxRx(12, scs.SMS_STS_ID, 20))
+        ok(lambda: ph.LockEprom(20))
+        ok(lambda: ph.write1ByteTxRx(20, 13, 55))  # Maximum Temperature Limit, locked
+        assert ok(lambda: ph.read1ByteTxRx(20, 13)) == (55,)
+        port.closePort()
+    with emulator(*args) as emu:
+        assert 20 in emu.first["servo_ids"] and 12 not in emu.first["servo_ids"]
+        port = scs.PortHandler(emu.port)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        ph = scs.sms_sts(port)
+        ok = Examples(ph, time.sleep, patiently).ok
+        assert ok(lambda: ph.read1ByteTxRx(20, 13)) == (70,)
+        port.closePort()

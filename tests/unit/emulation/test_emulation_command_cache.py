@@ -27,3 +27,28 @@ def test_the_cached_command_equals_a_fresh_decode_after_every_write(model: str) 
             servo.write(GOAL, rng.randint(0, 4095).to_bytes(4, "little"))
         assert servo.command() == firmware.command(servo)
         servo.step(0.001)
+
+
+@pytest.mark.parametrize(("model", "order"), [("STS3215", "little"), ("SCS0009", "big")])
+def test_a_feetech_servos_cached_command_equals_a_fresh_decode(model: str, order: str) -> None:
+    from snakebot.emulation import firmware_feetech
+
+    rng = random.Random(4)
+    servo = VirtualServo(model, 1)
+    count = servo.table.specs.ticks.count
+    for _ in range(300):
+        choice = rng.random()
+        if choice < 0.1:  # angle limits, sometimes both 0 (multi-turn / motor mode)
+            low = 0 if rng.random() < 0.3 else rng.randint(0, count // 2)
+            high = 0 if low == 0 and rng.random() < 0.5 else rng.randint(count // 2, count - 1)
+            servo.write(9, low.to_bytes(2, order) + high.to_bytes(2, order))
+        elif choice < 0.2 and servo.memory.has("homing_offset"):
+            magnitude = rng.randint(0, 2047)
+            raw = magnitude | (1 << 11 if rng.random() < 0.5 else 0)
+            servo.write(31, raw.to_bytes(2, order))
+        elif choice < 0.3:
+            servo.write(40, bytes([rng.choice((0, 1))]))
+        else:
+            servo.write(42, rng.randint(0, count - 1).to_bytes(2, order))
+        assert servo.command() == firmware_feetech.command(servo)
+        servo.step(0.001)

@@ -7,7 +7,9 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from snakebot.emulation import EmulatedChain, VirtualServo, make_chain_for_ids
+import pytest
+
+from snakebot.emulation import EmulatedChain, ExternalMotion, VirtualServo, make_chain_for_ids
 from snakebot.emulation.protocol_feetech import (
     BROADCAST_ID,
     ErrorBit,
@@ -64,6 +66,29 @@ def test_wiki_write_exchange_sets_goal_time_and_speed() -> None:
         0,
         1000,
     )
+
+
+def test_wiki_sync_read_exchange_two_servos_eight_bytes_each() -> None:
+    statuses = parse_packets(
+        b"".join(
+            r.data for r in sts((1, 2)).receive(bytes.fromhex("FF FF FE 06 82 38 08 01 02 36"))
+        )
+    )
+    assert [(s.servo_id, len(s.params)) for s in statuses] == [(1, 8), (2, 8)]
+    assert statuses[0].params[:2] == (2048).to_bytes(2, "little")
+
+
+@pytest.mark.parametrize(
+    ("wire", "answer"),
+    [
+        ("FF FF 01 02 0A F2", "FF FF 01 02 00 FC"),  # reset (the turn count)
+        ("FF FF 01 02 06 F6", "FF FF 01 02 00 FC"),  # parameter recovery
+        ("FF FF 01 02 08 F4", ""),  # restart: no status packet
+    ],
+)
+def test_wiki_reset_recovery_and_restart_exchanges(wire: str, answer: str) -> None:
+    replies = sts().receive(bytes.fromhex(wire))
+    assert b"".join(r.data for r in replies) == bytes.fromhex(answer)
 
 
 def test_sync_read_answers_in_the_order_of_the_request() -> None:
@@ -242,3 +267,50 @@ def test_feetech_and_dynamixel_p1_servos_share_one_wire() -> None:
     # An AX-12A's ping status has no parameters either; its model number reads at 0.
     assert read(chain, 2, 0, 2) == (12).to_bytes(2, "little")
     assert read(chain, 1, 3, 2) == (777).to_bytes(2, "little")
+
+
+def test_an_overload_held_past_protection_time_drops_to_holding_torque() -> None:
+    servo = VirtualServo("STS3215", 1, baud=BAUD, motion=ExternalMotion())
+    chain = EmulatedChain([servo], baud=BAUD)
+    write(chain, 1, 40, b"\x01")
+    servo.state = replace(servo.state, effort=0.85)  # above Overload Torque 80 %
+    chain.advance(1.9)  # Protection Time 200 x 10 ms = 2 s
+    (status,) = parse_packets(send(chain, 1, Instruction.PING))
+    assert status.error == 0
+    chain.advance(0.2)
+    (status,) = parse_packets(send(chain, 1, Instruction.PING))
+    assert status.error & ErrorBit.OVERLOAD
+    assert read(chain, 1, 65, 1) == bytes([ErrorBit.OVERLOAD])  # Servo status
+    assert servo.peek("torque_limit") == 200  # Holding Torque 20 % of Max Torque 1000
+    assert servo.peek("torque_enable") == 1
+
+
+def test_scramble_leaves_one_feetech_servo_answering_reads_only() -> None:
+    from snakebot.emulation.bench import scramble
+
+    chain = sts((1, 2))
+    scramble(chain, 0)
+    servo = chain.servo(2)
+    assert servo.peek("status_return_level") == 0
+    assert write(chain, 2, 41, b"\x00") == b""
+    assert read(chain, 2, 41, 1) == b"\x00"
+
+
+def test_a_poked_eeprom_item_survives_a_restart() -> None:
+    chain = sts()
+    chain.servo(1).poke("homing_offset", 123)  # as a scrambled bench servo's settings
+    send(chain, 1, Instruction.RESTART)
+    assert chain.servo(1).peek("homing_offset") == 123
+
+
+def test_an_scs_in_motor_mode_turns_by_goal_time_with_bit_10_the_direction() -> None:
+    chain = make_chain_for_ids("SCS0009", (1,), BAUD)
+    servo = chain.servo(1)
+    write(chain, 1, 9, bytes(4))  # both angle limits 0: motor mode
+    write(chain, 1, 40, b"\x01")
+    write(chain, 1, 44, (500 | 1 << 10).to_bytes(2, "big"))  # 50 % duty, reverse
+    chain.advance(0.2)
+    assert servo.state.velocity_rad_s < 0
+    write(chain, 1, 44, (500).to_bytes(2, "big"))
+    chain.advance(0.2)
+    assert servo.state.velocity_rad_s > 0
