@@ -79,7 +79,7 @@ def add_parser(subparsers: Any) -> None:
         action="store_true",
         help="try every rate the family's models can be set to (X series: 57600, 1000000, "
         "115200, 2000000, 3000000, 4000000, 9600; AX/MX also 500000, 2500000, 19200; Feetech "
-        f"{', '.join(map(str, family_bauds(FAMILIES[2])))})",
+        "1000000, 57600, 76800, 115200, 128000, 250000, 500000, 38400)",
     )
     which = parser.add_mutually_exclusive_group()
     which.add_argument(
