@@ -1,8 +1,9 @@
 """Every fault the emulated bus can inject, at several rates, under both stop policies.
 
 Each case runs the real DynamixelBackend and runner (snake12 by default, ``--robot`` another:
-snake12-ax12a for Protocol 1.0; sidewinding, 100 Hz) through the unmodified dynamixel_sdk on the
-in-process emulator (``dxlemu://``, virtual time), the servos speaking the robot's protocol,
+snake12-ax12a for Protocol 1.0, snake12-sts3215 for Feetech; sidewinding, 100 Hz) through the
+unmodified vendor SDK (dynamixel_sdk, scservo_sdk) on the in-process emulator (``dxlemu://``,
+virtual time), the servos speaking the robot's protocol,
 injects one fault through the emulated chain, lets the run end however it ends, then checks:
 
 - how it ended: completed, a typed error (a SnakebotError subclass, exit 1 in the CLI), or an
@@ -51,6 +52,7 @@ from snakebot.emulation import (
 )
 from snakebot.emulation import protocol as protocol2
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.emulation.port_feetech import EmulatedScsPortHandler
 from snakebot.errors import SnakebotError
 from snakebot.families import family_for
 from snakebot.gaits import make_gait
@@ -230,10 +232,13 @@ class GoalAudit:
                 robot.servo_ids, converter.lower_ticks, converter.upper_ticks, strict=True
             )
         }
-        self.p1 = family_for(table, robot.bus.protocol).protocol == 1.0
+        family = family_for(table, robot.bus.protocol)
+        # Feetech frames its packets as Protocol 1.0 does (one-byte addresses and lengths).
+        self.p1 = family.framing == "dynamixel-1.0"
         self.parser: Any = (protocol1 if self.p1 else protocol2).StreamParser(stale_after_s=None)
-        goal = table["goal_position"]
-        self.goal, self.size, self.signed = goal.address, goal.size, goal.signed
+        self.register = table["goal_position"]
+        self.goal, self.size = self.register.address, self.register.size
+        self.big_endian = family.byte_order == "big"  # Feetech SCS words
         self.address_bytes = 1 if self.p1 else 2
         self.sync_write = protocol2.Instruction.SYNC_WRITE  # 0x83 in both protocols
         self.write = protocol2.Instruction.WRITE
@@ -241,7 +246,9 @@ class GoalAudit:
         self.out_of_limits: list[tuple[int, int]] = []
 
     def _value(self, data: bytes) -> int:
-        return int.from_bytes(data, "little", signed=self.signed)
+        """The goal as the servo reads it: the model data's decoding (two's complement or
+        sign-magnitude) of the word in the family's byte order."""
+        return self.register.decode(data[::-1] if self.big_endian else data)
 
     def feed(self, data: bytes) -> None:
         fmt = "<BB" if self.p1 else "<HH"
@@ -267,8 +274,20 @@ class GoalAudit:
             self.out_of_limits.append((servo_id, ticks))
 
 
-def audited_port(audit: GoalAudit) -> Callable[[str], EmulatedPortHandler]:
-    class AuditedPortHandler(EmulatedPortHandler):  # type: ignore[misc]
+GOAL_TURNS_TORQUE_ON = frozenset({"feetech"})
+"""Vendors whose servos turn their torque on at a Goal Position write (the emulator's Feetech
+firmware, after FTServo_Python's examples, which never write Torque Enable)."""
+PORT_HANDLERS: dict[str, type[Any]] = {
+    "dynamixel": EmulatedPortHandler,
+    "feetech": EmulatedScsPortHandler,
+}
+"""The emulator's port handler for each vendor's SDK (both open ``dxlemu://`` URLs)."""
+
+
+def audited_port(audit: GoalAudit, vendor: str = "dynamixel") -> Callable[[str], Any]:
+    """The vendor SDK's emulated port handler, feeding every packet the host sends to ``audit``."""
+
+    class AuditedPortHandler(PORT_HANDLERS[vendor]):  # type: ignore[misc]
         def writePort(self, packet: Any) -> int:  # noqa: N802 - the SDK's name
             audit.feed(bytes(packet))
             return int(super().writePort(packet))
@@ -312,6 +331,10 @@ def run_case(
     robot = with_policy(robot_name, policy, ramp_s=0.3)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud, seed=seed)
     table = chain.servos[0].table
+    if fault.mode == "reboot" and table.family in GOAL_TURNS_TORQUE_ON:
+        # Nothing is latched: the restarted servo takes the next goal, torque and all, and
+        # ends as the policy says like the others.
+        fault = dataclasses.replace(fault, torque_cut=())
     version = family_for(table, robot.bus.protocol).protocol
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
@@ -327,7 +350,7 @@ def run_case(
         backend = DynamixelBackend(
             robot,
             port=url,
-            port_handler_factory=audited_port(audit),
+            port_handler_factory=audited_port(audit, table.family),
             clock=clock,
             sleep=chain.advance,
         )

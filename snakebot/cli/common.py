@@ -370,16 +370,16 @@ def gait_list_arg(text: str) -> str:
 
 
 def baud_arg(text: str) -> int:
-    """argparse type: a baud rate a serial port opens (snakebot.setup.bauds.PORT_BAUDS, and the
-    X series' 4.5 Mbps); whether the servo model has it is the model data's to say, checked where
-    the command knows the model."""
-    from snakebot.setup.bauds import PORT_BAUDS
+    """argparse type: a baud rate a serial port opens (snakebot.setup.bauds.VENDOR_PORT_BAUDS,
+    and the X series' 4.5 Mbps); whether the servo model has it is the model data's to say,
+    checked where the command knows the model."""
+    from snakebot.setup.bauds import VENDOR_PORT_BAUDS
 
     try:
         value = int(text)
     except ValueError:
         value = -1
-    known = {*PORT_BAUDS, 4_500_000}
+    known = {*(b for opens in VENDOR_PORT_BAUDS.values() for b in opens), 4_500_000}
     if value not in known:
         rates = ", ".join(map(str, sorted(known)))
         raise argparse.ArgumentTypeError(f"expected one of {rates}, got {text!r}")

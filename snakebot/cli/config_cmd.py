@@ -223,7 +223,7 @@ def run_assign(args: argparse.Namespace) -> int:
         if args.from_id is None and not family.broadcast_ping:
             ids = family.max_id + 1
             print(
-                f"Protocol {family.protocol:.1f} has no broadcast ping: every ID is pinged on "
+                f"{family.label} has no broadcast ping: every ID is pinged on "
                 f"its own, {ids} IDs at each rate (about "
                 f"{sum(sweep_seconds(ids, b) for b in bauds):.0f} s on a real port; --from 1 "
                 "finds a new servo at once)",

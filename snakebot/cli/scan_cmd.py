@@ -1,9 +1,10 @@
 """``snakebot scan``: which servos answer on a port, with protocol, model, firmware and baud rate.
 
-The search is ``snakebot.setup.scan``, in each protocol (both unless ``--protocol`` names one);
+The search is ``snakebot.setup.scan``, in each servo family (with ``--robot``, its vendor's;
+``--protocol`` names one Dynamixel protocol, ``--family`` any one family);
 this module prints what it found and says what went wrong in the words of what was seen: two
 servos sharing an ID (contradicting or always-corrupt replies), a line that garbles everything,
-line noise (a warning: the servos answer), or servos of both protocols on one port (a warning:
+line noise (a warning: the servos answer), or servos of two families on one port (a warning:
 a bus speaks one protocol).
 """
 
@@ -16,14 +17,15 @@ from typing import TYPE_CHECKING, Any
 
 from snakebot.cli.common import baud_arg, port_arg, print_json, robot_arg
 from snakebot.errors import BusError, SnakebotError, UsageError
-from snakebot.families import FAMILIES, ServoFamily, families_of
+from snakebot.families import FAMILIES, ServoFamily, families_of, family_for
 from snakebot.setup.bauds import family_bauds
 
 if TYPE_CHECKING:
     from snakebot.setup.scan import ScanEntry, ScanReport
 
 DEFAULT_BAUD = 1_000_000
-PROTOCOLS = tuple(sorted({f.protocol for f in FAMILIES}, reverse=True))
+PROTOCOLS = tuple(sorted({f.protocol for f in families_of("dynamixel")}, reverse=True))
+FAMILY_NAMES = tuple(f.name for f in FAMILIES)
 
 
 def protocol_arg(text: str) -> float:
@@ -75,15 +77,23 @@ def add_parser(subparsers: Any) -> None:
     bauds.add_argument(
         "--all-bauds",
         action="store_true",
-        help="try every rate the protocol's models can be set to (X series: 57600, 1000000, "
-        "115200, 2000000, 3000000, 4000000, 9600; AX/MX also 500000, 2500000, 19200)",
+        help="try every rate the family's models can be set to (X series: 57600, 1000000, "
+        "115200, 2000000, 3000000, 4000000, 9600; AX/MX also 500000, 2500000, 19200; Feetech "
+        "1000000, 57600, 76800, 115200, 128000, 250000, 500000, 38400)",
     )
-    parser.add_argument(
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument(
         "--protocol",
         type=protocol_arg,
-        help="search one protocol only, 1 or 2 (default: both, the robot's first; Protocol 1.0 "
-        "has no broadcast ping, so each ID is pinged on its own: about 8.7 s per rate at 1 Mbps "
-        "for all 254 IDs)",
+        help="search one Dynamixel protocol only, 1 or 2 (default: every family, the robot's "
+        "vendor's only and its own first; Protocol 1.0 and Feetech have no broadcast ping, so "
+        "each ID is pinged on its own: about 8.7 s per rate at 1 Mbps for all 254 IDs)",
+    )
+    which.add_argument(
+        "--family",
+        choices=FAMILY_NAMES,
+        help="search one servo family only, e.g. feetech-sts (Feetech STS/SMS, 1 Mbps from the "
+        "factory) or feetech-scs",
     )
     parser.add_argument(
         "--ids",
@@ -109,23 +119,27 @@ def model_name(model_number: int) -> str:
 Plan = list[tuple[ServoFamily, tuple[int, ...]]]
 
 
-def _plan(args: argparse.Namespace, first: float | None) -> Plan:
-    """(family, baud rates) in search order: the robot's protocol first, or only ``--protocol``."""
-    families = list(families_of("dynamixel"))
+def _plan(args: argparse.Namespace, first: ServoFamily | None) -> Plan:
+    """(family, baud rates) in search order: the robot's vendor's families, its own first; or
+    only ``--protocol`` (Dynamixel) or ``--family``; without a robot, every family."""
+    families = list(FAMILIES if first is None else families_of(first.vendor))
     if args.protocol is not None:
-        families = [f for f in families if f.protocol == args.protocol]
+        families = [f for f in families_of("dynamixel") if f.protocol == args.protocol]
+    elif args.family is not None:
+        families = [f for f in FAMILIES if f.name == args.family]
     elif first is not None:
-        families.sort(key=lambda f: f.protocol != first)
+        families.sort(key=lambda f: f != first)
     return [(f, family_bauds(f) if args.all_bauds else (args.baud,)) for f in families]
 
 
 def run(args: argparse.Namespace) -> int:
     """Print the servos found; exit 1 when none answer, IDs collide or the line garbles all."""
+    from snakebot.servo_tables import table_for_model
     from snakebot.setup.link import Link
     from snakebot.setup.scan import scan
 
     expected: tuple[int, ...] | None = None
-    first: float | None = None
+    first: ServoFamily | None = None
     if args.robot is not None:
         from snakebot.config import load_robot
 
@@ -133,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         args.port = args.port or robot.bus.port
         args.baud = args.baud or robot.bus.baud
         expected = tuple(robot.servo_ids)
-        first = robot.bus.protocol
+        first = family_for(table_for_model(robot.servo.name), robot.bus.protocol)
     if args.port is None:
         raise UsageError(
             "name the serial port with --port (`snakebot ports` lists them), or "
@@ -142,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
     args.baud = args.baud or DEFAULT_BAUD
     plan = _plan(args, first)
     start = time.monotonic()
-    with Link(args.port, plan[0][1][0], protocol=plan[0][0].protocol) as link:
+    with Link(args.port, plan[0][1][0], family=plan[0][0]) as link:
         report = scan(
             link,
             plan,
@@ -160,6 +174,7 @@ def run(args: argparse.Namespace) -> int:
                 "servos": servos,
                 "missing": missing,
                 "protocols": list(report.protocols),
+                "families": [f.name for f in report.families],
                 "mixed": report.mixed,
                 "seconds": round(elapsed, 2),
             }
@@ -183,8 +198,8 @@ def _missing(report: ScanReport, expected: tuple[int, ...] | None) -> list[int]:
     if expected is not None:
         return [i for i in expected if i not in found]
     gaps: set[int] = set()
-    for protocol in {e.family.protocol for e in report.entries}:
-        ids = {e.servo_id for e in report.entries if e.family.protocol == protocol}
+    for family in {e.family for e in report.entries}:
+        ids = {e.servo_id for e in report.entries if e.family == family}
         gaps |= {i for i in range(min(ids), max(ids) + 1) if i not in ids}
     return sorted(gaps - found)
 
@@ -215,23 +230,31 @@ def _warn_mixed(report: ScanReport) -> None:
     if not report.mixed:
         return
     groups = []
-    for protocol in report.protocols:
-        ids = sorted({e.servo_id for e in report.entries if e.family.protocol == protocol})
-        groups.append(f"Protocol {protocol:.1f}: ID(s) {', '.join(map(str, ids))}")
+    for family in report.families:
+        ids = sorted({e.servo_id for e in report.entries if e.family == family})
+        groups.append(f"{family.label}: ID(s) {', '.join(map(str, ids))}")
+    vendors = {f.vendor for f in report.families}
+    fix = (
+        "give each family its own port (a Feetech and a Dynamixel servo share neither protocol "
+        "nor control table)"
+        if len(vendors) > 1
+        else "give each protocol its own port, or switch the X-series servos' Protocol Type "
+        "(address 13, Dynamixel Wizard 2.0) so that every servo speaks the same one (AX and MX "
+        "Protocol 1.0 firmware speak 1.0 only)"
+    )
     print(
         f"snakebot: warning: servos of two protocols share this port ({'; '.join(groups)}). A "
-        "robot's bus speaks one protocol ([bus] protocol): give each protocol its own port, or "
-        "switch the X-series servos' Protocol Type (address 13, Dynamixel Wizard 2.0) so that "
-        "every servo speaks the same one (AX and MX Protocol 1.0 firmware speak 1.0 only)",
+        f"robot's bus speaks one protocol ([bus] protocol): {fix}",
         file=sys.stderr,
     )
 
 
-def _as_dict(entry: ScanEntry, bad_lines: list[tuple[float, int]]) -> dict[str, Any]:
+def _as_dict(entry: ScanEntry, bad_lines: list[tuple[str, int]]) -> dict[str, Any]:
     clash = (entry.shared or entry.garbled) and entry.line not in bad_lines
     return {
         "id": entry.servo_id,
         "protocol": entry.family.protocol,
+        "family": entry.family.name,
         "model": model_name(entry.model_number) if entry.model_number else "?",
         "model_number": entry.model_number,
         "firmware": entry.firmware,
@@ -245,11 +268,11 @@ def _as_dict(entry: ScanEntry, bad_lines: list[tuple[float, int]]) -> dict[str, 
     }
 
 
-def _line(entry: ScanEntry, bad_lines: list[tuple[float, int]]) -> str:
+def _line(entry: ScanEntry, bad_lines: list[tuple[str, int]]) -> str:
     text = _as_dict(entry, bad_lines)
     line = (
         f"ID {entry.servo_id:>3}  {text['model']:<12} firmware {entry.firmware:<3} "
-        f"Protocol {entry.family.protocol:.1f} at {entry.baud} baud"
+        f"{entry.family.label} at {entry.baud} baud"
     )
     if text["duplicate"]:
         label = "DUPLICATE ID" if entry.shared else "DUPLICATE ID?"
@@ -299,7 +322,9 @@ def _raise_problems(args: argparse.Namespace, report: ScanReport) -> None:
         which = (
             f"in Protocol {args.protocol:.1f} "
             if args.protocol is not None
-            else "in either protocol "
+            else f"as {args.family} "
+            if args.family is not None
+            else "in any protocol searched "
         )
         raise BusError(
             args.port,

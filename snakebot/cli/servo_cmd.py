@@ -165,7 +165,9 @@ def run_reset(args: argparse.Namespace) -> int:
         try:
             reset_option(link, keep_id=args.keep_id, keep_baud=args.keep_baud)
         except SetupError as exc:
-            raise SetupError(f"{exc} (drop --keep-id and --keep-baud)") from None
+            options = link.family.capabilities(link.bus.table).factory_reset_options
+            hint = "drop --keep-id and --keep-baud" if "all" in options else "use --keep-id alone"
+            raise SetupError(f"{exc} ({hint})") from None
         factory = factory_baud(link.bus.table)
         if link.ping_clean(args.id, args.baud) is None:
             raise BusError(

@@ -122,6 +122,19 @@ class ServoFamily(ABC):
     Dynamixel P1 Lock only ever closes, until power-off)."""
     restart_replies: bool = True
     """Whether a Reboot/Restart instruction is answered (Feetech's Restart 0x08 is not)."""
+    framing: str = ""
+    """The packet format, where two families share one byte for byte (Feetech's is Dynamixel
+    Protocol 1.0's, ``"dynamixel-1.0"``): a ping is then the same packet in both, and a search
+    pings each ID once for all of them."""
+    calibrates_homing_offset: bool = False
+    """Whether ``calibrate`` zeroes each servo itself, writing its Homing Offset so a straight
+    joint reads the centre tick (Feetech STS: the position wraps at 0/4095 and the angle limits
+    cannot span the wrap). False: the Homing Offset stays 0, the offset lives in the robot file."""
+
+    @property
+    def label(self) -> str:
+        """How messages name the family's protocol, e.g. "Protocol 1.0"."""
+        return f"Protocol {self.protocol:.1f}"
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ServoFamily) and other.name == self.name

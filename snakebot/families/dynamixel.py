@@ -38,6 +38,7 @@ class DynamixelProtocol2(ServoFamily):
 
     name = "dynamixel-p2"
     vendor = "dynamixel"
+    framing = "dynamixel-2.0"
     protocol = 2.0
     sdk_protocol = 2.0
     broadcast_id = 0xFE
@@ -103,6 +104,7 @@ class DynamixelProtocol1(ServoFamily):
 
     name = "dynamixel-p1"
     vendor = "dynamixel"
+    framing = "dynamixel-1.0"
     protocol = 1.0
     sdk_protocol = 1.0
     broadcast_id = 0xFE

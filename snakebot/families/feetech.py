@@ -37,6 +37,7 @@ class _Feetech(ServoFamily):
     """What STS and SCS share: the FT-SCS packets, status byte and timing."""
 
     vendor = "feetech"
+    framing = "dynamixel-1.0"  # FF FF ID LEN INST params CHK, the same checksum (ft-scs.md)
     broadcast_id = 0xFE
     max_id = 253  # 0x00..0xFD (ft-scs.md); the SDK's MAX_ID is 0xFC
     broadcast_ping = False
@@ -95,9 +96,14 @@ class FeetechSTS(_Feetech):
     """Feetech STS/SMS servos (STS3215, STS3250): little-endian words, Sync Read 0x82."""
 
     name = "feetech-sts"
+    label = "Feetech STS"
     protocol = 0.0
     sdk_protocol = 0.0  # FTServo_Python sms_sts: protocol_end 0
     byte_order = "little"
+    # Calibrate writes Position Offset (31) so the straight joint reads 2048: the 0/4095 wrap
+    # then lies behind the joint, where no angle limit or goal reaches (huggingface/lerobot
+    # calibrates the same register; Present = Actual - Offset).
+    calibrates_homing_offset = True
 
     def capabilities(self, table: ServoTable) -> Capabilities:
         """Sync Read; current sensing where the table has Present Current (69)."""
@@ -109,6 +115,7 @@ class FeetechSCS(_Feetech):
     ``scscl`` has no GroupSyncRead; LeRobot refuses it on protocol 1), one READ per servo."""
 
     name = "feetech-scs"
+    label = "Feetech SCS"
     protocol = 1.0
     sdk_protocol = 1.0  # FTServo_Python scscl: protocol_end 1
     byte_order = "big"

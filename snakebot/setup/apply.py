@@ -3,8 +3,11 @@
 Order per servo, head to tail: Status Return Level first (every later write must be answered),
 a reboot if a hardware error is latched, torque off before EEPROM items (the joint goes limp),
 Operating Mode before the other EEPROM items (a mode change resets gains and profiles, e-Manual
-Operating Mode), a reboot after settings that act at boot, then RAM items. Baud rates change last,
-one servo at a time, each found again at its new rate before the next. IDs never change here: a
+Operating Mode), the EEPROM items inside the family's EEPROM lock where it has one (Feetech: Lock
+0 before them, so they are saved, and 1 after), a reboot after settings that act at boot, then RAM
+items. Baud rates change last,
+one servo at a time (unlocked first where the family locks its EEPROM), each found again at its
+new rate (and locked there) before the next. IDs never change here: a
 servo is known by its ID (``assign-id`` changes IDs). Torque is left off. Before the first write,
 a servo that stands outside the Min/Max Position Limit about to be written is warned about
 (:class:`PositionOutsideLimitsWarning`): it could not hold there with torque on.
@@ -19,14 +22,14 @@ from typing import Literal
 
 from snakebot.families import family_for
 from snakebot.servo.ticks import ticks_to_rad
-from snakebot.setup.bauds import port_rate
+from snakebot.setup.bauds import port_bauds, port_rate
 from snakebot.setup.diff import ChainDiff, Difference, survey
 from snakebot.setup.errors import SetupError, VerifyError
 from snakebot.setup.link import Link, unanswered_ok
 from snakebot.setup.maintenance import reboot, wait_for_boot
 from snakebot.setup.settings import REBOOT_KEYS, ChainSettings, Setting
 
-Action = Literal["write", "torque_off", "reboot", "baud"]
+Action = Literal["write", "torque_off", "reboot", "baud", "unlock", "lock"]
 FIRST_KEYS = ("status_return_level",)
 LIMIT_KEYS = ("min_position_limit", "max_position_limit")
 
@@ -50,8 +53,8 @@ class Step:
         """One line for the plan, e.g. ``servo 3: return_delay_time 500 -> 0 us``."""
         head = f"servo {self.servo_id}:"
         if self.setting is None:
-            what = "torque off" if self.action == "torque_off" else "reboot"
-            return f"{head} {what} ({self.reason})"
+            what = {"torque_off": "torque off", "unlock": "unlock EEPROM", "lock": "lock EEPROM"}
+            return f"{head} {what.get(self.action, self.action)} ({self.reason})"
         want, unit = self.setting.show(self.setting.raw)
         want = f"{want} {unit}".rstrip()
         if self.current is None:
@@ -77,7 +80,8 @@ class ApplyPlan:
 def _refusals(chain: ChainSettings, diff: ChainDiff) -> list[str]:
     """Why the plan cannot be carried out by any order of writes: a locked EEPROM (AX/MX Lock,
     which snakebot never sets) or a latched error in a family without Reboot."""
-    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(chain.table).reboot
+    family = family_for(chain.table, chain.robot.bus.protocol)
+    can_reboot = family.capabilities(chain.table).reboot
     out = []
     for wanted in chain.servos:
         state = diff.servos[wanted.servo_id]
@@ -89,8 +93,8 @@ def _refusals(chain: ChainSettings, diff: ChainDiff) -> list[str]:
             )
         if state.hardware_error and not can_reboot:
             out.append(
-                f"servo {wanted.servo_id} has a latched hardware error and Protocol "
-                f"{chain.robot.bus.protocol:.1f} has no Reboot: power-cycle it"
+                f"servo {wanted.servo_id} has a latched hardware error and "
+                f"{family.label} has no Reboot: power-cycle it"
             )
     return out
 
@@ -103,7 +107,11 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
     refused = _refusals(chain, diff)
     if refused:
         raise SetupError("cannot apply the settings: " + "; ".join(refused))
-    can_reboot = family_for(chain.table, chain.robot.bus.protocol).capabilities(chain.table).reboot
+    family = family_for(chain.table, chain.robot.bus.protocol)
+    can_reboot = family.capabilities(chain.table).reboot
+    lock = (
+        family.eeprom_lock if family.eeprom_lock and family.eeprom_lock.key in chain.table else None
+    )
     steps: list[Step] = []
     bauds: list[Step] = []
     limp: list[int] = []
@@ -123,7 +131,13 @@ def plan_apply(chain: ChainSettings, diff: ChainDiff) -> ApplyPlan:
             limp += [servo_id] if state.torque_on else []
             why = "the joint goes limp" if state.torque_on else "already off"
             steps.append(Step(servo_id, "torque_off", reason=f"EEPROM writes need it; {why}"))
+            if lock is not None:
+                why = f"{lock.key} {lock.unlocked}: the EEPROM writes that follow are saved"
+                steps.append(Step(servo_id, "unlock", reason=why))
             steps += [_write(d) for d in eeprom]
+            if lock is not None:
+                why = f"{lock.key} {lock.locked} again, its power-on value"
+                steps.append(Step(servo_id, "lock", reason=why))
             resets |= any(d.key == "operating_mode" for d in eeprom)
         # Without a Reboot instruction (Protocol 1.0) they act at the next power-up.
         booted = [d.key for d in eeprom if d.key in REBOOT_KEYS] if can_reboot else []
@@ -154,9 +168,17 @@ class Applier:
     def __init__(self, link: Link, diff: ChainDiff) -> None:
         self.link = link
         self.where = {i: s.baud for i, s in diff.servos.items()}
-        # Status Return Level < 2: writes get no status reply (e-Manual Status Return Level).
+        # Below its highest value (Dynamixel 2, Feetech 1) Status Return Level leaves writes
+        # unanswered (e-Manual Status Return Level; Feetech Response Status Level 8).
+        self.answers_all = (
+            link.bus.table["status_return_level"].maximum
+            if "status_return_level" in link.bus.table
+            else 2
+        )
         self.quiet = {
-            i for i, s in diff.servos.items() if s.values.get("status_return_level", 2) < 2
+            i
+            for i, s in diff.servos.items()
+            if s.values.get("status_return_level", self.answers_all) < self.answers_all
         }
 
     def run(self, step: Step) -> bool:
@@ -169,6 +191,9 @@ class Applier:
             return True
         if step.action == "torque_off":
             self._write(servo_id, "torque_enable", 0)
+            return True
+        if step.action in ("unlock", "lock"):
+            self._lock(servo_id, step.action == "lock")
             return True
         assert step.setting is not None
         if step.action == "baud":
@@ -189,12 +214,18 @@ class Applier:
         if back != value:
             raise VerifyError(self.link.port, servo_id, key, value, back)
         if key == "status_return_level":
-            (self.quiet.discard if value >= 2 else self.quiet.add)(servo_id)
+            (self.quiet.discard if value >= self.answers_all else self.quiet.add)(servo_id)
+
+    def _lock(self, servo_id: int, locked: bool) -> None:
+        """Close (``locked``) or open the family's EEPROM lock, where it has one."""
+        lock = self.link.family.eeprom_lock
+        if lock is not None and lock.key in self.link.bus.table:
+            self._write(servo_id, lock.key, lock.locked if locked else lock.unlocked)
 
     def _change_baud(self, servo_id: int, index: int) -> None:
         old = self.where[servo_id]
         rate = self.link.bus.table.baud_rates[index]
-        new = port_rate(rate) or rate
+        new = port_rate(rate, port_bauds(self.link.bus.table)) or rate
         other = self.link.probe(servo_id, new, tries=1)
         if other.models or other.corrupt:
             raise SetupError(
@@ -202,6 +233,7 @@ class Applier:
                 f"servo already answers as ID {servo_id} at {new} baud. Unplug it, or give it "
                 "another ID with `snakebot config assign-id`"
             )
+        self._lock(servo_id, locked=False)
         bus = self.link.at(old)
         # The status may already come back at the new rate; finding the servo there decides.
         with unanswered_ok():
@@ -218,6 +250,7 @@ class Applier:
         back = self.link.at(new).read(servo_id, "baud_rate")
         if back != index:
             raise VerifyError(self.link.port, servo_id, "baud_rate", index, back)
+        self._lock(servo_id, locked=True)
 
 
 def outside_new_limits(

@@ -6,7 +6,9 @@ has one, else by pinging every ID on its own (Protocol 1.0; about 8.7 s per rate
 so naming the ID, ``from_id``, is much quicker). Without ``from_id`` it must be the only servo on
 the bus; with it, the only one answering as that ID. The target ID must be free, both at the rate
 the servo is at and at the rate it moves to. The ID changes first, the baud rate last, each verified
-by finding the servo again.
+by finding the servo again. Where the family locks its EEPROM (Feetech: Lock 1 at power-on, when an
+ID written acts until the next power-off only and the servo is back at ID 1 after it), the lock is
+opened before each write and closed again at the servo's new ID and rate.
 """
 
 from __future__ import annotations
@@ -98,7 +100,7 @@ def _lone(link: Link, found: list[Found], from_id: int | None, bauds: Sequence[i
     if not found:
         raise SetupError(
             f"{link.port}: {who} answered at any baud rate ({', '.join(map(str, bauds))}) in "
-            f"Protocol {link.family.protocol:.1f}. Check the servo's power (its LED blinks once "
+            f"{link.family.label}. Check the servo's power (its LED blinks once "
             "at power-up) and cable"
         )
     if len(found) > 1:
@@ -158,13 +160,17 @@ def assign_id(
     if (to_id, baud) != (servo.servo_id, servo.baud) and bus.read(servo.servo_id, "torque_enable"):
         bus.write(servo.servo_id, "torque_enable", 0)  # ID and Baud Rate are EEPROM items
     if to_id != servo.servo_id:
+        link.unlock(servo.servo_id, servo.baud)
         with unanswered_ok():  # the reply may already carry the new ID
-            bus.write(servo.servo_id, "id", to_id)
+            link.at(servo.baud).write(servo.servo_id, "id", to_id)
         _verify(link, to_id, servo.baud, "id", to_id)
+        link.relock(to_id, servo.baud)
     if baud != servo.baud:
+        link.unlock(to_id, servo.baud)
         with unanswered_ok():  # the reply may already come at the new rate
             link.at(servo.baud).write(to_id, "baud_rate", index)
         _verify(link, to_id, baud, "baud_rate", index)
+        link.relock(to_id, baud)
     return Assignment(servo, to_id, baud)
 
 

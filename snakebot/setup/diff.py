@@ -13,14 +13,15 @@ from dataclasses import dataclass, field
 from snakebot.backends.dynamixel.faults import decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.servo_tables import table_for_model
-from snakebot.setup.bauds import model_bauds, preferred
+from snakebot.setup.bauds import factory_baud, model_bauds, preferred
 from snakebot.setup.errors import DuplicateIdError, SetupError
 from snakebot.setup.link import Link
 from snakebot.setup.settings import ChainSettings, Setting
 
 STATE_KEYS = ("torque_enable", "hardware_error_status", "lock")
 """Read beside the settings where the model has them (an AX has no Hardware Error Status, an X
-no Lock)."""
+no Lock). A family's own EEPROM lock (Feetech, :attr:`ServoFamily.eeprom_lock`) is not a lock
+that holds until a power cycle: setup opens it around its writes."""
 
 
 @dataclass(frozen=True)
@@ -116,8 +117,9 @@ def locate(link: Link, ids: Sequence[int], model_number: int, first_baud: int) -
     if remaining:
         problems.append(
             f"no servo answers as ID {', '.join(map(str, remaining))} at any baud rate (check "
-            "power and cables; `snakebot scan --all-bauds` lists who is there; a new servo is "
-            "ID 1 at 57600: give it its ID with `snakebot config assign-id`)"
+            "power and cables; `snakebot scan --all-bauds` lists who is there; a new "
+            f"{link.bus.table.model} is ID {link.bus.table['id'].default} at "
+            f"{factory_baud(link.bus.table)}: give it its ID with `snakebot config assign-id`)"
         )
     if problems:
         expected = _model_name(model_number)
@@ -153,14 +155,37 @@ def read_servo(link: Link, servo_id: int, baud: int, settings: Sequence[Setting]
             "Its Status Return Level may be 0: `snakebot servo reset` or Dynamixel Wizard fixes it"
         ) from exc
     state = {k: values.pop(k) for k in state_keys}
+    sticky_lock = link.family.eeprom_lock is None
     return ServoState(
         servo_id,
         baud,
         values,
         bool(state["torque_enable"]),
         state.get("hardware_error_status", 0),
-        bool(state.get("lock", 0)),
+        sticky_lock and bool(state.get("lock", 0)),
     )
+
+
+VOLTAGE_KEYS = ("present_input_voltage", "min_voltage_limit", "max_voltage_limit")
+
+
+def condition_note(link: Link, servo_id: int, bits: int) -> str:
+    """What a status byte's condition bits say about one servo (a family without a Hardware
+    Error Status register reports the servo's faults in every reply), with the supply's reading
+    where the input voltage is out of range."""
+    faults = link.family.status_errors(bits)
+    text = f"servo {servo_id} reports {', '.join(faults)} in its status"
+    table = link.bus.table
+    if "input voltage" in faults and all(k in table for k in VOLTAGE_KEYS):
+        volts, low, high = (link.bus.read(servo_id, k) * 0.1 for k in VOLTAGE_KEYS)
+        text += f": its supply reads {volts:.1f} V, outside its limits {low:.1f}..{high:.1f} V"
+        if volts > high:
+            text += (
+                f". A {table.model} made for a lower voltage is damaged by this one (a 7.4 V "
+                "servo on 12 V: huggingface/lerobot#1010): switch the supply off and use the "
+                "servo's own voltage, or the robot file of the model made for it"
+            )
+    return text
 
 
 def survey(link: Link, chain: ChainSettings) -> ChainDiff:
@@ -186,6 +211,9 @@ def survey(link: Link, chain: ChainSettings) -> ChainDiff:
                 else "a power cycle clears it (no Reboot in this protocol)"
             )
             notes.append(f"servo {servo_id} has a latched hardware error ({flags}); {fix}")
+        bits = link.bus.conditions.get(servo_id, 0)
+        if bits and not link.family.capabilities(link.bus.table).hardware_error_status:
+            notes.append(condition_note(link, servo_id, bits))
         if state.locked:
             notes.append(
                 f"servo {servo_id} has its EEPROM locked (Lock = 1): it takes no EEPROM "

@@ -119,25 +119,35 @@ def gather(link: Link, servo_id: int, baud: int, *, patient: bool = False) -> Ev
     pings = Tally(clean, corrupt, silent)
     if not models:
         return Evidence(servo_id, baud, pings, Tally(), Tally(), (), None, None)
-    position, firmware_at = _layout(link, models[0])
+    position, model_at, firmware_at = _layout(link, models[0])
     reads = Tally()
     if position is not None:
         reads = _ask(link, servo_id, position.address, position.size)[0]
-    info, data = _ask(link, servo_id, 0, firmware_at + 1, tries=2)
+    info, data = _ask(link, servo_id, 0, max(firmware_at, (model_at or 0) + 1) + 1, tries=2)
     model_register = firmware = None
     if data is not None:
-        model_register, firmware = data[0] | data[1] << 8, data[firmware_at]
+        firmware = data[firmware_at]
+        if model_at is not None:
+            word = bytes(data[model_at : model_at + 2])
+            big = link.family.byte_order == "big"
+            model_register = int.from_bytes(word, "big" if big else "little")
     return Evidence(servo_id, baud, pings, reads, info, tuple(models), model_register, firmware)
 
 
-def _layout(link: Link, model_number: int) -> tuple[Register | None, int]:
-    """Present Position and the Firmware Version address of ``model_number`` (its table's;
-    for a model snakebot has no data for: no position, the protocol's firmware address)."""
+def _layout(link: Link, model_number: int) -> tuple[Register | None, int | None, int]:
+    """Present Position, the Model Number address and the Firmware Version address of
+    ``model_number`` (its table's: the model at 0 and firmware at 2 on an AX, 6 on the X series,
+    the model at 3 and firmware at 0 on a Feetech STS; for a model snakebot has no data for: no
+    position, no model register to compare, the protocol's firmware address)."""
     try:
         table = table_for_model(model_number)
     except SnakebotError:
-        return None, link.family.firmware_address
-    return table["present_position"], table["firmware_version"].address
+        return None, None, link.family.firmware_address
+    return (
+        table["present_position"],
+        table["model_number"].address,
+        table["firmware_version"].address,
+    )
 
 
 def _ask(

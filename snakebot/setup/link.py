@@ -1,7 +1,9 @@
 """One serial port for the setup tools: a DynamixelBus whose baud rate they switch, raw probes.
 
-Device paths (``/dev/ttyUSB0``, ``COM3``) open through the SDK's own port handler, the emulator's
-``dxlemu://NAME`` URLs through pyserial's ``serial_for_url``. Any other URL is refused before
+The link under it is the family's vendor's (``snakebot.backends.dynamixel.links``: the Dynamixel
+SDK, or Feetech's ``scservo_sdk``). Device paths (``/dev/ttyUSB0``, ``COM3``) open through the
+vendor SDK's port handler, the emulator's ``dxlemu://NAME`` URLs through pyserial's
+``serial_for_url``. Any other URL is refused before
 anything opens (snakebot.config.ports, checked by DynamixelBus): ``socket://`` would connect to a
 host, ``spy://...?file=`` truncate a file.
 """
@@ -12,17 +14,28 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from types import TracebackType
+from typing import Any
 
-from snakebot.backends.dynamixel import sdk
+from snakebot.backends.dynamixel import links, sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import ServoStatusError
 from snakebot.errors import BusError
 from snakebot.families import ServoFamily, family_for
 from snakebot.servo import FACTORY_BAUD
-from snakebot.servo_tables import table_for_model
+from snakebot.servo_tables import supported_models, table_for_model
+from snakebot.setup.errors import VerifyError
 
 SEARCH_BAUDS = (FACTORY_BAUD, 1_000_000, 115200, 2_000_000, 3_000_000, 4_000_000, 9600)
 """Rates searched for a servo, factory default first (4.5 Mbps needs a custom port handler)."""
+
+
+def model_of(family: ServoFamily) -> str:
+    """A model that speaks ``family`` (its control table names the registers a search reads):
+    the XL430-W250 where it can, else the first by name of the models snakebot has data for."""
+    for name in ("XL430-W250", *sorted(supported_models())):
+        if family.speaks(table_for_model(name)):
+            return name
+    raise LookupError(f"no servo model speaks {family.name}")  # every family ships one
 
 
 def search_order(first: int) -> tuple[int, ...]:
@@ -66,9 +79,10 @@ class Probe:
 class Link:
     """A port opened for setup: ``bus`` (registers by name, typed errors) at a switchable rate.
 
-    ``model`` picks the control table register names resolve in (X-series servos share it);
-    ``protocol`` the family spoken (None: the model's default; ConfigError if the model cannot
-    speak it). :meth:`speak` switches the family on the same open port (``scan`` tries both).
+    ``model`` picks the control table register names resolve in (X-series servos share it;
+    default: a model ``family`` speaks, else the XL430-W250); ``protocol`` the family spoken
+    (None: the model's default; ConfigError if the model cannot speak it), or ``family`` names
+    it. :meth:`speak` switches the family on the same open port (``scan`` tries each).
     """
 
     def __init__(
@@ -76,12 +90,17 @@ class Link:
         port: str,
         baud: int,
         *,
-        model: str | int = "XL430-W250",
+        model: str | int | None = None,
         protocol: float | None = None,
+        family: ServoFamily | None = None,
         retries: int = 2,
     ) -> None:
         self.port = port
-        self.handler: sdk.PortHandlerLike
+        self.handler: Any
+        if model is None:
+            model = "XL430-W250" if family is None else model_of(family)
+        if family is not None:
+            protocol = family.protocol
         self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
         self.bus = DynamixelBus(
@@ -92,28 +111,34 @@ class Link:
             retries=retries,
             port_handler_factory=self._make_handler,
         )
-        self._raw = sdk.SdkLink(self.handler, self.family)
+        self._raw: links.Link = links.link_for(self.handler, self.family)
         self._open = False
 
     def speak(self, family: ServoFamily) -> None:
         """Talk ``family``'s protocol from now on, on the same port at the same rate (the
-        bus keeps its control table and retries)."""
+        bus keeps its retries, and its control table where ``family`` speaks the model). A
+        family of another vendor has its own SDK: the port is reopened through its handler."""
         if family == self.family:
             return
         old = self.bus
+        model = old.table.model if family.speaks(old.table) else model_of(family)
+        same_sdk = family.vendor == self.family.vendor
+        if not same_sdk:
+            old.close()
+            self._open = False
+        self.family = family
         self.bus = DynamixelBus(
             self.port,
             old.baud,
             family=family,
-            model=old.table.model,
+            model=model,
             retries=old.retries,
-            port_handler_factory=lambda _port: self.handler,
+            port_handler_factory=(lambda _port: self.handler) if same_sdk else self._make_handler,
         )
-        self._raw = sdk.SdkLink(self.handler, family)
-        self.family = family
+        self._raw = links.link_for(self.handler, family)
 
-    def _make_handler(self, port: str) -> sdk.PortHandlerLike:
-        self.handler = sdk.port_handler_for(port)
+    def _make_handler(self, port: str) -> Any:
+        self.handler = links.port_handler_for(port, self.family)
         return self.handler
 
     def __enter__(self) -> Link:
@@ -212,6 +237,27 @@ class Link:
             for i in range(self.family.max_id + 1)
             if (probe := self.probe(i, baud, tries=1)).models or probe.corrupt
         }
+
+    def unlock(self, servo_id: int, baud: int) -> None:
+        """Open the family's EEPROM lock on one servo, so the EEPROM writes that follow are
+        saved (Feetech Lock 0); nothing where the family has no such lock. Verified."""
+        lock = self.family.eeprom_lock
+        if lock is not None and lock.key in self.bus.table:
+            self._write_lock(servo_id, baud, lock.key, lock.unlocked)
+
+    def relock(self, servo_id: int, baud: int) -> None:
+        """Close the family's EEPROM lock again (Feetech Lock 1, its power-on value), after the
+        EEPROM writes that :meth:`unlock` opened it for; nothing where there is none."""
+        lock = self.family.eeprom_lock
+        if lock is not None and lock.key in self.bus.table:
+            self._write_lock(servo_id, baud, lock.key, lock.locked)
+
+    def _write_lock(self, servo_id: int, baud: int, key: str, value: int) -> None:
+        bus = self.at(baud)
+        bus.write(servo_id, key, value)
+        back = bus.read(servo_id, key)
+        if back != value:
+            raise VerifyError(self.port, servo_id, key, value, back)
 
     def raw_read(self, servo_id: int, address: int, length: int) -> tuple[list[int], int]:
         """One Read without retries: (data, SDK result code); for collision checks."""

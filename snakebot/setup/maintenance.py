@@ -40,7 +40,7 @@ def wait_for_boot(link: Link, servo_id: int, baud: int, timeout_s: float = BOOT_
 
 
 def _protocol(link: Link) -> str:
-    return f"{link.bus.table.model} on Protocol {link.family.protocol:.1f}"
+    return f"{link.bus.table.model} on {link.family.label}"
 
 
 def check_reboot(link: Link, servo_id: int | None = None) -> None:
@@ -83,7 +83,14 @@ def reset_option(link: Link, *, keep_id: bool, keep_baud: bool) -> str:
         )
     option = RESET_KEEP[(keep_id, keep_baud)]
     table = link.bus.table
-    if option not in link.family.capabilities(table).factory_reset_options:
+    options = link.family.capabilities(table).factory_reset_options
+    if option not in options and options == ("keep_id",):
+        raise SetupError(
+            f"{_protocol(link)}: its one reset (parameter recovery, 0x06) keeps the ID and "
+            f"restores everything else, the baud rate to {factory_baud(table)} included; reset "
+            "keeping the ID, then give the servo its rate back with assign-id"
+        )
+    if option not in options:
         raise SetupError(
             f"{_protocol(link)}: its Factory Reset resets everything, the ID to "
             f"{table['id'].default} and the baud rate to {factory_baud(table)} included; it has "
@@ -110,6 +117,7 @@ def factory_reset(
     if bus.read(servo_id, "torque_enable"):
         bus.write(servo_id, "torque_enable", 0)
     families = reset_families(link, option)
+    link.unlock(servo_id, baud)  # Feetech: "unlock the EEPROM first" (ft-scs.md, 0x06)
     if option == "all":
         with unanswered_ok():  # the status may already come as ID 1, at the factory rate
             bus.factory_reset(servo_id, keep=option)
@@ -117,7 +125,9 @@ def factory_reset(
         bus.factory_reset(servo_id, keep=option)
     new_id = servo_id if keep_id else table["id"].default
     new_baud = baud if keep_baud else factory_baud(table)
-    return new_id, new_baud, _find_after_reset(link, new_id, new_baud, families)
+    family = _find_after_reset(link, new_id, new_baud, families)
+    link.relock(new_id, new_baud)
+    return new_id, new_baud, family
 
 
 def reset_families(link: Link, option: str) -> tuple[ServoFamily, ...]:

@@ -1,8 +1,14 @@
 """Find every servo on a port, per protocol and baud rate: a first pass, then each ID on its own.
 
-The first pass is a broadcast ping where the protocol has one (2.0), else a ping of every ID in
-the range, one by one (1.0 has no broadcast ping: each absent ID costs the SDK's reply timeout,
-about 34 ms, so 254 IDs take about 8.7 s per rate on a real port).
+The first pass is a broadcast ping where the protocol has one (Dynamixel 2.0), else a ping of
+every ID in the range, one by one (Dynamixel 1.0 and Feetech have no broadcast ping: each absent
+ID costs the SDK's reply timeout, about 34 ms (Feetech's SDK: 50 ms), so 254 IDs take about 8.7 s
+per rate on a real port).
+
+Dynamixel Protocol 1.0 and Feetech's protocol frame their packets alike, so a servo of either
+answers the other's ping; its model number, read where the family keeps it (address 0 on a
+Dynamixel, 3 on a Feetech), names a model only in its own family. Where the same ID at the same
+rate answered in two such families, the entry whose model number its family knows is kept.
 
 The broadcast ping drops any reply slot it cannot parse, so a servo whose slot was lost (to noise
 or a collision) and two servos sharing an ID both vanish from it. Hence every ID it lists, ID 1
@@ -16,8 +22,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from snakebot.errors import SnakebotError
 from snakebot.families import ServoFamily
 from snakebot.servo import FACTORY_ID
+from snakebot.servo_tables import table_for_model
 from snakebot.setup.duplicates import Evidence, Kind, Verdict, gather, judge
 from snakebot.setup.link import Link
 
@@ -58,9 +66,17 @@ class ScanEntry:
     family: ServoFamily
 
     @property
-    def line(self) -> tuple[float, int]:
-        """(protocol, baud rate): the servos that hear each other."""
-        return self.family.protocol, self.baud
+    def line(self) -> tuple[str, int]:
+        """(family name, baud rate): the servos that hear each other."""
+        return self.family.name, self.baud
+
+    @property
+    def known_model(self) -> bool:
+        """Whether the model number names a model of the entry's family."""
+        try:
+            return self.family.speaks(table_for_model(self.model_number))
+        except SnakebotError:
+            return False
 
     @property
     def shared(self) -> bool:
@@ -80,8 +96,8 @@ class ScanReport:
     entries: tuple[ScanEntry, ...]
 
     @property
-    def bad_lines(self) -> list[tuple[float, int]]:
-        """(protocol, baud) pairs at which several IDs answered and not one reply came back
+    def bad_lines(self) -> list[tuple[str, int]]:
+        """(family name, baud) pairs at which several IDs answered and not one reply came back
         clean: the line is at fault (wiring, termination, a rate the wiring cannot hold), not
         shared IDs."""
         lines = list(dict.fromkeys(e.line for e in self.entries))
@@ -117,9 +133,16 @@ class ScanReport:
         )
 
     @property
+    def families(self) -> tuple[ServoFamily, ...]:
+        """The families that single servos answered in, in search order."""
+        return tuple(
+            dict.fromkeys(e.family for e in self.entries if e.verdict.kind is Kind.ONE_SERVO)
+        )
+
+    @property
     def mixed(self) -> bool:
-        """Whether servos of more than one protocol share the port (one bus speaks one)."""
-        return len(self.protocols) > 1
+        """Whether servos of more than one family share the port (one bus speaks one)."""
+        return len(self.families) > 1
 
 
 def scan(
@@ -136,27 +159,59 @@ def scan(
     sweeps before they start.
     """
     entries: list[ScanEntry] = []
+    swept: dict[tuple[str, int], set[int]] = {}
     for family, bauds in plan:
         link.speak(family)
         wanted = tuple(range(family.max_id + 1)) if ids is None else tuple(ids)
         for baud in bauds:
-            entries += _scan_baud(link, family, baud, wanted, notify)
-    return ScanReport(tuple(entries))
+            heard = swept.get((family.framing, baud)) if family.framing else None
+            found = _scan_baud(link, family, baud, wanted, notify, heard)
+            entries += found
+            if heard is None and not family.broadcast_ping and family.framing:
+                swept[(family.framing, baud)] = {e.servo_id for e in found}
+    return ScanReport(tuple(_one_family_each(entries)))
+
+
+def _one_family_each(entries: list[ScanEntry]) -> list[ScanEntry]:
+    """One entry per servo where an ID at a rate answered in several families of one framing (a
+    Feetech servo answers a Dynamixel 1.0 ping): the ones whose model number their family knows,
+    else the first searched (a model snakebot has no data for reads as such in every family)."""
+    groups: dict[tuple[int, int, str], list[ScanEntry]] = {}
+    for entry in entries:
+        if entry.verdict.kind is Kind.ONE_SERVO and entry.family.framing:
+            key = (entry.servo_id, entry.baud, entry.family.framing)
+            groups.setdefault(key, []).append(entry)
+    dropped: set[int] = set()
+    for group in groups.values():
+        known = [e for e in group if e.known_model] or group[:1]
+        dropped |= {id(e) for e in group if e not in known}
+    return [e for e in entries if id(e) not in dropped]
 
 
 def _first_pass(
-    link: Link, family: ServoFamily, baud: int, ids: Sequence[int], notify: Notify
+    link: Link,
+    family: ServoFamily,
+    baud: int,
+    ids: Sequence[int],
+    notify: Notify,
+    heard: set[int] | None = None,
 ) -> tuple[dict[int, tuple[int, int]], set[int], bool]:
     """The IDs found at first sight ``{id: (model, firmware or 0)}``, the IDs whose reply was
-    corrupt, and whether the broadcast ping was left with garbage it could not place."""
+    corrupt, and whether the broadcast ping was left with garbage it could not place.
+
+    ``heard``: the IDs that answered a ping sweep at this rate in another family of the same
+    framing (the same ping packet): only those are pinged again."""
     if family.broadcast_ping:
         pinged, garbled = link.broadcast(baud)
         return pinged, set(), garbled
-    notify(
-        f"Protocol {family.protocol:.1f} has no broadcast ping: pinging IDs {_span(ids)} one by "
-        f"one at {baud} baud (about {sweep_seconds(len(ids), baud):.1f} s on a real port; "
-        "--ids bounds it)"
-    )
+    if heard is not None:
+        ids = [i for i in ids if i in heard]
+    else:
+        notify(
+            f"{family.label} has no broadcast ping: pinging IDs {_span(ids)} one by "
+            f"one at {baud} baud (about {sweep_seconds(len(ids), baud):.1f} s on a real port; "
+            "--ids bounds it)"
+        )
     found: dict[int, tuple[int, int]] = {}
     corrupt: set[int] = set()
     for servo_id in ids:
@@ -175,9 +230,14 @@ def _span(ids: Sequence[int]) -> str:
 
 
 def _scan_baud(
-    link: Link, family: ServoFamily, baud: int, ids: Sequence[int], notify: Notify
+    link: Link,
+    family: ServoFamily,
+    baud: int,
+    ids: Sequence[int],
+    notify: Notify,
+    heard: set[int] | None = None,
 ) -> list[ScanEntry]:
-    pinged, suspects, garbled = _first_pass(link, family, baud, ids, notify)
+    pinged, suspects, garbled = _first_pass(link, family, baud, ids, notify, heard)
     evidence: dict[int, Evidence] = {}
     highest = max(pinged, default=0)
     todo = {*pinged, *suspects, FACTORY_ID, *range(1, highest + LOOK_PAST + 1)}

@@ -110,6 +110,16 @@ def _checked(
                 "run --backend dynamixel` checks them at connect, so set them here",
             )
         values[servo.servo_id] = keys
+    family = family_for(chain.table, chain.robot.bus.protocol)
+    if family.calibrates_homing_offset and any(
+        s.key == "homing_offset" for servo in chain.servos for s in servo.settings
+    ):
+        raise ConfigError(
+            servo_file,
+            "settings.homing_offset",
+            f"{family.label} servos hold their own zero: `snakebot calibrate` writes each "
+            "one's Homing Offset, so the settings may not set it (remove the key)",
+        )
     ids = [j.servo_id for j in joints]
     errors, notes = check_settings(
         values,

@@ -1,4 +1,5 @@
-"""Hardware-in-the-loop tests: skipped unless SNAKEBOT_PORT names a real Dynamixel bus.
+"""Hardware-in-the-loop tests: skipped unless SNAKEBOT_PORT names a real servo bus (Dynamixel or
+Feetech: the robot file's servo model says which).
 
 A robot owner runs them against the snake on the desk::
 
@@ -23,7 +24,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     if os.environ.get("SNAKEBOT_PORT"):
         return
     skip = pytest.mark.skip(
-        reason="needs a real Dynamixel bus: set SNAKEBOT_PORT (and SNAKEBOT_ROBOT) to run"
+        reason="needs a real servo bus: set SNAKEBOT_PORT (and SNAKEBOT_ROBOT) to run"
     )
     for item in items:
         if "hardware" in item.keywords:

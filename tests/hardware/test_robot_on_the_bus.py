@@ -27,16 +27,25 @@ DURATION_S = 2.0
 
 
 def open_bus(port: str, robot: RobotConfig) -> DynamixelBus:
-    bus = DynamixelBus(port, robot.bus.baud, model=robot.servo.name)
+    """The robot's bus: its model's family speaks (Dynamixel, or Feetech's scservo_sdk)."""
+    bus = DynamixelBus(port, robot.bus.baud, model=robot.servo.name, protocol=robot.bus.protocol)
     bus.open()
     return bus
+
+
+LOOK_PAST = 3
+"""IDs pinged past the robot's highest where the family has no broadcast ping (Feetech, Dynamixel
+Protocol 1.0): a servo left at another ID sits near the chain's."""
 
 
 def test_every_servo_of_the_robot_answers_and_no_other(port: str, robot: RobotConfig) -> None:
     bus = open_bus(port, robot)
     try:
         found = bus.ping_all(robot.servo_ids)
-        on_bus = bus.broadcast_ping()
+        if bus.family.broadcast_ping:
+            on_bus = bus.broadcast_ping()
+        else:
+            on_bus = bus.ping_all(range(max(robot.servo_ids) + LOOK_PAST + 1))
     finally:
         bus.close()
     missing = [i for i in robot.servo_ids if i not in found]
@@ -101,7 +110,9 @@ def test_the_stop_policy_is_left_applied(port: str, robot: RobotConfig) -> None:
     bus = open_bus(port, robot)
     try:
         torque = bus.sync_read("torque_enable", robot.servo_ids)
-        watchdog = bus.sync_read("bus_watchdog", robot.servo_ids)
+        watchdog = (
+            bus.sync_read("bus_watchdog", robot.servo_ids) if "bus_watchdog" in bus.table else {}
+        )
         goals = bus.sync_read("goal_position", robot.servo_ids)
     finally:
         bus.close()
@@ -109,7 +120,7 @@ def test_the_stop_policy_is_left_applied(port: str, robot: RobotConfig) -> None:
     assert {i: v["torque_enable"] for i, v in torque.items()} == dict.fromkeys(
         robot.servo_ids, int(hold)
     )
-    assert {v["bus_watchdog"] for v in watchdog.values()} == {0}  # disarmed, never tripped
+    assert {v["bus_watchdog"] for v in watchdog.values()} <= {0}  # disarmed, never tripped
     if hold:
         converter = TickConverter.for_robot(robot)
         safe = converter.goal_ticks(

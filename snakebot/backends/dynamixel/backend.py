@@ -18,7 +18,7 @@ import dataclasses
 import logging
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -41,7 +41,7 @@ from snakebot.backends.dynamixel.faults import (
     ServoSettingsError,
 )
 from snakebot.backends.dynamixel.interrupts import deferred_interrupts
-from snakebot.backends.dynamixel.plans import Row
+from snakebot.backends.dynamixel.plans import Row, SyncWritePlan
 from snakebot.backends.dynamixel.rate import (
     CycleBudget,
     check_rate,
@@ -168,7 +168,11 @@ class DynamixelBackend(Backend):
         if self._decoder.measures_current:
             self.present_current_a = self._present_current_a  # SensesCurrent: this model
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
-        self._goal_plan = self.bus.sync_write_plan("goal_position", self.ids)
+        self._goal_plan: SyncWritePlan | None = self.bus.sync_write_plan("goal_position", self.ids)
+        self.unloaded: set[int] = set()
+        """Servos whose firmware cut their torque for a fault (a HardwareFaultError named them):
+        every later goal leaves them out, the stop ramp's too, since a Goal Position write turns
+        a Feetech servo's torque back on (FTServo_Python's examples rely on it)."""
         self.stopper = StopSequence(self, tracking or TrackingLimits())
         self.interrupts = deferred_interrupts()
         """Holds the stop signals back from before the first torque write until the stop policy
@@ -302,6 +306,7 @@ class DynamixelBackend(Backend):
         """The HardwareFaultError for ``{id: fault bits}`` (Hardware Error Status, or the
         status byte's condition bits where the model has no such register), with the remedy
         the family allows (a Reboot instruction, or a power cycle)."""
+        self._leave_out(faults)
         caps, family = self.capabilities, self.bus.family
         if caps.reboot:
             return HardwareFaultError(self.port, faults)
@@ -479,6 +484,22 @@ class DynamixelBackend(Backend):
             self._close_bounds(ticks)
         self.write_goals(ticks)
 
+    def _leave_out(self, ids: Iterable[int]) -> None:
+        """Send no more goals to ``ids`` (see :attr:`unloaded`), and turn their torque off
+        again: a goal sent between the fault and its report (the status bits are checked at a
+        slow rate) turned a Feetech servo's torque back on. Best effort: the fault is what the
+        caller reports."""
+        new = set(ids) - self.unloaded
+        if not new:
+            return
+        self.unloaded |= new
+        keep = [i for i in self.ids if i not in self.unloaded]
+        self._goal_plan = self.bus.sync_write_plan("goal_position", keep) if keep else None
+        try:
+            self.bus.sync_write("torque_enable", dict.fromkeys(sorted(new), 0))
+        except BusError as exc:
+            log.warning("%s: could not turn torque off on faulted servo(s): %s", self.port, exc)
+
     def write_goals(self, ticks: list[int]) -> None:
         """One Sync Write of N goal ticks, re-arming the Bus Watchdog first after a long pause.
 
@@ -497,8 +518,16 @@ class DynamixelBackend(Backend):
             self.write_watchdog(self.watchdog_ticks)
             self.stats.extra["watchdog_rearms"] = self.stats.extra.get("watchdog_rearms", 0) + 1
         self._fed_s = now
-        self._goal_plan.write(ticks, checked=False)  # clipped to the goal bounds
+        self._send_goals(ticks, checked=False)  # clipped to the goal bounds
         self.last_goal_ticks = ticks
+
+    def _send_goals(self, ticks: list[int], *, checked: bool) -> None:
+        """One Sync Write of the goals, leaving out the :attr:`unloaded` servos."""
+        sent = ticks
+        if self.unloaded:
+            sent = [t for i, t in zip(self.ids, ticks, strict=True) if i not in self.unloaded]
+        if self._goal_plan is not None:
+            self._goal_plan.write(sent, checked=checked)
 
     def write_watchdog(self, value: int) -> None:
         """Bus Watchdog (98) of every servo: 0 disarms (and clears a trip), 1..127 x 20 ms arms.
@@ -572,7 +601,7 @@ class DynamixelBackend(Backend):
                 limit = high if p > high else low
                 angle, bound = self._joint_angles(j, p, limit)
                 raise PoseOutsideLimitsError(self.port, j, self.ids[j], angle, bound)
-        self._goal_plan.write(present)
+        self._send_goals(present, checked=True)
         self.last_goal_ticks = present
         self.write_watchdog(self.watchdog_ticks)
         self.torque_may_be_on = True

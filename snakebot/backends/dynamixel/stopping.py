@@ -243,7 +243,7 @@ class StopSequence:
             unreached = [
                 i
                 for j, i in enumerate(b.ids)
-                if i in goals and goals[i]["goal_position"] != want[j]
+                if i in goals and goals[i]["goal_position"] != want[j] and i not in b.unloaded
             ]
             if not unreached or signals.count > before or attempt:
                 break

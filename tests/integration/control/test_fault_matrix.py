@@ -32,6 +32,36 @@ def test_reduced_fault_matrix_has_no_untyped_errors_bad_goals_or_wrong_final_sta
     assert outcomes["jam"] == "TrackingError"
 
 
+def test_reduced_fault_matrix_on_a_feetech_snake_leaves_a_faulted_servo_limp() -> None:
+    """snake12-sts3215 through scservo_sdk: no watchdog, and a Goal Position write turns a
+    Feetech servo's torque on, so a servo that unloaded itself for overload must get no goal
+    after the fault is seen, the stop ramp's included, and its torque off again."""
+    results = run_matrix(faults(quick=True), duration_s=2.0, robot_name="snake12-sts3215")
+    figures = totals(results)
+    details = [(r.fault, r.policy, r.outcome, r.final_mismatches) for r in results if not r.ok]
+    assert figures["untyped_errors"] == 0, details
+    assert figures["out_of_limit_goals"] == 0, details
+    assert figures["final_state_mismatches"] == 0, details
+    assert figures["goals_audited"] > 10_000
+    outcomes = {r.fault: r.outcome for r in results}
+    assert outcomes["none"] == "completed"
+    assert outcomes["silence"] == "SyncReadError"
+    assert outcomes["hardware_error(overload)"] == "HardwareFaultError"
+    assert outcomes["jam"] == "TrackingError"
+
+
+def test_the_goal_audit_reads_feetech_sign_magnitude_goals() -> None:
+    robot = load_robot("snake12-sts3215")
+    audit = GoalAudit(robot, table_for_model("STS3215"))
+    low, high = audit.limits[robot.servo_ids[0]]
+    params = bytes([42, 2, 1]) + (2048).to_bytes(2, "little")
+    params += bytes([2]) + (0x8000 | 5).to_bytes(2, "little")  # -5: bit 15 is the sign
+    audit.feed(protocol1.build_instruction(0xFE, protocol1.Instruction.SYNC_WRITE, params))
+    assert audit.goals == 2
+    assert audit.out_of_limits == [(2, -5)]
+    assert low <= 2048 <= high
+
+
 def test_the_goal_audit_sees_a_goal_outside_the_joint_limits() -> None:
     audit = GoalAudit(load_robot("snake12"), table_for_model("XL430-W250"))  # ticks 1071..3025
     params = struct.pack("<HH", 116, 4) + bytes([1]) + struct.pack("<i", 2048)

@@ -24,10 +24,10 @@ pytestmark = [
 REPO = Path(__file__).resolve().parents[3]
 
 
-def hardware_suite(port: str | None) -> subprocess.CompletedProcess[str]:
+def hardware_suite(port: str | None, robot: str = "snake12") -> subprocess.CompletedProcess[str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("SNAKEBOT_")}
     if port is not None:
-        env.update(SNAKEBOT_PORT=port, SNAKEBOT_ROBOT="snake12")
+        env.update(SNAKEBOT_PORT=port, SNAKEBOT_ROBOT=robot)
     return subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/hardware"],
         cwd=REPO,
@@ -44,9 +44,11 @@ def test_the_hardware_suite_skips_without_a_port() -> None:
     assert "4 skipped" in result.stdout
 
 
-def test_the_hardware_suite_passes_on_an_emulated_bus_after_config_apply() -> None:
-    with emulator("--robot", "snake12") as emu:
-        factory = hardware_suite(emu.port)
+@pytest.mark.parametrize("robot", ["snake12", "snake12-sts3215"])
+def test_the_hardware_suite_passes_on_an_emulated_bus_after_config_apply(robot: str) -> None:
+    """Dynamixel X-series, and a Feetech STS3215 snake (no broadcast ping, no watchdog)."""
+    with emulator("--robot", robot) as emu:
+        factory = hardware_suite(emu.port, robot)
         applied = subprocess.run(
             [
                 sys.executable,
@@ -55,7 +57,7 @@ def test_the_hardware_suite_passes_on_an_emulated_bus_after_config_apply() -> No
                 "config",
                 "apply",
                 "--robot",
-                "snake12",
+                robot,
                 "--port",
                 emu.port,
                 "--yes",
@@ -65,7 +67,7 @@ def test_the_hardware_suite_passes_on_an_emulated_bus_after_config_apply() -> No
             timeout=120,
         )
         assert applied.returncode == 0, applied.stderr
-        result = hardware_suite(emu.port)
+        result = hardware_suite(emu.port, robot)
     assert factory.returncode == 1  # factory settings: it names the fix
     assert "1 failed, 3 passed" in factory.stdout
     assert "`snakebot config apply` writes them" in factory.stdout

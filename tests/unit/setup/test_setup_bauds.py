@@ -59,11 +59,16 @@ def test_a_rate_the_model_cannot_be_set_to_is_refused_naming_its_rates() -> None
 def test_scan_help_names_the_rates_each_family_is_searched_at() -> None:
     scan = build_parser()._subparsers._group_actions[0].choices["scan"]  # type: ignore[union-attr]
     text = " ".join(scan.format_help().split())
-    x_part, p1_part = re.search(r"X series: ([\d, ]+); AX/MX also ([\d, ]+)\)", text).groups()
+    found = re.search(r"X series: ([\d, ]+); AX/MX also ([\d, ]+); Feetech ([\d, ]+)\)", text)
+    assert found is not None, text
+    x_part, p1_part, feetech_part = found.groups()
     x_rates = [int(r) for r in x_part.split(", ")]
     extra = {int(r) for r in p1_part.split(", ")}
     assert x_rates == list(family_bauds(family_named("dynamixel-p2")))
     assert set(family_bauds(family_named("dynamixel-p1"))) == set(x_rates) | extra
+    feetech = [int(r) for r in feetech_part.split(", ")]
+    assert feetech == list(family_bauds(family_named("feetech-sts")))
+    assert feetech[0] == 1_000_000 and 76800 in feetech  # the factory rate first
 
 
 def test_only_protocol_2_has_a_broadcast_ping_and_firmware_sits_where_its_tables_keep_it() -> None:
