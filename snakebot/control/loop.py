@@ -46,12 +46,14 @@ class CycleLoop:
         on_cycle: CycleHook | None = None,
         observers: Sequence[CycleObserver] = (),
         records: bool = False,
+        read_body: bool = True,
     ) -> None:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
         self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
         self.records = records
-        self.body_sensor = backend if isinstance(backend, SensesBody) else None
-        """The backend where it measures the body (COM, head orientation), else None."""
+        self.body_sensor = backend if read_body and isinstance(backend, SensesBody) else None
+        """The backend where it measures the body (COM, head orientation) and ``read_body``
+        asks for it every cycle, else None (a learning env reads it at its policy steps)."""
         self.state: JointState = backend.read_state()
         self.start_s = self.state.time_s
         self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target
