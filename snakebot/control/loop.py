@@ -20,19 +20,20 @@ from snakebot.control.cycle import (
     GaitCycle,
 )
 from snakebot.control.metrics import RunMetrics
-from snakebot.telemetry.sink import CycleLog
 from snakebot.types import JointCommand, JointState
 
 
 class CycleLoop:
     """One run's cycles on a connected backend, and which parts still take part.
 
-    ``step`` returns each cycle's ``CycleRecord`` when ``records`` is set or ``observers`` are
-    given (else None: nobody reads it, and the twin's cycle stays as cheap as it was).
+    Everything that leaves the loop leaves as each cycle's ``CycleRecord``: to ``metrics``
+    (None: not kept; it accounts the scored cycles), then to the observers in order (the
+    telemetry sinks among them: snakebot.telemetry.sink), then ``on_cycle(cycle, gait_time_s)``
+    runs; ``step`` returns the record.
 
     ``stage`` names the part running when an exception leaves ``step`` ("gait", "safety",
-    "backend", "metrics", "log", "hook"); ``leave_out`` drops a failed part from the cycles that
-    follow (the runner's ramp-out).
+    "backend", "metrics", "observer", "hook"); ``leave_out`` drops a failed part from the cycles
+    that follow (the runner's ramp-out): the one observer that raised, the others go on.
     """
 
     def __init__(
@@ -40,17 +41,14 @@ class CycleLoop:
         backend: Backend,
         cycle: GaitCycle,
         schedule: CycleSchedule,
-        metrics: RunMetrics,
+        metrics: RunMetrics | None,
         *,
-        log: CycleLog | None = None,
         on_cycle: CycleHook | None = None,
         observers: Sequence[CycleObserver] = (),
-        records: bool = False,
         read_body: bool = True,
     ) -> None:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
-        self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
-        self.records = records
+        self.on_cycle, self.observers = on_cycle, tuple(observers)
         self.body_sensor = backend if read_body and isinstance(backend, SensesBody) else None
         """The backend where it measures the body (COM, head orientation) and ``read_body``
         asks for it every cycle, else None (a learning env reads it at its policy steps)."""
@@ -62,27 +60,30 @@ class CycleLoop:
         self.cycle = 0
         self.stage = "gait"
         self._last_period_s: float | None = None
+        self._observing = 0
 
     def start(self) -> None:
         """Reset the gaits and the safety layer to the measured pose; open the scored window."""
         self.gaits.reset(self.state.position_rad)
-        sensor = self.body_sensor
-        self.metrics.start(self.state.time_s, None if sensor is None else sensor.body_state())
+        if self.metrics is not None:
+            sensor = self.body_sensor
+            body = None if sensor is None else sensor.body_state()
+            self.metrics.start(self.state.time_s, body, self.schedule.period_s)
 
     @property
     def elapsed_s(self) -> float:
         """Robot time since the run started."""
         return self.state.time_s - self.start_s
 
-    def gait_step(self) -> CycleRecord | None:
+    def gait_step(self) -> CycleRecord:
         """One scored gait cycle now: the gait's targets at the robot time since the start,
         ramped in as the schedule ramps (``run_gait``'s gait cycles, a learning env's)."""
         gait_time = self.state.time_s - self.start_s
         return self.step(gait_time, self.schedule.ramp_in(gait_time), scored=True)
 
-    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord | None:
+    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord:
         """One cycle with the targets of ``gait_time_s`` at ``amplitude``; scored cycles count
-        in the metrics. Returns the cycle's record (observers have seen it), or None."""
+        in the metrics. Returns the cycle's record (the metrics and observers have seen it)."""
         backend, schedule = self.backend, self.schedule
         self.stage = "gait"
         before = self.state
@@ -100,31 +101,9 @@ class CycleLoop:
         backend.advance(schedule.period_s)
         self.state = state = backend.read_state()
         body = None if self.body_sensor is None else self.body_sensor.body_state()
-        self.stage = "metrics"
-        if scored:
-            self.metrics.add(command, state, body, schedule.period_s)
-        self.stage = "log"
-        if self.log is not None:
-            com = None if body is None else body.com_m
-            imu = None if body is None else (body.head_quat, body.head_gyro_rad_s)
-            self.log.write(
-                state.time_s,
-                self.cycle,
-                command,
-                state.position_rad,
-                state.velocity_rad_s,
-                state.effort_nm,
-                com,
-                imu,
-            )
         self.cycle += 1
         period = state.time_s - before.time_s
         self._last_period_s = period
-        self.stage = "hook"
-        if self.on_cycle is not None:
-            self.on_cycle(self.cycle, gait_time_s)
-        if not (self.observers or self.records):
-            return None
         elapsed = state.time_s - self.start_s
         record = CycleRecord(
             cycle=self.cycle,
@@ -139,16 +118,24 @@ class CycleLoop:
             overrun=backend.stats.overruns != overruns,
             achieved_rate_hz=self.cycle / elapsed if elapsed > 0 else schedule.rate_hz,
         )
-        for observer in self.observers:
+        self.stage = "metrics"
+        if self.metrics is not None:
+            self.metrics(record)
+        self.stage = "observer"
+        for index, observer in enumerate(self.observers):
+            self._observing = index
             observer(record)
+        self.stage = "hook"
+        if self.on_cycle is not None:
+            self.on_cycle(self.cycle, gait_time_s)
         return record
 
     def leave_out(self, stage: str) -> None:
         """Drop the part that failed from the cycles that follow."""
         if stage in ("gait", "safety"):
             self.use_gait = False  # hold the last target the safety layer accepted
-        elif stage == "log":
-            self.log = None
+        elif stage == "observer":  # the one that raised; the others (the log) go on
+            index = self._observing
+            self.observers = self.observers[:index] + self.observers[index + 1 :]
         elif stage == "hook":
             self.on_cycle = None
-            self.observers = ()

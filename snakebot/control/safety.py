@@ -8,6 +8,8 @@ moving only inwards, never stepped onto the limit.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from snakebot.config.body import BodyConfig
@@ -52,6 +54,20 @@ class SafetyLayer:
         """The envelope a robot (or mass-spring body) config asks for."""
         return cls(robot.lower_rad, robot.upper_rad, robot.max_speed_rad_s, robot.safety.ramp_s)
 
+    @classmethod
+    def clip_only(cls, robot: RobotConfig | BodyConfig) -> SafetyLayer:
+        """The robot's joint limits and nothing else: no slew limit, no ramp. For command
+        tables made for the servo (step tests, chirps, excitation records), whose every step
+        and speed is the point of the test: inside the limits a row goes out as it is (to the
+        bit where the rest pose is straight, 0 inside the limits). A NaN or a wrong shape still
+        stops the run."""
+        return cls(robot.lower_rad, robot.upper_rad, math.inf, 0.0)
+
+    @property
+    def limits_speed(self) -> bool:
+        """False for a clip-only layer (no slew limit)."""
+        return math.isfinite(self.max_speed_rad_s)
+
     def reset(self, measured_rad: np.ndarray) -> None:
         """Start from the measured pose, so the first command never jumps (even from a pose
         outside the limits: the slew limit then brings the joint in)."""
@@ -74,7 +90,7 @@ class SafetyLayer:
             raise SafetyLimitError(f"gait returned non-finite targets for joints {bad}; stopping")
         blended = self.rest_rad + amplitude * (target - self.rest_rad)
         command = np.clip(blended, self.lower_rad, self.upper_rad)
-        if self._last is not None:
+        if self._last is not None and self.limits_speed:
             max_step = self.max_speed_rad_s * dt_s
             command = self._last + np.clip(command - self._last, -max_step, max_step)
             # Inside the limits, or on the way in from a start outside them: never outwards.
