@@ -103,5 +103,5 @@ class RunMetrics:
 
 def head_yaw_rad(quat: np.ndarray) -> float:
     """Heading of the head module's forward (+x) axis in the world's horizontal plane."""
-    w, x, y, z = (float(v) for v in quat)
+    w, x, y, z = quat.tolist()
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

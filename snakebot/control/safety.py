@@ -8,6 +8,8 @@ moving only inwards, never stepped onto the limit.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from snakebot.config.body import BodyConfig
@@ -46,6 +48,7 @@ class SafetyLayer:
         rest = np.zeros_like(self.lower_rad) if rest_rad is None else np.asarray(rest_rad, float)
         self.rest_rad = np.clip(rest, self.lower_rad, self.upper_rad)
         self._last: np.ndarray | None = None
+        self._inside = False  # whether the last command is within the limits
 
     @classmethod
     def for_robot(cls, robot: RobotConfig | BodyConfig) -> SafetyLayer:
@@ -61,25 +64,41 @@ class SafetyLayer:
                 f"measured pose {measured} is not {self.lower_rad.shape} finite angles"
             )
         self._last = measured.copy()
+        self._inside = bool(np.all((self.lower_rad <= measured) & (measured <= self.upper_rad)))
 
     def filter(self, target_rad: np.ndarray, dt_s: float, amplitude: float = 1.0) -> np.ndarray:
         """The command to send this cycle: ramped towards rest, clipped, slew-limited."""
         target = np.asarray(target_rad, dtype=float)
-        if target.shape != self.lower_rad.shape:
-            raise SafetyLimitError(
-                f"gait returned shape {target.shape}, expected {self.lower_rad.shape}"
-            )
-        if not np.isfinite(target).all():
+        lower, upper = self.lower_rad, self.upper_rad
+        if target.shape != lower.shape:
+            raise SafetyLimitError(f"gait returned shape {target.shape}, expected {lower.shape}")
+        # One reduction: a sum of finite angles is finite (unless it overflows: then look).
+        if not math.isfinite(float(target.sum())) and not np.isfinite(target).all():
             bad = np.flatnonzero(~np.isfinite(target)).tolist()
             raise SafetyLimitError(f"gait returned non-finite targets for joints {bad}; stopping")
-        blended = self.rest_rad + amplitude * (target - self.rest_rad)
-        command = np.clip(blended, self.lower_rad, self.upper_rad)
-        if self._last is not None:
+        # np.clip(x, lo, hi) is minimum(maximum(x, lo), hi): the same floats, in fewer calls.
+        command = target - self.rest_rad
+        command *= amplitude
+        command += self.rest_rad
+        np.maximum(command, lower, out=command)
+        np.minimum(command, upper, out=command)
+        last = self._last
+        if last is not None:
             max_step = self.max_speed_rad_s * dt_s
-            command = self._last + np.clip(command - self._last, -max_step, max_step)
+            command -= last
+            np.maximum(command, -max_step, out=command)
+            np.minimum(command, max_step, out=command)
+            command += last
             # Inside the limits, or on the way in from a start outside them: never outwards.
-            low = np.minimum(self.lower_rad, self._last)
-            high = np.maximum(self.upper_rad, self._last)
-            np.clip(command, low, high, out=command)
+            if self._inside:  # then every command stays inside: the bounds are the limits
+                low, high = lower, upper
+            else:
+                low, high = np.minimum(lower, last), np.maximum(upper, last)
+            np.maximum(command, low, out=command)
+            np.minimum(command, high, out=command)
+            if not self._inside:
+                self._inside = bool(np.all((lower <= command) & (command <= upper)))
+        else:
+            self._inside = True  # clipped into the limits above
         self._last = command
-        return command  # type: ignore[no-any-return]
+        return command

@@ -17,6 +17,7 @@ from snakebot.backends.twin.health import (
     DEFAULT_LIMITS,
     HealthLimits,
     HealthMonitor,
+    as_slice,
     divergence_time_s,
 )
 from snakebot.backends.twin.imu import TwinSensors
@@ -46,13 +47,10 @@ class Simulated(Protocol):
 
 
 # MuJoCo answers instability by resetting the state and counting a warning, not with NaN.
-_BAD_WARNINGS = np.array(
-    [
-        mujoco.mjtWarning.mjWARN_BADQACC,
-        mujoco.mjtWarning.mjWARN_BADQPOS,
-        mujoco.mjtWarning.mjWARN_BADQVEL,
-    ],
-    dtype=int,
+_BAD_WARNINGS = (
+    int(mujoco.mjtWarning.mjWARN_BADQACC),
+    int(mujoco.mjtWarning.mjWARN_BADQPOS),
+    int(mujoco.mjtWarning.mjWARN_BADQVEL),
 )
 
 
@@ -114,9 +112,11 @@ class TwinBackend(Backend):
             friction_model=self._friction_model,
         )
         self.data = mujoco.MjData(self.model)
+        self._warning_count = self.data.warning.number  # a view of mjData's counters
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]
         self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
+        self._qpos_at, self._dof_at = as_slice(self._qpos_index), as_slice(self._dof_index)
         self._head_id = self.model.body(link_name(0)).id
         # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
         self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
@@ -170,16 +170,22 @@ class TwinBackend(Backend):
     # -- the cycle ---------------------------------------------------------------------------
     def _servo_torque(self) -> np.ndarray:
         """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
-        velocity = self.data.qvel[self._dof_index]
-        damping = self.model.dof_damping[self._dof_index]
-        torque: np.ndarray = self.data.actuator_force - damping * velocity
+        dof = self._dof_at
+        torque: np.ndarray = (
+            self.data.actuator_force - self.model.dof_damping[dof] * (self.data.qvel[dof])
+        )
         return torque
+
+    def _bad_warnings(self) -> int:
+        """MuJoCo's count of bad-acceleration/position/velocity warnings so far."""
+        count = self._warning_count
+        return int(count[_BAD_WARNINGS[0]] + count[_BAD_WARNINGS[1]] + count[_BAD_WARNINGS[2]])
 
     def _read_state(self) -> JointState:
         data = self.data
-        velocity = data.qvel[self._dof_index].copy()
+        velocity = data.qvel[self._dof_at].copy()
         effort = self._servo_torque()
-        position = data.qpos[self._qpos_index].copy()
+        position = data.qpos[self._qpos_at].copy()
         if self._sensors.alters_positions:
             position = self._sensors.encoder_rad(position)
         return JointState(
@@ -249,11 +255,10 @@ class TwinBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
-        warnings = self.data.warning.number
-        before = int(warnings[_BAD_WARNINGS].sum())
+        before = self._bad_warnings()
         time_before = float(self.data.time)
         mujoco.mj_step(self.model, self.data, steps)
-        if int(warnings[_BAD_WARNINGS].sum()) != before:
+        if self._bad_warnings() != before:
             timestep = float(self.model.opt.timestep)
             raise SimulationDivergedError(
                 divergence_time_s(time_before, steps, timestep, float(self.data.time)),

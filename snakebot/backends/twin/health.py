@@ -51,6 +51,14 @@ DEFAULT_LIMITS = HealthLimits()
 _ROWS = 512  # cycles judged per vectorised pass at most
 
 
+def as_slice(index: np.ndarray) -> slice | np.ndarray:
+    """``index`` as a slice where it is a run of consecutive addresses (a view, not a copy: a
+    per-cycle read costs a fraction of a fancy index's), else as it is."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
+
+
 def divergence_time_s(
     time_before_s: float, steps: int, timestep_s: float, time_after_s: float
 ) -> float:
@@ -88,7 +96,7 @@ class HealthMonitor:
         self._links = link_geoms
         self._half_length = model.geom_size[link_geoms, 1].copy()
         self._radius = radius_m
-        self._dof = dof_index
+        self._dof = as_slice(dof_index)
         self._head = head_id
         self._no_load = no_load_speed_rad_s
         self._torque_limit = torque_limit_nm
@@ -129,21 +137,23 @@ class HealthMonitor:
         grounded = False
         if ncon:
             contact = data.contact
-            links = self._is_link[contact.geom[:ncon]]
-            self_contact = links.all(axis=1)
+            self_contact = self._is_link[contact.geom[:ncon]].all(axis=1)
             depth = -contact.dist[:ncon]
-            if self_contact.any():
-                grounded = not self_contact.all()
-                other = float(depth[self_contact].max())
-                self.max_self_penetration_m = max(self.max_self_penetration_m, other)
-                floor = float(depth[~self_contact].max(initial=0.0))
-            else:
-                grounded = True
-                floor = float(depth.max())
-            self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
+            selfs = int(np.count_nonzero(self_contact))
+            grounded = selfs < ncon
+            # Only a contact deeper than a maximum so far can raise one.
+            deepest = float(depth.max())
+            if deepest > min(self.max_floor_penetration_m, self.max_self_penetration_m):
+                if selfs:
+                    other = float(depth[self_contact].max())
+                    self.max_self_penetration_m = max(self.max_self_penetration_m, other)
+                    floor = float(depth[~self_contact].max(initial=0.0)) if grounded else 0.0
+                else:
+                    floor = deepest
+                self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
         if not grounded and self._clearance_m(data) > limits.contact_tolerance_m:
             self._airborne_cycles += 1
-        _, x, y, _ = data.xquat[self._head]
+        _, x, y, _ = data.xquat[self._head].tolist()
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down
             self._upside_down_cycles += 1
 
