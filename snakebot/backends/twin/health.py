@@ -9,6 +9,7 @@ with ``PhysicsHealthError`` at the time it happened. Thresholds and why: docs/ph
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -93,6 +94,7 @@ class HealthMonitor:
         self.limits = limits
         self._is_link = np.zeros(model.ngeom, dtype=bool)
         self._is_link[link_geoms] = True
+        self._link_flags: list[bool] = self._is_link.tolist()
         self._links = link_geoms
         self._half_length = model.geom_size[link_geoms, 1].copy()
         self._radius = radius_m
@@ -136,21 +138,20 @@ class HealthMonitor:
         ncon = data.ncon
         grounded = False
         if ncon:
+            # A few dozen contacts: a Python pass over them costs less than numpy's reductions.
             contact = data.contact
-            self_contact = self._is_link[contact.geom[:ncon]].all(axis=1)
-            depth = -contact.dist[:ncon]
-            selfs = int(np.count_nonzero(self_contact))
-            grounded = selfs < ncon
-            # Only a contact deeper than a maximum so far can raise one.
-            deepest = float(depth.max())
-            if deepest > min(self.max_floor_penetration_m, self.max_self_penetration_m):
-                if selfs:
-                    other = float(depth[self_contact].max())
-                    self.max_self_penetration_m = max(self.max_self_penetration_m, other)
-                    floor = float(depth[~self_contact].max(initial=0.0)) if grounded else 0.0
+            is_link = self._link_flags
+            floor = other = -math.inf
+            for (first, second), dist in zip(
+                contact.geom[:ncon].tolist(), contact.dist[:ncon].tolist(), strict=True
+            ):
+                if is_link[first] and is_link[second]:
+                    other = max(other, -dist)
                 else:
-                    floor = deepest
-                self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
+                    grounded = True
+                    floor = max(floor, -dist)
+            self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
+            self.max_self_penetration_m = max(self.max_self_penetration_m, other)
         if not grounded and self._clearance_m(data) > limits.contact_tolerance_m:
             self._airborne_cycles += 1
         _, x, y, _ = data.xquat[self._head].tolist()
@@ -163,7 +164,7 @@ class HealthMonitor:
         self._torque[row] = force_nm
         self._dt[row] = dt_s
         self._rows = row + 1
-        self.max_speed_rad_s = max(self.max_speed_rad_s, float(np.abs(velocity).max()))
+        self.max_speed_rad_s = max(self.max_speed_rad_s, *map(abs, velocity.tolist()))
         self._window_s += dt_s
 
         time_s = float(data.time)
