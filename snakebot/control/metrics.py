@@ -44,7 +44,7 @@ class RunMetrics:
         """Account one control cycle."""
         error = command - state.position_rad
         self._squared_error_sum += float(error @ error)
-        self._max_abs_command = max(self._max_abs_command, float(np.abs(command).max()))
+        self._max_abs_command = max(self._max_abs_command, *map(abs, command.tolist()))
         power = state.effort_nm * state.velocity_rad_s
         self._positive_work_j += float(power[power > 0].sum()) * dt_s
         self.cycles += 1

@@ -100,6 +100,8 @@ class TwinBackend(Backend):
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
         self._pacer: Pacer | None = None
+        self._torque_now: np.ndarray | None = None  # servo torque (N,) at _torque_time_s
+        self._torque_time_s = math.nan
         self._steps_per_period: dict[float, int] = {}
 
     # -- lifecycle ---------------------------------------------------------------------------
@@ -184,7 +186,12 @@ class TwinBackend(Backend):
     def _read_state(self) -> JointState:
         data = self.data
         velocity = data.qvel[self._dof_at].copy()
-        effort = self._servo_torque()
+        # The torque the physics check took at the end of the last advance, if nothing has
+        # stepped or changed the gains since (computing it once a cycle, not twice).
+        effort = self._torque_now
+        self._torque_now = None  # handed over once: no two states share one array
+        if effort is None or self._torque_time_s != data.time:
+            effort = self._servo_torque()
         position = data.qpos[self._qpos_at].copy()
         if self._sensors.alters_positions:
             position = self._sensors.encoder_rad(position)
@@ -232,6 +239,7 @@ class TwinBackend(Backend):
 
     def _apply_gains(self) -> None:
         """Write each joint's kp/kv and damping, or none where its torque is off."""
+        self._torque_now = None  # the damping changes the servo torque
         mask = self._torque_mask
         kp, kv = self._kp, self._kv
         electrics = self.electrics
@@ -264,10 +272,13 @@ class TwinBackend(Backend):
                 divergence_time_s(time_before, steps, timestep, float(self.data.time)),
                 "MuJoCo reported bad accelerations (state was reset)",
             )
-        if self.physics_monitor is not None:
-            self.physics_monitor.sample(self.data, dt_s, self._servo_torque())
-        if self.electrics is not None:
-            self._update_electrics(dt_s)
+        if self.physics_monitor is not None or self.electrics is not None:
+            torque = self._servo_torque()  # read_state's effort too, unless changed since
+            self._torque_now, self._torque_time_s = torque, float(self.data.time)
+            if self.physics_monitor is not None:
+                self.physics_monitor.sample(self.data, dt_s, torque)
+            if self.electrics is not None:
+                self._update_electrics(dt_s, torque)
         if self._pacer is not None:
             self._pacer.wait(dt_s)
 
@@ -285,13 +296,12 @@ class TwinBackend(Backend):
         self._steps_per_period[dt_s] = steps
         return steps
 
-    def _update_electrics(self, dt_s: float) -> None:
-        """Currents, supply sag and overload after a period; a trip limps the joint."""
+    def _update_electrics(self, dt_s: float, torque_nm: np.ndarray) -> None:
+        """Currents, supply sag and overload after a period (``torque_nm`` the servos' output
+        torque now); a trip limps the joint."""
         assert self.electrics is not None
         velocity = self.data.qvel[self._dof_index]
-        trips = self.electrics.update(
-            self._servo_torque(), self.data.actuator_force, velocity, dt_s
-        )
+        trips = self.electrics.update(torque_nm, self.data.actuator_force, velocity, dt_s)
         if trips.any() or self.electrics.battery_resistance_ohm is not None:
             self._apply_gains()
         if trips.any() and self.raise_on_overload:

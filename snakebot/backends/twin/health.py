@@ -146,12 +146,16 @@ class HealthMonitor:
                 contact.geom[:ncon].tolist(), contact.dist[:ncon].tolist(), strict=True
             ):
                 if is_link[first] and is_link[second]:
-                    other = max(other, -dist)
+                    if -dist > other:
+                        other = -dist
                 else:
                     grounded = True
-                    floor = max(floor, -dist)
-            self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
-            self.max_self_penetration_m = max(self.max_self_penetration_m, other)
+                    if -dist > floor:
+                        floor = -dist
+            if floor > self.max_floor_penetration_m:
+                self.max_floor_penetration_m = floor
+            if other > self.max_self_penetration_m:
+                self.max_self_penetration_m = other
         if not grounded and self._clearance_m(data) > limits.contact_tolerance_m:
             self._airborne_cycles += 1
         _, x, y, _ = data.xquat[self._head].tolist()
@@ -164,7 +168,9 @@ class HealthMonitor:
         self._torque[row] = force_nm
         self._dt[row] = dt_s
         self._rows = row + 1
-        self.max_speed_rad_s = max(self.max_speed_rad_s, *map(abs, velocity.tolist()))
+        speed = max(map(abs, velocity.tolist()))
+        if speed > self.max_speed_rad_s:
+            self.max_speed_rad_s = speed
         self._window_s += dt_s
 
         time_s = float(data.time)
