@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from snakebot.backends.capabilities import SensesBody
 from snakebot.backends.registry import BackendSpec, get_backend_spec
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
@@ -334,7 +335,8 @@ class Snake:
 
     def body_state(self) -> BodyState | None:
         """Centre of mass (m, (3,)) and head orientation on a twin; None on hardware."""
-        return self.backend.body_state()
+        backend = self.backend
+        return backend.body_state() if isinstance(backend, SensesBody) else None
 
     def set_torque(self, enabled: bool) -> None:
         """Torque on (joints hold) or off (limp) on every joint."""

@@ -29,6 +29,15 @@ class JointState:
     effort_nm: np.ndarray
 
 
+def positive_power_w(effort_nm: np.ndarray, velocity_rad_s: np.ndarray) -> np.ndarray:
+    """The mechanical power each joint puts in, W: effort times velocity where positive, 0 where
+    the joint is being driven (negative power) or a value is missing (NaN). Any shape (..., N);
+    positive work is its sum times the period (run summaries, the twin's health check, the
+    learning environments' reward info)."""
+    power = effort_nm * velocity_rad_s
+    return np.where(power > 0.0, power, 0.0)
+
+
 @dataclass(frozen=True)
 class BodyState:
     """Whole-body quantities only a twin (or a motion-capture rig) can measure.

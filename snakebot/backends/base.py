@@ -1,20 +1,20 @@
 """The backend contract: what the runner needs from a twin or a real servo chain.
 
 Everything here is SI (radians, seconds, newton-metres); servo ticks never cross this boundary.
+What only some backends can do (body state, IMU, health readings, physics checks, current
+sensing, reset) is not here: each is a protocol in ``capabilities.py`` a backend has or has not.
 """
 
 from __future__ import annotations
 
 import abc
 import logging
-from collections.abc import Mapping
 from types import TracebackType
 
 import numpy as np
 
 from snakebot.errors import BackendStateError
 from snakebot.types import (
-    BodyState,
     CycleStats,
     JointCommand,
     JointState,
@@ -40,6 +40,9 @@ class Backend(abc.ABC):
         self._closed = False
         self.stats = CycleStats()
         self.torque_enabled = False
+        self.last_state: JointState | None = None
+        """What ``read_state`` returned last (None before the first): a reader that must not
+        cost another bus transaction asks this."""
         self.hurry_stop = False
         """Set when a KeyboardInterrupt is on its way out through the context manager (a second
         Ctrl-C or SIGTERM while the runner was already ramping out): the stop ramp then runs at
@@ -107,10 +110,11 @@ class Backend(abc.ABC):
 
     # -- the cycle ---------------------------------------------------------------------------
     def read_state(self) -> JointState:
-        """Measured joint positions, velocities and efforts now."""
+        """Measured joint positions, velocities and efforts now (kept as ``last_state``)."""
         self._require_connected()
         self._safe_point()
-        return self._read_state()
+        self.last_state = state = self._read_state()
+        return state
 
     def send_command(self, command: JointCommand) -> None:
         """Set goal positions (rad, shape (N,)); takes effect as time advances."""
@@ -152,17 +156,6 @@ class Backend(abc.ABC):
         a ``rate_hz`` control rate, saying the most it can; no bus traffic, connected or not.
         The default holds any rate (a simulation takes its own time)."""
         return None
-
-    def body_state(self) -> BodyState | None:
-        """Whole-body state where the backend can measure it (the twin); None on hardware."""
-        self._require_connected()
-        return None
-
-    def health(self) -> Mapping[str, np.ndarray]:
-        """Slow readings about the hardware's condition, by name with units in the name (e.g.
-        ``temperature_c`` (N,)), as of the backend's last reading; cheap (no bus traffic), so a
-        display may ask every cycle. Empty where the backend measures none (the default)."""
-        return {}
 
     @property
     def time_s(self) -> float:

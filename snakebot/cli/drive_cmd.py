@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import OnBus
 from snakebot.cli.backend_options import (
     add_backend_argument,
     add_option_flags,
@@ -304,8 +305,7 @@ def _display(
         return None
     from snakebot.drive.display import DriveDisplay
 
-    port = getattr(backend, "port", None)
-    where = f" ({port})" if port else ""
+    where = f" ({backend.port})" if isinstance(backend, OnBus) else ""
 
     health, alerts = backend_readings(backend)
     name = backend_spec(args).name

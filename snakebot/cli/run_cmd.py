@@ -10,9 +10,10 @@ import time
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import Simulated
 from snakebot.cli.backend_options import (
     add_backend_argument,
     add_option_flags,
@@ -253,29 +254,22 @@ def _cycle_hooks(
     stack: contextlib.ExitStack, backend: Backend, args: argparse.Namespace
 ) -> list[Any]:
     hooks: list[Any] = []
-    if (args.video or args.viewer) and not _simulated(backend):
-        raise ConfigError(
-            "--video" if args.video else "--viewer",
-            "",
-            f"{type(backend).__name__} has no MuJoCo model to render",
-        )
-    if args.video:
-        hooks.append(stack.enter_context(VideoOutput(backend, args.video, args.rate)))
-    if args.viewer:
-        from snakebot.backends.twin.viewer import PassiveViewer
+    if args.video or args.viewer:
+        if not isinstance(backend, Simulated):
+            raise ConfigError(
+                "--video" if args.video else "--viewer",
+                "",
+                f"{type(backend).__name__} has no MuJoCo model to render",
+            )
+        if args.video:
+            hooks.append(stack.enter_context(VideoOutput(backend, args.video, args.rate)))
+        if args.viewer:
+            from snakebot.backends.twin.viewer import PassiveViewer
 
-        hooks.append(stack.enter_context(PassiveViewer(cast(Any, backend))))
+            hooks.append(stack.enter_context(PassiveViewer(backend)))
     if not args.json and sys.stderr.isatty() and (args.duration >= 5 or args.video):
         hooks.append(ProgressLine(args.duration))
     return hooks
-
-
-def _simulated(backend: Backend) -> bool:
-    import mujoco
-
-    return isinstance(getattr(backend, "model", None), mujoco.MjModel) and isinstance(
-        getattr(backend, "data", None), mujoco.MjData
-    )
 
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".webm", ".avi")
@@ -285,7 +279,7 @@ class VideoOutput:
     """The twin's VideoRecorder, its failures (the encoder, the file, offscreen rendering) as
     OutputError naming the file."""
 
-    def __init__(self, backend: Any, path: Path, rate_hz: float) -> None:
+    def __init__(self, backend: Simulated, path: Path, rate_hz: float) -> None:
         from snakebot.backends.twin.video import VideoRecorder
 
         self.path = path

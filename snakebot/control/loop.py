@@ -11,6 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import SensesBody
 from snakebot.control.cycle import (
     CycleHook,
     CycleObserver,
@@ -49,6 +50,8 @@ class CycleLoop:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
         self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
         self.records = records
+        self.body_sensor = backend if isinstance(backend, SensesBody) else None
+        """The backend where it measures the body (COM, head orientation), else None."""
         self.state: JointState = backend.read_state()
         self.start_s = self.state.time_s
         self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target
@@ -61,12 +64,19 @@ class CycleLoop:
     def start(self) -> None:
         """Reset the gaits and the safety layer to the measured pose; open the scored window."""
         self.gaits.reset(self.state.position_rad)
-        self.metrics.start(self.state.time_s, self.backend.body_state())
+        sensor = self.body_sensor
+        self.metrics.start(self.state.time_s, None if sensor is None else sensor.body_state())
 
     @property
     def elapsed_s(self) -> float:
         """Robot time since the run started."""
         return self.state.time_s - self.start_s
+
+    def gait_step(self) -> CycleRecord | None:
+        """One scored gait cycle now: the gait's targets at the robot time since the start,
+        ramped in as the schedule ramps (``run_gait``'s gait cycles, a learning env's)."""
+        gait_time = self.state.time_s - self.start_s
+        return self.step(gait_time, self.schedule.ramp_in(gait_time), scored=True)
 
     def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord | None:
         """One cycle with the targets of ``gait_time_s`` at ``amplitude``; scored cycles count
@@ -87,7 +97,7 @@ class CycleLoop:
         backend.send_command(JointCommand(command))
         backend.advance(schedule.period_s)
         self.state = state = backend.read_state()
-        body = backend.body_state()
+        body = None if self.body_sensor is None else self.body_sensor.body_state()
         self.stage = "metrics"
         if scored:
             self.metrics.add(command, state, body, schedule.period_s)

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snakebot.types import BodyState, JointState
+from snakebot.types import BodyState, JointState, positive_power_w
 
 GRAVITY_M_S2 = 9.81
 
@@ -45,8 +45,8 @@ class RunMetrics:
         error = command - state.position_rad
         self._squared_error_sum += float(error @ error)
         self._max_abs_command = max(self._max_abs_command, *map(abs, command.tolist()))
-        power = state.effort_nm * state.velocity_rad_s
-        self._positive_work_j += float(power[power > 0].sum()) * dt_s
+        power = positive_power_w(state.effort_nm, state.velocity_rad_s)
+        self._positive_work_j += float(power.sum()) * dt_s
         self.cycles += 1
         self.end_time_s = state.time_s
         if body is not None:
@@ -55,6 +55,11 @@ class RunMetrics:
             if self._last_yaw is not None:
                 self._turn_rad += math.remainder(yaw - self._last_yaw, 2 * math.pi)
             self._last_yaw = yaw
+
+    @property
+    def positive_work_j(self) -> float:
+        """Positive joint work of the scored cycles so far, J."""
+        return self._positive_work_j
 
     def summary(self, period_s: float | None) -> dict[str, object]:
         """The run's summary, JSON-ready; distance-based keys are None without a COM."""

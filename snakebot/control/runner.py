@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import ChecksPhysics
 from snakebot.control.cycle import (
     CycleHook,
     CycleObserver,
@@ -111,11 +112,11 @@ def run_gait(
     stopped_by = ""
     failure: Exception | None = None
     try:
-        while schedule.in_gait(gait_time := loop.elapsed_s):
+        while schedule.in_gait(loop.elapsed_s):
             if stop is not None and (reason := stop()) is not None:
                 stopped_by = reason
                 break
-            loop.step(gait_time, schedule.ramp_in(gait_time), scored=True)
+            loop.gait_step()
     except KeyboardInterrupt:
         interrupted = True
     except BackendError:
@@ -135,9 +136,8 @@ def run_gait(
     summary["overruns"] = backend.stats.overruns
     summary["backend_stats"] = dict(backend.stats.extra)
     summary["interrupted"] = interrupted
-    health = getattr(backend, "physics_health", None)  # the twin's physics checks
-    if callable(health) and (physics := health()) is not None:
-        summary["physics"] = physics
+    if isinstance(backend, ChecksPhysics) and (physics := backend.physics_health()) is not None:
+        summary["physics"] = physics  # the twin's physics checks
     return RunResult(summary, interrupted, 0 if log is None else log.rows, stopped_by=stopped_by)
 
 

@@ -15,6 +15,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import ChecksPhysics
 from snakebot.control.cycle import CycleRecord, CycleSchedule, GaitCycle, StopCheck
 from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
@@ -113,9 +114,8 @@ def run_drive(
     summary["dropped_keys"] = gate.dropped
     summary["governed_cycles"] = live.governed_cycles
     summary["interrupted"] = False
-    health = getattr(backend, "physics_health", None)  # the twin's physics checks
-    if callable(health) and (physics := health()) is not None:
-        summary["physics"] = physics
+    if isinstance(backend, ChecksPhysics) and (physics := backend.physics_health()) is not None:
+        summary["physics"] = physics  # the twin's physics checks
     return DriveResult(summary, controller.stop_reason or "", loop.cycle)
 
 

@@ -7,6 +7,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import OnBus, ReportsHealth
 from snakebot.drive.loop import DriveCycle, DriveObserver
 from snakebot.telemetry import CsvTelemetryWriter
 
@@ -35,11 +36,11 @@ def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
 def backend_readings(
     backend: Backend,
 ) -> tuple[Callable[[], Mapping[str, np.ndarray]], Callable[[], tuple[str, ...]]]:
-    """(health, alerts) callables for the display: the backend's slow readings
-    (``Backend.health()``: the Dynamixel backend's ``temperature_c`` (N,), ...) and what went
-    wrong so far (clipped commands, Bus Watchdog re-arms, bus retries, servos raising the alert
-    bit)."""
-    bus = getattr(backend, "bus", None)
+    """(health, alerts) callables for the display: the backend's slow readings where it
+    reports them (``ReportsHealth``: the Dynamixel backend's ``temperature_c`` (N,), ...; none
+    otherwise) and what went wrong so far (clipped commands, Bus Watchdog re-arms, and on a
+    servo bus (``OnBus``) its retries and the servos raising the alert bit)."""
+    bus = backend.bus if isinstance(backend, OnBus) else None
 
     def alerts() -> tuple[str, ...]:
         extra = backend.stats.extra
@@ -57,4 +58,10 @@ def backend_readings(
                 found.append(f"{', '.join(names)}: servo {i}" if names else f"alert bit: servo {i}")
         return tuple(found)
 
-    return backend.health, alerts
+    if isinstance(backend, ReportsHealth):
+        return backend.health, alerts
+    return _no_health, alerts
+
+
+def _no_health() -> Mapping[str, np.ndarray]:
+    return {}

@@ -1,13 +1,16 @@
 """A trained policy played as a gait: ``snakebot run --policy DIR``.
 
 ``PolicyGait`` is a ``Gait`` the runner drives like any other, through the same safety layer and
-telemetry. Every 1/action_hz s of gait time it builds the observation the environment built,
-asks the policy for an action, and turns it into a gait with the env's encoding; in between it
-plays that gait at the phases it integrates, once per control cycle, as the env does.
+telemetry. It is the environments' ``ActionGait`` (snakebot.rl.action_gait) deciding its own
+actions: every 1/action_hz s of gait time it builds the observation the environment built, asks
+the policy for an action and holds it; in between it plays that action's gait at the phases it
+integrates, once per control cycle, exactly as the env's cycles do (the same gait class in the
+same ``CycleLoop``).
 
 Pose source. A velocity policy observes only the servos. A goal policy also needs the snake's
 centre of mass and heading every step: anything with a ``body_state() -> BodyState | None``
-method (``PoseSource``) provides them. The twin backend is one; a motion-capture rig or an
+method (``PoseSource``) provides them. A backend that senses the body (``SensesBody``: the twin)
+is one; a motion-capture rig or an
 odometry estimate can be another (see docs/learning.md, "Pose sources"). On a backend with no
 pose (the servo bus) a goal policy is refused, saying why.
 """
@@ -22,12 +25,13 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import SensesBody
 from snakebot.config import RobotConfig
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, GaitError
-from snakebot.gaits import Gait, PhasedGait
 from snakebot.gaits.base import FloatArray
-from snakebot.rl.encodings import GaitClock, make_encoding
+from snakebot.rl.action_gait import ActionGait
+from snakebot.rl.encodings import make_encoding
 from snakebot.rl.observe import goal_observation, velocity_observation
 from snakebot.rl.policy_file import PolicyFile, check_env_id
 from snakebot.rl.settings import (
@@ -52,22 +56,22 @@ class PoseSource(Protocol):
 
 
 def knows_pose(backend: Backend) -> bool:
-    """True when ``backend`` measures the body's pose itself (overrides ``body_state``)."""
-    return type(backend).body_state is not Backend.body_state
+    """True when ``backend`` measures the body's pose itself (``SensesBody``)."""
+    return isinstance(backend, SensesBody)
 
 
 def state_reader(backend: Backend) -> StateReader:
-    """The joint state the runner read last: the bus backend keeps it (``last_state``), so no
-    extra bus transaction; on the twin a read is a copy of the simulation state."""
+    """The joint state the runner read last (every backend keeps it: ``last_state``), so no
+    extra bus transaction; a read before the first cycle's."""
 
     def read() -> JointState:
-        last = getattr(backend, "last_state", None)
-        return last if isinstance(last, JointState) else backend.read_state()
+        last = backend.last_state
+        return last if last is not None else backend.read_state()
 
     return read
 
 
-class PolicyGait(Gait):
+class PolicyGait(ActionGait):
     """The policy in ``policy`` as a closed-loop gait for ``robot``.
 
     ``command``: for a velocity policy (speed m/s, turn rate rad/s); for a goal policy the goal
@@ -109,7 +113,7 @@ class PolicyGait(Gait):
                 "env_kwargs.robot",
                 f"the policy was trained on {settings.robot!r}, not {robot.name!r}",
             )
-        self.encoding = make_encoding(
+        encoding = make_encoding(
             settings.encoding,
             robot.joint_count,
             robot.lower_rad,
@@ -117,14 +121,15 @@ class PolicyGait(Gait):
             phase_hz=settings.phase_hz,
             dft_bins=settings.dft_bins,
         )
-        if policy.actor.action_dim != self.encoding.action_dim:
+        if policy.actor.action_dim != encoding.action_dim:
             raise ConfigError(
                 source,
                 "actor.npz",
                 f"the actor gives {policy.actor.action_dim} "
                 f"actions, the {settings.encoding} encoding takes "
-                f"{self.encoding.action_dim}",
+                f"{encoding.action_dim}",
             )
+        super().__init__(encoding)
         self.policy = policy
         self.robot = robot
         self.read_state = read_state
@@ -132,11 +137,8 @@ class PolicyGait(Gait):
         self.user_command = (float(command[0]), float(command[1]))
         if not all(math.isfinite(v) for v in self.user_command):
             raise ConfigError("command", "", f"expected two finite numbers, got {command}")
-        self.clock = GaitClock(self.encoding)
         self.decisions = 0
         self.goal_xy_m: FloatArray | None = None
-        self._gait: PhasedGait | None = None
-        self._last_time_s = 0.0
         self._next_decision_s = 0.0
         self._check_obs_size()
 
@@ -160,11 +162,9 @@ class PolicyGait(Gait):
 
     def reset(self) -> None:
         """Start afresh: phases at 0, a decision due at once, the goal set at the first one."""
-        self.clock.reset(0.0)
+        super().reset()
         self.decisions = 0
         self.goal_xy_m = None
-        self._gait = None
-        self._last_time_s = 0.0
         self._next_decision_s = 0.0
 
     def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
@@ -176,18 +176,16 @@ class PolicyGait(Gait):
 
     def command(self, time_s: float, measured_rad: FloatArray | None = None) -> FloatArray:
         """Targets (N,) in rad for gait time ``time_s``; a new action every 1/action_hz s."""
-        if self._gait is not None and time_s > self._last_time_s:
-            self.clock.advance(self._gait, time_s - self._last_time_s)
-        self._last_time_s = time_s
+        self.advance_to(time_s)  # the phases of now, which the observation holds
         # Half a control period of slack: gait times are sums of floats.
-        if self._gait is None or time_s >= self._next_decision_s - 1e-6:
+        if self.held is None or time_s >= self._next_decision_s - 1e-6:
             # float32, as the env's action space hands actions over in training
             action = self.policy.actor(self.observation()).astype(np.float32)
-            self._gait = self.encoding.gait(action.astype(np.float64))
+            self.hold(action.astype(np.float64))
             self.decisions += 1
             period = 1.0 / self.settings.action_hz
             self._next_decision_s = max(self._next_decision_s + period, time_s + 0.5 * period)
-        return self.clock.targets(self._gait)
+        return super().command(time_s)
 
     def observation(self) -> np.ndarray:
         """What the env would observe now."""
@@ -264,7 +262,7 @@ def policy_gait_for_backend(
             f"the policy acts at {action_hz:g} Hz; run the "
             f"control loop at least that fast (e.g. 100 Hz)",
         )
-    if pose is None and knows_pose(backend):
+    if pose is None and isinstance(backend, SensesBody):
         pose = backend
     gait = PolicyGait(policy, robot, state_reader(backend), command, pose=pose)
     kind = "goal" if gait.goal_task else "velocity"

@@ -1,9 +1,12 @@
-"""The cycle every learning environment steps: encoding -> gait -> safety layer -> twin.
+"""The twin side of every learning environment: ``snakebot run``'s cycle, not a copy of it.
 
-It is ``snakebot run``'s cycle (``control/cycle.py``): the gait's targets at the current
-phases go through the same ``SafetyLayer`` (joint limits, speed limit), ramped in as the run's
-``CycleSchedule`` ramps, into the same twin backend (made through the backend registry),
-``cycles_per_action`` times per policy action.
+A policy step plays the action through a ``CycleLoop`` (``control/loop.py``, the loop
+``run_gait`` steps): an ``ActionGait`` holds the action for ``cycles_per_action`` cycles, each
+one the runner's gait cycle (targets at the integrated phases, the ``SafetyLayer``'s joint and
+speed limits, the ``CycleSchedule``'s amplitude ramp, the twin stepped one control period,
+``RunMetrics`` accounting it). A new episode starts from the twin's own reset (``Resettable``).
+Nothing here sends a command or steps physics itself, so the env's episodes are what
+``snakebot run --policy`` plays, by construction.
 """
 
 from __future__ import annotations
@@ -11,20 +14,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import mujoco
-
+from snakebot.backends.capabilities import Resettable
 from snakebot.backends.registry import make_backend
 from snakebot.backends.twin import TwinBackend
-from snakebot.backends.twin.model_builder import hold_ctrl_history, link_name
+from snakebot.backends.twin.model_builder import link_name
 from snakebot.config import RobotConfig, load_robot
-from snakebot.control.cycle import CycleSchedule
-from snakebot.control.metrics import head_yaw_rad
+from snakebot.control.cycle import CycleSchedule, GaitCycle
+from snakebot.control.loop import CycleLoop
+from snakebot.control.metrics import RunMetrics, head_yaw_rad
 from snakebot.control.safety import SafetyLayer
 from snakebot.errors import PhysicsHealthError
 from snakebot.gaits.base import FloatArray
+from snakebot.rl.action_gait import ActionGait
 from snakebot.rl.encodings import Encoding, GaitClock, make_encoding
 from snakebot.rl.settings import EnvSettings
-from snakebot.types import BodyState, JointCommand, JointState
+from snakebot.types import BodyState, JointState
 
 
 @dataclass(frozen=True)
@@ -43,7 +47,7 @@ class StepOutcome:
 
 
 class TwinLoop:
-    """One connected twin of ``settings.robot`` driven through the safety layer."""
+    """One connected twin of ``settings.robot`` and the ``CycleLoop`` of its current episode."""
 
     def __init__(self, settings: EnvSettings, robot: RobotConfig | None = None) -> None:
         self.settings = settings
@@ -56,7 +60,7 @@ class TwinLoop:
             phase_hz=settings.phase_hz,
             dft_bins=settings.dft_bins,
         )
-        self.clock = GaitClock(self.encoding)
+        self.gait = ActionGait(self.encoding)
         backend = make_backend(
             self.robot,
             "twin",
@@ -65,16 +69,33 @@ class TwinLoop:
             friction_model=settings.friction_model,
         )
         assert isinstance(backend, TwinBackend)  # a robot file's twin (RobotConfig above)
+        assert isinstance(backend, Resettable)
         self.backend = backend
         self.backend.connect()
         self.safety = SafetyLayer.for_robot(self.robot)
-        self.dt_s = 1.0 / settings.control_hz
-        self.backend.steps_for(self.dt_s)  # a rate that is no whole number of steps fails here
+        self.backend.steps_for(1.0 / settings.control_hz)  # a rate with no whole number of steps
         # The run's schedule: what ramps the amplitude in, as `snakebot run` ramps it.
-        self.schedule = CycleSchedule(settings.control_hz, ramp_s=self.safety.ramp_s)
+        self.schedule = CycleSchedule(
+            settings.control_hz,
+            ramp_s=self.safety.ramp_s,
+            timestep_s=float(self.backend.model.opt.timestep),
+        )
         self._tail_id = self.backend.model.body(link_name(self.robot.link_count - 1)).id
         self._head_id = self.backend.model.body(link_name(0)).id
-        self.state = self.backend.read_state()
+        self.metrics: RunMetrics
+        self.cycles: CycleLoop
+        self.state: JointState
+        self.reset(0.0)
+
+    @property
+    def clock(self) -> GaitClock:
+        """The phases the actions are played at."""
+        return self.gait.clock
+
+    @property
+    def dt_s(self) -> float:
+        """The control period, s."""
+        return self.schedule.period_s
 
     @property
     def body_length_m(self) -> float:
@@ -82,16 +103,20 @@ class TwinLoop:
         return float(self.robot.body_length_m)
 
     def reset(self, phase_rad: float) -> JointState:
-        """Straight snake at rest at the origin, facing +x; the phases start at ``phase_rad``."""
-        model, data = self.backend.model, self.backend.data
-        mujoco.mj_resetData(model, data)
-        data.ctrl[:] = 0.0
-        hold_ctrl_history(model, data, data.ctrl)
-        mujoco.mj_forward(model, data)
-        self.clock.reset(phase_rad)
-        self.backend.reset_physics_health()  # each episode is judged on its own
-        self.state = self.backend.read_state()
-        self.safety.reset(self.state.position_rad)
+        """Straight snake at rest at the origin, facing +x; the phases start at ``phase_rad``.
+
+        The twin resets itself (``Resettable``: pose, time 0, physics health afresh) and a new
+        episode's ``CycleLoop`` starts from the pose it measures, as ``run_gait`` starts.
+        """
+        self.backend.reset()
+        self.gait.start_phase_rad = phase_rad
+        robot = self.robot
+        self.metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+        self.cycles = CycleLoop(
+            self.backend, GaitCycle([self.gait], self.safety), self.schedule, self.metrics
+        )
+        self.cycles.start()  # the gait (phases) and the safety layer from the measured pose
+        self.state = self.cycles.state
         return self.state
 
     def step(self, action: FloatArray) -> StepOutcome:
@@ -100,27 +125,26 @@ class TwinLoop:
         A hard physics-health limit crossed on the way ends the step at that cycle, named in
         the outcome (the episode cannot go on credibly; training can).
         """
-        gait = self.encoding.gait(action)
-        backend, safety, clock, dt = self.backend, self.safety, self.clock, self.dt_s
+        cycles, metrics = self.cycles, self.metrics
+        self.gait.hold(action)
         com_before = self.body().com_m
-        work = 0.0
+        work_before = metrics.positive_work_j
+        error: str | None = None
         for _ in range(self.settings.cycles_per_action):
-            target = clock.targets(gait)
-            command = safety.filter(target, dt, self.schedule.ramp_in(self.state.time_s))
-            backend.send_command(JointCommand(command))
             try:
-                backend.advance(dt)
+                cycles.gait_step()
             except PhysicsHealthError as exc:
-                self.state = backend.read_state()
-                return StepOutcome(com_before, self.body().com_m, work, self.state, str(exc))
-            state = backend.read_state()
-            # Robot time, as the runner's gait time: a policy played by `run` turns its phases
-            # by the same float differences.
-            clock.advance(gait, state.time_s - self.state.time_s)
-            self.state = state
-            power = state.effort_nm * state.velocity_rad_s
-            work += float(power[power > 0].sum()) * dt
-        return StepOutcome(com_before, self.body().com_m, work, self.state)
+                error = str(exc)
+                break
+        if error is None:
+            self.state = cycles.state
+            # The phases of now, as the next action sees them (PolicyGait turns them before it
+            # decides, as here).
+            self.gait.advance_to(cycles.elapsed_s)
+        else:
+            self.state = self.backend.read_state()
+        work = metrics.positive_work_j - work_before
+        return StepOutcome(com_before, self.body().com_m, work, self.state, error)
 
     def body(self) -> BodyState:
         """COM (3,) m and head orientation, from the twin."""

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from snakebot.telemetry.csv_log import TelemetryLog
+from snakebot.types import positive_power_w
 
 GRAVITY_M_S2 = 9.81
 LATE_FACTOR = 1.5
@@ -47,8 +48,8 @@ def summarize(log: TelemetryLog, sidecar: dict[str, Any] | None) -> dict[str, An
     period = nominal_period_s(log, sidecar)
     periods = np.diff(time_s)
     error = command - position
-    power = effort * velocity
-    work = float(np.sum(np.where(power > 0, power, 0.0)[1:] * periods[:, None])) if rows > 1 else 0
+    power = positive_power_w(effort, velocity)
+    work = float(np.sum(power[1:] * periods[:, None])) if rows > 1 else 0
     out: dict[str, Any] = {
         "log": log.source,
         "robot": robot.get("name"),

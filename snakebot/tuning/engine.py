@@ -22,6 +22,12 @@ from mujoco import batch as mj_batch
 from snakebot.backends.twin import GroundFriction, TwinBackend
 from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.model_builder import hold_ctrl_history, joint_name, link_name
+from snakebot.backends.twin.readouts import (
+    WARNING_NUMBER,
+    Capsules,
+    servo_torque_nm,
+    unstable_count,
+)
 from snakebot.backends.twin.terrain import Terrain
 from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleSchedule
@@ -31,11 +37,6 @@ from snakebot.tuning.trace import SAMPLES, FloatArray, Trace, make_trace
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _RECORD = ("qpos", "qvel", "actuator_force", "subtree_com", "xquat", "geom_xpos", "geom_xmat")
-_BAD_WARNINGS = [
-    int(mujoco.mjtWarning.mjWARN_BADQACC),
-    int(mujoco.mjtWarning.mjWARN_BADQPOS),
-    int(mujoco.mjtWarning.mjWARN_BADQVEL),
-]
 
 
 @dataclass(frozen=True)
@@ -45,30 +46,22 @@ class TwinLayout:
     qpos_index: np.ndarray
     dof_index: np.ndarray
     head_id: int
-    link_geoms: np.ndarray
-    radius_m: np.ndarray
-    half_length_m: np.ndarray
+    capsules: Capsules
 
     def clearance_m(self, geom_xpos: FloatArray, geom_xmat: FloatArray) -> FloatArray:
         """Lowest point of the module capsules above z = 0 for MjData's ``geom_xpos`` (..., G, 3)
-        and ``geom_xmat`` (..., G, 9): shape (...)."""
-        axis_z = np.abs(geom_xmat[..., self.link_geoms, 8])
-        lowest = geom_xpos[..., self.link_geoms, 2] - self.radius_m
-        clearance: FloatArray = (lowest - self.half_length_m * axis_z).min(axis=-1)
-        return clearance
+        and ``geom_xmat`` (..., G, 9): shape (...) (the twin's readout)."""
+        return self.capsules.clearance_m(geom_xpos, geom_xmat)
 
 
 def twin_layout(model: mujoco.MjModel, robot: RobotConfig) -> TwinLayout:
     """Indices of the joints, the head and the module capsules in a twin model of ``robot``."""
-    geoms = np.array([model.geom(f"{link_name(i)}_geom").id for i in range(robot.link_count)])
     joints = [model.joint(joint_name(i)).id for i in range(robot.joint_count)]
     return TwinLayout(
         qpos_index=model.jnt_qposadr[joints].copy(),
         dof_index=model.jnt_dofadr[joints].copy(),
         head_id=model.body(link_name(0)).id,
-        link_geoms=geoms,
-        radius_m=model.geom_size[geoms, 0].copy(),
-        half_length_m=model.geom_size[geoms, 1].copy(),
+        capsules=Capsules.of_modules(model, robot.link_count),
     )
 
 
@@ -175,13 +168,13 @@ class TwinBatch:
             ids = np.flatnonzero(live)
             sent = np.stack([r[1] for r in rows], axis=1)  # (B, C, N)
             control = np.repeat(sent[ids], steps, axis=1)
-            before = batch.warning[:, _BAD_WARNINGS, 0].sum(axis=1)
+            before = unstable_count(batch.warning[..., WARNING_NUMBER])
             try:
                 out = batch.rollout(len(span) * steps, control=control, record=_RECORD, ids=ids)
             except mj_batch.SimulationError as exc:
                 self._stop(exc.ids, "diverged", k, live, stopped_at, reasons)
                 continue
-            bad = ids[batch.warning[ids][:, _BAD_WARNINGS, 0].sum(axis=1) > before[ids]]
+            bad = ids[unstable_count(batch.warning[ids][..., WARNING_NUMBER]) > before[ids]]
             self._stop(bad, "diverged", k, live, stopped_at, reasons)
             end = {name: values[:, steps - 1 :: steps] for name, values in out.items()}
             position = end["qpos"][..., lay.qpos_index]
@@ -195,7 +188,7 @@ class TwinBatch:
                 command=sent[ids],
                 position=position,
                 velocity=velocity,
-                effort=force - damping[ids, None, :] * velocity,
+                effort=servo_torque_nm(force, damping[ids, None, :], velocity),
                 force=force,
                 com=end["subtree_com"][:, :, lay.head_id],
                 quat=end["xquat"][:, :, lay.head_id],

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import SensesBody
 from snakebot.config.schema import RobotConfig
 from snakebot.control.safety import smooth_ramp
 from snakebot.errors import ConfigError
@@ -65,12 +66,13 @@ def chirp_plan(
 def record(backend: Backend, commands: FloatArray, path: Path, rate_hz: float = 100.0) -> int:
     """Play commands (K, N) on a connected backend, logging every cycle to ``path``; rows."""
     dt = 1.0 / rate_hz
+    senses_body = backend if isinstance(backend, SensesBody) else None
     with CsvTelemetryWriter(path, backend.joint_count) as log:
         for cycle, row in enumerate(commands):
             backend.send_command(JointCommand(row))
             backend.advance(dt)
             state = backend.read_state()
-            body = backend.body_state()
+            body = None if senses_body is None else senses_body.body_state()
             log.write(
                 state.time_s,
                 cycle,

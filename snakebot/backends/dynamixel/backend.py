@@ -165,6 +165,8 @@ class DynamixelBackend(Backend):
             else TrackingMonitor(tracking, self.joint_count, self.converter.rad_per_tick)
         )
         self._decoder = StateDecoder(robot, self.bus.table, self.converter, read_current)
+        if self._decoder.measures_current:
+            self.present_current_a = self._present_current_a  # SensesCurrent: this model
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
         self._goal_plan = self.bus.sync_write_plan("goal_position", self.ids)
         self.stopper = StopSequence(self, tracking or TrackingLimits())
@@ -443,6 +445,13 @@ class DynamixelBackend(Backend):
         self._health["temperature_c"] = temps * table["present_temperature"].scale
         self.stats.extra["max_temperature_c"] = float(self._health["temperature_c"].max())
         self.stats.extra["min_input_voltage_v"] = float(self._health["input_voltage_v"].min())
+
+    def _present_current_a(self) -> np.ndarray:
+        """Present Current per joint (N,) A, in the joints' sense, from the last cycle read
+        (no bus traffic); zeros before the first."""
+        if self.last_rows is None:
+            return np.zeros(self.joint_count)
+        return self._decoder.current_a(self.last_rows)
 
     def health(self) -> dict[str, np.ndarray]:
         """The servos' slow readings, head to tail, as of the last slow read (every

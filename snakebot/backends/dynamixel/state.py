@@ -28,6 +28,9 @@ class StateDecoder:
             stall = physics.stall_torque_nm * physics.supply_voltage_v / physics.nominal_voltage_v
             per_unit = table[load_key].scale / 100.0 * stall
         self.read_effort = read_effort
+        self.measures_current = read_effort and load_key == "present_current"
+        """Whether the read holds Present Current (the X series' XM/XL330 tables)."""
+        self._current_gain = converter.direction * table[load_key].scale  # A per unit, (N,)
         wanted = (load_key,) * read_effort + ("present_velocity", "present_position")
         self.keys: tuple[str, ...] = tuple(sorted(wanted, key=lambda k: table[k].address))
         """The registers to read, in address order (the order of each row): load, velocity,
@@ -55,3 +58,12 @@ class StateDecoder:
             velocity.append(row[v] * vg)
             effort.append(0.0 if e is None else row[e] * eg)
         return np.array((position, velocity, effort))
+
+    def current_a(self, rows: list[tuple[int, ...]]) -> np.ndarray:
+        """Present Current (N,) A in the joints' sense from the same rows; only where
+        ``measures_current``."""
+        assert self._effort_index is not None and self.measures_current
+        e = self._effort_index
+        raw = np.array([row[e] for row in rows], dtype=float)
+        current: np.ndarray = raw * self._current_gain
+        return current

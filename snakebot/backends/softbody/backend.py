@@ -22,19 +22,10 @@ from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.cliff import Cliff
-from snakebot.backends.twin.health import divergence_time_s
+from snakebot.backends.twin.readouts import StepCheck
 from snakebot.config.body import BodyConfig
-from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.errors import ConfigError
 from snakebot.types import BodyState, JointState, PDGains
-
-_BAD_WARNINGS = np.array(
-    [
-        mujoco.mjtWarning.mjWARN_BADQACC,
-        mujoco.mjtWarning.mjWARN_BADQPOS,
-        mujoco.mjtWarning.mjWARN_BADQVEL,
-    ],
-    dtype=int,
-)
 
 
 @dataclass(frozen=True)
@@ -92,6 +83,7 @@ class SoftBodyBackend(Backend):
         built = build_body_model(self.body, friction=self.friction, terrain=self.terrain)
         self.model, self.lattice = built.model, built.lattice
         self.data = mujoco.MjData(self.model)
+        self._step_check = StepCheck(self.model, self.data, finite_positions=True)
         self.start_positions = built.start_positions
         lat = self.body.lattice
         self.muscles = MuscleMap(self.lattice, lat.segment_length_m, lat.width_m, lat.height_m)
@@ -197,9 +189,7 @@ class SoftBodyBackend(Backend):
         model, data = self.model, self.data
         if self.body.muscles.volume_preservation:
             self._apply_muscles()
-        warnings = data.warning.number
-        before = int(warnings[_BAD_WARNINGS].sum())
-        time_before = float(data.time)
+        self._step_check.start()
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
         for step in range(steps):
@@ -209,11 +199,7 @@ class SoftBodyBackend(Backend):
             mujoco.mj_step(model, data)
             if rule.enabled and data.ncon:
                 rule.apply(displacement, velocity, data.contact.geom)
-        if int(warnings[_BAD_WARNINGS].sum()) != before or not np.isfinite(data.qpos).all():
-            raise SimulationDivergedError(
-                divergence_time_s(time_before, steps, float(model.opt.timestep), float(data.time)),
-                "MuJoCo reported bad accelerations (state was reset)",
-            )
+        self._step_check.finish(steps)
         self._track()
         if self._pacer is not None:
             self._pacer.wait(dt_s)

@@ -4,22 +4,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Protocol
 
 import mujoco
 import numpy as np
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import Simulated
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.friction.scale import FrictionModel
-from snakebot.backends.twin.health import (
-    DEFAULT_LIMITS,
-    HealthLimits,
-    HealthMonitor,
-    as_slice,
-    divergence_time_s,
-)
+from snakebot.backends.twin.health import DEFAULT_LIMITS, HealthLimits, HealthMonitor
 from snakebot.backends.twin.imu import TwinSensors
 from snakebot.backends.twin.model_builder import (
     GroundFriction,
@@ -28,30 +22,19 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
+from snakebot.backends.twin.readouts import Capsules, StepCheck, as_slice, servo_torque_nm
 from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.backends.twin.terrain import Terrain, as_terrain
 from snakebot.config.schema import RobotConfig
-from snakebot.errors import ConfigError, ServoFaultError, SimulationDivergedError
+from snakebot.errors import ConfigError, ServoFaultError
 from snakebot.types import BodyState, JointState, PDGains
 
 JointSelection = int | slice | Sequence[int] | np.ndarray
 """Joints by numpy indexing: one index, a slice, indices, or a (N,) bool mask."""
 
 
-class Simulated(Protocol):
-    """A backend with a MuJoCo model and data to render or view (the twin, a soft body)."""
-
-    model: mujoco.MjModel
-    data: mujoco.MjData
-
-
-# MuJoCo answers instability by resetting the state and counting a warning, not with NaN.
-_BAD_WARNINGS = (
-    int(mujoco.mjtWarning.mjWARN_BADQACC),
-    int(mujoco.mjtWarning.mjWARN_BADQPOS),
-    int(mujoco.mjtWarning.mjWARN_BADQVEL),
-)
+__all__ = ["JointSelection", "Simulated", "TwinBackend"]
 
 
 class TwinBackend(Backend):
@@ -68,6 +51,9 @@ class TwinBackend(Backend):
     supply sag, overload protection (a trip raises ServoFaultError unless
     ``raise_on_overload`` is False, e.g. under the emulator, which latches it) and encoder and
     IMU noise drawn from ``seed``.
+
+    Abilities (``backends.capabilities``): SensesBody, SensesImu, ChecksPhysics, Resettable,
+    Simulated; SensesCurrent where the servo file models the current (``stall_current_a``).
     """
 
     def __init__(
@@ -103,6 +89,8 @@ class TwinBackend(Backend):
         self._torque_now: np.ndarray | None = None  # servo torque (N,) at _torque_time_s
         self._torque_time_s = math.nan
         self._steps_per_period: dict[float, int] = {}
+        if robot.servo.physics.extras.stall_current_a is not None:
+            self.present_current_a = self._present_current_a  # SensesCurrent: this servo file
 
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
@@ -114,7 +102,7 @@ class TwinBackend(Backend):
             friction_model=self._friction_model,
         )
         self.data = mujoco.MjData(self.model)
-        self._warning_count = self.data.warning.number  # a view of mjData's counters
+        self._step_check = StepCheck(self.model, self.data)
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]
         self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
@@ -144,6 +132,42 @@ class TwinBackend(Backend):
         self._start_com = self.data.subtree_com[self._head_id].copy()
         self.reset_physics_health()
 
+    def reset(self, position_rad: np.ndarray | None = None) -> JointState:
+        """Back to the start at once (Resettable): the model's start pose at rest (the origin,
+        facing +x, or where the terrain starts it), the joints straight or at ``position_rad``
+        (N,) rad with their goals there, time 0, the servos' electrical state and the
+        physics-health account afresh. Gains and torque stay as they are. ValueError for a
+        wrong shape."""
+        self._require_connected()
+        model, data = self.model, self.data
+        mujoco.mj_resetData(model, data)
+        self._torque_now = None
+        if position_rad is not None:
+            pose = np.asarray(position_rad, dtype=float)
+            if pose.shape != (self.joint_count,):
+                raise ValueError(
+                    f"reset pose has shape {pose.shape}, expected ({self.joint_count},) angles"
+                )
+            data.qpos[self._qpos_index] = pose
+            data.ctrl[:] = pose
+        else:
+            data.ctrl[:] = 0.0
+        hold_ctrl_history(model, data, data.ctrl)
+        mujoco.mj_forward(model, data)
+        if self.electrics is not None:
+            physics = self.robot.servo.physics
+            servo = servo_dynamics(physics, self.robot.gains)
+            self.electrics = ServoElectrics(
+                physics, self.joint_count, servo.torque_limit_nm, servo.no_load_speed_rad_s
+            )
+            self.model.actuator_forcerange[:] = self._force_limit
+            self._apply_gains()
+        self._start_com = data.subtree_com[self._head_id].copy()
+        self.reset_physics_health()
+        if self._pacer is not None:
+            self._pacer = Pacer(self.stats)
+        return self.read_state()
+
     def reset_physics_health(self, limits: HealthLimits | None = None) -> None:
         """Start the physics-health account afresh (a learning environment's new episode), with
         ``limits`` from now on when given. Nothing happens with the checks off."""
@@ -152,13 +176,9 @@ class TwinBackend(Backend):
         if self._health_limits is None:
             return
         servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
-        links = np.array(
-            [self.model.geom(f"{link_name(i)}_geom").id for i in range(self.robot.link_count)]
-        )
         self.physics_monitor = HealthMonitor(
             self.model,
-            links,
-            self.robot.link.radius_m,
+            Capsules.of_modules(self.model, self.robot.link_count),
             self._dof_index,
             self._head_id,
             no_load_speed_rad_s=servo.no_load_speed_rad_s,
@@ -173,15 +193,9 @@ class TwinBackend(Backend):
     def _servo_torque(self) -> np.ndarray:
         """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
         dof = self._dof_at
-        torque: np.ndarray = (
-            self.data.actuator_force - self.model.dof_damping[dof] * (self.data.qvel[dof])
+        return servo_torque_nm(
+            self.data.actuator_force, self.model.dof_damping[dof], self.data.qvel[dof]
         )
-        return torque
-
-    def _bad_warnings(self) -> int:
-        """MuJoCo's count of bad-acceleration/position/velocity warnings so far."""
-        count = self._warning_count
-        return int(count[_BAD_WARNINGS[0]] + count[_BAD_WARNINGS[1]] + count[_BAD_WARNINGS[2]])
 
     def _read_state(self) -> JointState:
         data = self.data
@@ -263,15 +277,9 @@ class TwinBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
-        before = self._bad_warnings()
-        time_before = float(self.data.time)
+        self._step_check.start()
         mujoco.mj_step(self.model, self.data, steps)
-        if self._bad_warnings() != before:
-            timestep = float(self.model.opt.timestep)
-            raise SimulationDivergedError(
-                divergence_time_s(time_before, steps, timestep, float(self.data.time)),
-                "MuJoCo reported bad accelerations (state was reset)",
-            )
+        self._step_check.finish(steps)
         if self.physics_monitor is not None or self.electrics is not None:
             torque = self._servo_torque()  # read_state's effort too, unless changed since
             self._torque_now, self._torque_time_s = torque, float(self.data.time)
@@ -337,6 +345,19 @@ class TwinBackend(Backend):
             electrical = self.electrics.summary(self.robot.total_mass_kg, distance)
             out = {**(out or {}), **electrical}
         return out
+
+    def head_gyro_rad_s(self) -> np.ndarray:
+        """The head IMU's gyro (3,) rad/s in the head's frame, with the servo file's noise."""
+        self._require_connected()
+        return self._sensors.gyro_rad_s(self.data)
+
+    def _present_current_a(self) -> np.ndarray:
+        """Each servo's current (N,) A, signed as its torque: |torque| over the torque
+        constant, as the servo file's electrical model draws it."""
+        assert self.electrics is not None
+        torque = self._servo_torque()
+        current: np.ndarray = torque / self.electrics.torque_constant_nm_per_a
+        return current
 
     def body_state(self) -> BodyState:
         """Centre of mass of the whole snake and the head's orientation."""

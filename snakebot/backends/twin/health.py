@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from snakebot.backends.twin.readouts import Capsules, as_slice, positive_power_w
 from snakebot.errors import PhysicsHealthError
 
 
@@ -52,38 +53,16 @@ DEFAULT_LIMITS = HealthLimits()
 _ROWS = 512  # cycles judged per vectorised pass at most
 
 
-def as_slice(index: np.ndarray) -> slice | np.ndarray:
-    """``index`` as a slice where it is a run of consecutive addresses (a view, not a copy: a
-    per-cycle read costs a fraction of a fancy index's), else as it is."""
-    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
-        return slice(int(index[0]), int(index[0]) + len(index))
-    return index
-
-
-def divergence_time_s(
-    time_before_s: float, steps: int, timestep_s: float, time_after_s: float
-) -> float:
-    """When MuJoCo's reset happened inside ``mj_step(..., steps)``.
-
-    MuJoCo answers bad accelerations by resetting the data (time 0) and then stepping on, so the
-    clock after the call counts only the steps since the reset: the reset came ``steps`` minus
-    those steps after ``time_before_s``.
-    """
-    after_reset = round(time_after_s / timestep_s)
-    return time_before_s + max(steps - after_reset, 0) * timestep_s
-
-
 class HealthMonitor:
     """Accumulates the health of one twin run; ``sample`` after every control period.
 
-    ``link_geoms`` are the module capsules (M,) with ``radius_m``; every other geom is ground.
+    ``capsules`` are the modules (readouts.Capsules); every other geom is ground.
     """
 
     def __init__(
         self,
         model: mujoco.MjModel,
-        link_geoms: np.ndarray,
-        radius_m: float,
+        capsules: Capsules,
         dof_index: np.ndarray,
         head_id: int,
         *,
@@ -93,11 +72,10 @@ class HealthMonitor:
     ) -> None:
         self.limits = limits
         self._is_link = np.zeros(model.ngeom, dtype=bool)
-        self._is_link[link_geoms] = True
+        self._is_link[capsules.geoms] = True
         self._link_flags: list[bool] = self._is_link.tolist()
-        self._links = link_geoms
-        self._half_length = model.geom_size[link_geoms, 1].copy()
-        self._radius = radius_m
+        self._capsules = capsules
+        self._radius = float(capsules.radius_m.max())
         self._dof = as_slice(dof_index)
         self._head = head_id
         self._no_load = no_load_speed_rad_s
@@ -156,7 +134,11 @@ class HealthMonitor:
                 self.max_floor_penetration_m = floor
             if other > self.max_self_penetration_m:
                 self.max_self_penetration_m = other
-        if not grounded and self._clearance_m(data) > limits.contact_tolerance_m:
+        if (
+            not grounded
+            and self._capsules.clearance_m(data.geom_xpos, data.geom_xmat)
+            > limits.contact_tolerance_m
+        ):
             self._airborne_cycles += 1
         _, x, y, _ = data.xquat[self._head].tolist()
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down
@@ -215,7 +197,7 @@ class HealthMonitor:
         self._rows = 0
         limits = self.limits
         velocity, torque, dt = self._velocity[:rows], self._torque[:rows], self._dt[:rows]
-        work = (np.maximum(torque * velocity, 0.0) * dt[:, None]).sum(axis=0)
+        work = (positive_power_w(torque, velocity) * dt[:, None]).sum(axis=0)
         self._work_j += work
         self._window_work_j += work
         moving = np.abs(velocity) > limits.moving_fraction * self._no_load
@@ -236,12 +218,6 @@ class HealthMonitor:
         streak = np.where(stalled, streak[1:], 0.0)
         self.longest_stall_s = max(self.longest_stall_s, float(streak.max(initial=0.0)))
         self._stall_carry_s = streak[-1].copy()
-
-    def _clearance_m(self, data: mujoco.MjData) -> float:
-        """Height of the lowest point of any module capsule above z = 0."""
-        axis_z = np.abs(data.geom_xmat[self._links, 8])
-        lowest = data.geom_xpos[self._links, 2] - self._radius - self._half_length * axis_z
-        return float(lowest.min())
 
     @property
     def chatter(self) -> float:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 
+import mujoco
 import numpy as np
+import pytest
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
@@ -12,6 +14,7 @@ from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
+from snakebot.errors import SimulationDivergedError
 from snakebot.gaits import make_gait
 from snakebot.tuning.commands import ArrayCommands, GaitCommands
 from snakebot.tuning.engine import TwinBatch
@@ -21,6 +24,7 @@ from snakebot.tuning.trace import summarise
 from tests.integration.twin.robots import with_delay
 
 PARAMS = [{"omega": 6.0, "phase_lag": 0.5}, {"omega": 2.0, "amplitude": 0.6}]
+STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 KEYS = ("distance_m", "tracking_rms_rad", "positive_work_j", "turn_deg", "cost_of_transport")
 
 
@@ -110,3 +114,26 @@ def test_a_delayed_replay_from_a_bent_pose_starts_with_the_held_goals() -> None:
         trace = batch.run(hold, 0.1, 100.0, initial_state=start)[0]
         drift.append(float(np.abs(trace.position_rad[:, 0] - 0.5).max()))
     assert drift[0] < 1e-3 and drift[1] > 0.05  # zeros: the joint heads for 0 for 50 ms
+
+
+def test_a_run_that_blows_up_at_the_floating_base_is_stopped_as_diverged_as_the_twin_raises() -> (
+    None
+):
+    # Measured: the engine read mujoco.batch's warning field 0, mjWarningStat.lastinfo (the
+    # index of the DOF that went bad), instead of field 1, the count. A blow-up first seen at
+    # DOF 0 (the floating base, where a whole-body explosion shows first) left lastinfo at 0:
+    # the run's records froze at the reset state and it scored as a full, healthy run.
+    robot = load_robot("snake8")
+    batch = TwinBatch(robot)
+    data = mujoco.MjData(batch.model)
+    mujoco.mj_setState(batch.model, data, batch.initial_state, STATE)
+    data.qvel[0] = 1e11  # past MuJoCo's mjMAXVAL: a bad velocity at DOF 0 on the first step
+    state = np.empty_like(batch.initial_state)
+    mujoco.mj_getState(batch.model, data, state, STATE)
+    gait = make_gait("serpenoid", 8, PARAMS[0])
+    trace = batch.run(GaitCommands([gait], robot), 0.5, 100.0, initial_state=state)[0]
+    assert trace.stop_reason == "diverged" and trace.cycles == 0
+    with TwinBackend(robot) as twin:  # the step-by-step twin stops the same run
+        mujoco.mj_setState(twin.model, twin.data, state, STATE)
+        with pytest.raises(SimulationDivergedError):
+            twin.advance(0.01)
