@@ -38,12 +38,12 @@ from snakebot.types import BodyState, JointCommand, JointState, PDGains
 
 if TYPE_CHECKING:
     from snakebot.backends.base import Backend
+    from snakebot.control.cycle import CycleSink
     from snakebot.drive.controller import DriveController
     from snakebot.drive.loop import DriveObserver, DriveResult
     from snakebot.drive.sources import InputSource
     from snakebot.gaits import Gait
     from snakebot.gaits.live import LiveGait
-    from snakebot.telemetry.sink import CycleLog
 
 __all__ = [
     "DEFAULT_BACKEND",
@@ -235,15 +235,16 @@ class Snake:
         duration_s: float,
         params: Mapping[str, object] | None = None,
         rate_hz: float = DEFAULT_RATE_HZ,
-        log: str | Path | CycleLog | None = None,
+        log: str | Path | CycleSink | None = None,
         on_cycle: CycleHook | None = None,
         ramp_out: bool = True,
     ) -> RunSummary:
         """Play ``gait`` for ``duration_s`` seconds at ``rate_hz``, then ramp out to rest.
 
         ``gait``: a gait name, a gait file path or a Gait; ``params`` override its parameters.
-        ``log``: a CSV path (or an open sink: CsvTelemetryWriter, snakebot.telemetry.sink's
-        CycleLog) for per-cycle telemetry; rows
+        ``log``: a CSV path (or an open sink: CsvTelemetryWriter, or any
+        snakebot.control.cycle.CycleSink, which sees each cycle's record) for per-cycle
+        telemetry; rows
         written stay on disk whatever ends the run. ``on_cycle(cycle, gait_time_s)`` runs after
         every cycle. Ctrl-C ends the gait early and ramps out (``summary.interrupted``).
         Raises GaitError/ConfigError for a bad gait (before anything moves), ValueError for a
@@ -307,7 +308,7 @@ class Snake:
         )
 
     @contextlib.contextmanager
-    def _open_log(self, log: str | Path | CycleLog | None) -> Iterator[CycleLog | None]:
+    def _open_log(self, log: str | Path | CycleSink | None) -> Iterator[CycleSink | None]:
         from snakebot.telemetry import CsvTelemetryWriter
 
         if log is None or not isinstance(log, str | Path):

@@ -12,10 +12,11 @@ machine disturbs less than the rate); the report gives each run and the medians 
 load average, and what the server did with the clients (the run summary's ``foxglove_clients``).
 The hogs, the swarm and the emulator are stopped on every exit path (including Ctrl-C).
 
-``--write-cost`` measures instead, in this process, what one cycle's ``FoxgloveTelemetry.write``
-costs the control thread (median and 99th percentile, paced at 100 Hz for ``--duration`` s) and
-the CPU seconds of the whole process (every thread: the SDK's, the gate's), with and without the
-swarm; a loaded machine disturbs these figures far less than a bus run's rate.
+``--write-cost`` measures instead, in this process, what handing one cycle's record to
+``FoxgloveTelemetry`` costs the control thread (median and 99th percentile, paced at 100 Hz for
+``--duration`` s) and the CPU seconds of the whole process (every thread: the SDK's, the
+gate's), with and without the swarm; a loaded machine disturbs these figures far less than a
+bus run's rate.
 
 Usage::
 
@@ -252,7 +253,9 @@ def write_cost(args: argparse.Namespace) -> list[dict[str, Any]]:
     """Per-write cost and process CPU over ``args.duration`` s at 100 Hz, each arm in turn."""
     import numpy as np
 
+    from snakebot.control.cycle import CycleRecord
     from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, TelemetryOptions
+    from snakebot.types import JointState
 
     rows = []
     rng = np.random.default_rng(0)
@@ -284,8 +287,22 @@ def write_cost(args: argparse.Namespace) -> list[dict[str, Any]]:
                 cycles = round(args.duration * 100)
                 for cycle in range(cycles):
                     values = rng.normal(size=(4, 12))
+                    state = JointState(cycle / 100, values[1], values[2], values[3])
+                    record = CycleRecord(
+                        cycle + 1,
+                        state.time_s,
+                        values[0],
+                        values[0],
+                        state,
+                        None,
+                        1,
+                        True,
+                        0.01,
+                        False,
+                        100,
+                    )
                     began = time.perf_counter()
-                    sink.write(cycle / 100, cycle, values[0], values[1], values[2], values[3], None)
+                    sink(record)
                     took.append(time.perf_counter() - began)
                     time.sleep(max(0.0, start + (cycle + 1) / 100 - time.monotonic()))
                 cpu = time.process_time() - cpu0

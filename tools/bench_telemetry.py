@@ -1,7 +1,7 @@
 """What the telemetry sinks cost the control loop, per cycle (issue 13: must not disturb it).
 
 Records 1000 cycles of snake12 sidewinding on the twin at 100 Hz, then replays them into each
-sink set, timing every ``write`` (what the control thread pays): the CSV log alone, the Foxglove
+sink set, timing every call (what the control thread pays): the CSV log alone, the Foxglove
 server with no client, with a subscribed client (a thread here, so it competes for the CPU as a
 local Foxglove app would), the MCAP file, and CSV + server + client + MCAP. The scene is the
 forward kinematics of the measured joints (the hardware path; the twin's own poses are cheaper).
@@ -29,6 +29,7 @@ import numpy as np
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
+from snakebot.control.cycle import CycleRecord, CycleSink
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
@@ -36,46 +37,23 @@ from snakebot.gaits import make_gait
 from snakebot.telemetry import CsvTelemetryWriter
 from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, Geometry, TelemetryOptions
 from snakebot.telemetry.scene import KinematicLinkPoses
-from snakebot.telemetry.sink import CycleLog, TelemetryTee
-
-Row = tuple[float, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]
+from snakebot.telemetry.sink import TelemetryTee
 
 
 class Recorder:
-    """Keeps every cycle the runner writes, and the time between writes (the twin's cycle)."""
+    """Keeps every cycle's record the runner hands out, and the time between them (the twin's
+    cycle)."""
 
     def __init__(self) -> None:
-        self.rows: list[Row] = []
+        self.rows: list[CycleRecord] = []
         self.cycle_s: list[float] = []
         self._last = time.perf_counter()
 
-    def write(
-        self,
-        time_s: float,
-        cycle: int,
-        command: np.ndarray,
-        position: np.ndarray,
-        velocity: np.ndarray,
-        effort: np.ndarray,
-        com: np.ndarray | None,
-    ) -> None:
+    def __call__(self, record: CycleRecord) -> None:
         now = time.perf_counter()
         self.cycle_s.append(now - self._last)
         self._last = now
-        self.rows.append(
-            (
-                time_s,
-                cycle,
-                command.copy(),
-                position.copy(),
-                velocity.copy(),
-                effort.copy(),
-                None if com is None else com.copy(),
-            )
-        )
-
-    def close(self) -> None:
-        pass
+        self.rows.append(record)
 
 
 def record(cycles: int) -> Recorder:
@@ -92,7 +70,7 @@ def record(cycles: int) -> Recorder:
             SafetyLayer.for_robot(robot),
             RunPlan(cycles / 100.0, 100.0, False),
             metrics,
-            log=recorder,
+            observers=[recorder],
         )
     return recorder
 
@@ -153,14 +131,14 @@ def foxglove(folder: Path, *, port: bool, mcap: bool) -> FoxgloveTelemetry:
     )
 
 
-def replay(rows: list[Row], sink: CycleLog, period_s: float) -> list[float]:
+def replay(rows: list[CycleRecord], sink: CycleSink, period_s: float) -> list[float]:
     """Write every row at its cycle's deadline, as a loop waiting on the bus or the pacer does
     (the SDK's threads send while the loop waits); period 0 writes back to back."""
     costs = []
     deadline = time.perf_counter()
     for row in rows:
         start = time.perf_counter()
-        sink.write(*row)
+        sink(row)
         costs.append(time.perf_counter() - start)
         deadline += period_s
         pause = deadline - time.perf_counter()
@@ -169,7 +147,7 @@ def replay(rows: list[Row], sink: CycleLog, period_s: float) -> list[float]:
     return costs
 
 
-def measure(name: str, folder: Path, rows: list[Row], period_s: float) -> list[float]:
+def measure(name: str, folder: Path, rows: list[CycleRecord], period_s: float) -> list[float]:
     csv: Callable[[], CsvTelemetryWriter] = lambda: CsvTelemetryWriter(folder / "b.csv", 12)  # noqa: E731
     if name == "CSV log":
         with csv() as sink:
@@ -179,7 +157,7 @@ def measure(name: str, folder: Path, rows: list[Row], period_s: float) -> list[f
             return replay(rows, sink, period_s)
     with contextlib.ExitStack() as stack:
         fox = stack.enter_context(foxglove(folder, port=True, mcap=name.endswith("MCAP")))
-        sinks: list[CycleLog] = [fox]
+        sinks: list[CycleSink] = [fox]
         if "client" in name:
             assert fox.port is not None
             got = stack.enter_context(client(fox.port))

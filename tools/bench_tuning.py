@@ -210,7 +210,7 @@ def sysid() -> None:
             path = Path(folder) / "log.csv"
             with TwinBackend(truth.apply(robot)) as twin:
                 start = twin.read_state().position_rad
-                record(twin, chirp_plan(robot, start, joint, hold), path)
+                record(twin, robot, chirp_plan(robot, start, joint, hold), path)
             began = time.perf_counter()
             result = fit_servo(robot, [load_log(path, robot)])
             wall = time.perf_counter() - began

@@ -190,6 +190,6 @@ def _record(robot: Any, args: argparse.Namespace) -> int:
             duration_s=args.duration,
             stop_hz=args.stop_hz,
         )
-        rows = record(backend, commands, args.record)
+        rows = record(backend, robot, commands, args.record)
     print(f"recorded {rows} cycles to {args.record}")
     return 0

@@ -18,7 +18,7 @@ from snakebot.cli.backend_options import backend_spec
 from snakebot.cli.common import add_force_option, check_writable
 from snakebot.errors import OutputError
 from snakebot.telemetry import CsvTelemetryWriter, column_names
-from snakebot.telemetry.sink import CycleLog, combine
+from snakebot.telemetry.sink import CycleSink, combine
 from snakebot.telemetry.ws_gate import FOXGLOVE_ORIGINS, MAX_CLIENTS
 
 DEFAULT_PORT = 8765
@@ -113,9 +113,9 @@ def check_outputs(args: argparse.Namespace, *others: tuple[Path | None, str]) ->
 
 @dataclass
 class Telemetry:
-    """The sinks a run writes to: ``log`` gets every cycle (None: none asked for)."""
+    """The sinks a run writes to: ``log`` gets every cycle's record (None: none asked for)."""
 
-    log: CycleLog | None = None
+    log: CycleSink | None = None
     csv: CsvTelemetryWriter | None = None
     foxglove: Any = None
     summary: dict[str, object] = field(default_factory=dict)
@@ -255,24 +255,12 @@ def drive_observer(telemetry: Telemetry) -> Any:
         return None
 
     def observe(cycle: Any) -> None:
-        state = cycle.state
-        com = None if cycle.body is None else cycle.body.com_m
-        imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
-        log.write(
-            state.time_s,
-            cycle.cycle,
-            cycle.command_rad,
-            state.position_rad,
-            state.velocity_rad_s,
-            state.effort_nm,
-            com,
-            imu,
-        )
+        log(cycle)
         if foxglove is not None:
             status = cycle.status
             controls = status.controls or status.setpoint
             foxglove.drive(
-                state.time_s,
+                cycle.time_s,
                 {
                     "gait": status.gait,
                     "mode": status.mode,

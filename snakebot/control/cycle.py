@@ -20,6 +20,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
@@ -187,6 +188,34 @@ class CycleRecord:
 
 
 CycleObserver = Callable[[CycleRecord], None]
+"""Sees every cycle's record: telemetry sinks, the drive display, tuning samples, a test.
+
+The record is the only thing that leaves the loop, so a new channel is one field: of the
+state or body a backend reads (the record carries them as they are: no edit to the loop), or of
+the record where the loop itself makes it, plus the sinks that choose to show it. No sink's
+signature changes and the sinks that do not show it never hear of it
+(tests/integration/control/test_cycle_channel.py)."""
+
+
+@runtime_checkable
+class CycleSink(Protocol):
+    """An observer that keeps what it sees (a CSV file, a Foxglove server, an MCAP file):
+    ``rows`` counts the records taken, ``close`` flushes and releases (idempotent)."""
+
+    @property
+    def rows(self) -> int:
+        """Records taken so far."""
+        ...
+
+    def __call__(self, record: CycleRecord) -> None:
+        """Take one cycle's record."""
+        ...
+
+    def close(self) -> None:
+        """Flush and release; idempotent."""
+        ...
+
+
 CycleHook = Callable[[int, float], None]
 """``hook(cycle, gait_time_s)`` after every cycle (progress, video, viewer)."""
 StopCheck = Callable[[], str | None]

@@ -20,19 +20,22 @@ from snakebot.control.cycle import (
     GaitCycle,
 )
 from snakebot.control.metrics import RunMetrics
-from snakebot.telemetry.sink import CycleLog
 from snakebot.types import JointCommand, JointState
 
 
 class CycleLoop:
     """One run's cycles on a connected backend, and which parts still take part.
 
-    ``step`` returns each cycle's ``CycleRecord`` when ``records`` is set or ``observers`` are
+    ``metrics`` (None: not kept) accounts the scored cycles. ``step`` returns each cycle's
+    ``CycleRecord`` when ``records`` is set or ``observers`` are
     given (else None: nobody reads it, and the twin's cycle stays as cheap as it was).
 
+    Everything that leaves the loop leaves as the record, observer by observer in order (the
+    telemetry sinks among them: snakebot.telemetry.sink), then ``on_cycle(cycle, gait_time_s)``.
+
     ``stage`` names the part running when an exception leaves ``step`` ("gait", "safety",
-    "backend", "metrics", "log", "hook"); ``leave_out`` drops a failed part from the cycles that
-    follow (the runner's ramp-out).
+    "backend", "metrics", "observer", "hook"); ``leave_out`` drops a failed part from the cycles
+    that follow (the runner's ramp-out): the one observer that raised, the others go on.
     """
 
     def __init__(
@@ -40,15 +43,14 @@ class CycleLoop:
         backend: Backend,
         cycle: GaitCycle,
         schedule: CycleSchedule,
-        metrics: RunMetrics,
+        metrics: RunMetrics | None,
         *,
-        log: CycleLog | None = None,
         on_cycle: CycleHook | None = None,
         observers: Sequence[CycleObserver] = (),
         records: bool = False,
     ) -> None:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
-        self.log, self.on_cycle, self.observers = log, on_cycle, tuple(observers)
+        self.on_cycle, self.observers = on_cycle, tuple(observers)
         self.records = records
         self.body_sensor = backend if isinstance(backend, SensesBody) else None
         """The backend where it measures the body (COM, head orientation), else None."""
@@ -60,12 +62,14 @@ class CycleLoop:
         self.cycle = 0
         self.stage = "gait"
         self._last_period_s: float | None = None
+        self._observing = 0
 
     def start(self) -> None:
         """Reset the gaits and the safety layer to the measured pose; open the scored window."""
         self.gaits.reset(self.state.position_rad)
-        sensor = self.body_sensor
-        self.metrics.start(self.state.time_s, None if sensor is None else sensor.body_state())
+        if self.metrics is not None:
+            sensor = self.body_sensor
+            self.metrics.start(self.state.time_s, None if sensor is None else sensor.body_state())
 
     @property
     def elapsed_s(self) -> float:
@@ -99,29 +103,13 @@ class CycleLoop:
         self.state = state = backend.read_state()
         body = None if self.body_sensor is None else self.body_sensor.body_state()
         self.stage = "metrics"
-        if scored:
+        if scored and self.metrics is not None:
             self.metrics.add(command, state, body, schedule.period_s)
-        self.stage = "log"
-        if self.log is not None:
-            com = None if body is None else body.com_m
-            imu = None if body is None else (body.head_quat, body.head_gyro_rad_s)
-            self.log.write(
-                state.time_s,
-                self.cycle,
-                command,
-                state.position_rad,
-                state.velocity_rad_s,
-                state.effort_nm,
-                com,
-                imu,
-            )
         self.cycle += 1
         period = state.time_s - before.time_s
         self._last_period_s = period
-        self.stage = "hook"
-        if self.on_cycle is not None:
-            self.on_cycle(self.cycle, gait_time_s)
         if not (self.observers or self.records):
+            self._hook(gait_time_s)
             return None
         elapsed = state.time_s - self.start_s
         record = CycleRecord(
@@ -137,16 +125,24 @@ class CycleLoop:
             overrun=backend.stats.overruns != overruns,
             achieved_rate_hz=self.cycle / elapsed if elapsed > 0 else schedule.rate_hz,
         )
-        for observer in self.observers:
+        self.stage = "observer"
+        for index, observer in enumerate(self.observers):
+            self._observing = index
             observer(record)
+        self._hook(gait_time_s)
         return record
+
+    def _hook(self, gait_time_s: float) -> None:
+        self.stage = "hook"
+        if self.on_cycle is not None:
+            self.on_cycle(self.cycle, gait_time_s)
 
     def leave_out(self, stage: str) -> None:
         """Drop the part that failed from the cycles that follow."""
         if stage in ("gait", "safety"):
             self.use_gait = False  # hold the last target the safety layer accepted
-        elif stage == "log":
-            self.log = None
+        elif stage == "observer":  # the one that raised; the others (the log) go on
+            index = self._observing
+            self.observers = self.observers[:index] + self.observers[index + 1 :]
         elif stage == "hook":
             self.on_cycle = None
-            self.observers = ()

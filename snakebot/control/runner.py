@@ -26,23 +26,32 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import ChecksPhysics
 from snakebot.control.cycle import (
     CycleHook,
     CycleObserver,
     CycleRecord,
     CycleSchedule,
+    CycleSink,
     GaitCycle,
     StopCheck,
 )
 from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer, smooth_ramp
+from snakebot.control.summary import run_summary
 from snakebot.errors import BackendError
 from snakebot.gaits import Gait
-from snakebot.telemetry.sink import CycleLog
+from snakebot.gaits.table import CommandTable
 
-__all__ = ["CycleHook", "CycleObserver", "CycleRecord", "RunPlan", "RunResult", "run_gait"]
+__all__ = [
+    "CycleHook",
+    "CycleObserver",
+    "CycleRecord",
+    "RunPlan",
+    "RunResult",
+    "play_commands",
+    "run_gait",
+]
 
 
 @dataclass(frozen=True)
@@ -82,15 +91,16 @@ def run_gait(
     plan: RunPlan,
     metrics: RunMetrics,
     *,
-    log: CycleLog | None = None,
+    log: CycleSink | None = None,
     on_cycle: CycleHook | None = None,
     observers: Sequence[CycleObserver] = (),
     stop: StopCheck | None = None,
 ) -> RunResult:
     """Run ``gait`` on a connected ``backend`` for ``plan.duration_s``, then ramp out.
 
-    ``on_cycle(cycle, gait_time_s)`` runs after every cycle (progress, video, viewer), then each
-    of ``observers`` gets the cycle's ``CycleRecord``. ``stop()`` is asked before every gait
+    ``log`` (a telemetry sink: snakebot.telemetry.sink) and then each of ``observers`` get every
+    cycle's ``CycleRecord``, then ``on_cycle(cycle, gait_time_s)`` runs (progress, video,
+    viewer); ``RunResult.log_rows`` are the rows ``log`` took. ``stop()`` is asked before every gait
     cycle: a reason ends the gait there as Ctrl-C does (ramp-out, then ``RunResult.stopped_by``);
     with ``plan.duration_s`` None only ``stop`` or Ctrl-C ends the gait. Raises what ended the
     run early (after the ramp-out where the bus still works; see the module doc), and, before
@@ -103,9 +113,8 @@ def run_gait(
         GaitCycle([gait], safety),
         schedule,
         metrics,
-        log=log,
         on_cycle=on_cycle,
-        observers=observers,
+        observers=[*([] if log is None else [log]), *observers],
     )
     loop.start()
     interrupted = False
@@ -130,15 +139,50 @@ def run_gait(
         _ramp_out(loop, safety, loop.elapsed_s, failure)
     if failure is not None:
         raise failure
-    summary = metrics.summary(gait.period_s)
-    summary["rate_hz"] = plan.rate_hz
-    summary["achieved_rate_hz"] = _achieved_rate(metrics, schedule.period_s)
-    summary["overruns"] = backend.stats.overruns
-    summary["backend_stats"] = dict(backend.stats.extra)
-    summary["interrupted"] = interrupted
-    if isinstance(backend, ChecksPhysics) and (physics := backend.physics_health()) is not None:
-        summary["physics"] = physics  # the twin's physics checks
+    summary = run_summary(
+        metrics,
+        backend,
+        rate_hz=plan.rate_hz,
+        gait_period_s=gait.period_s,
+        interrupted=interrupted,
+    )
     return RunResult(summary, interrupted, 0 if log is None else log.rows, stopped_by=stopped_by)
+
+
+def play_commands(
+    backend: Backend,
+    commands: np.ndarray,
+    rate_hz: float,
+    safety: SafetyLayer,
+    *,
+    observers: Sequence[CycleObserver] = (),
+) -> list[CycleRecord]:
+    """Play a command table (T, N) rad on a connected ``backend``, one row per control period,
+    through the control loop; returns every cycle's record (each of ``observers`` sees them).
+
+    The table is a gait (snakebot.gaits.table.CommandTable) behind ``safety``, usually
+    ``SafetyLayer.clip_only(robot)``: step tests and chirps must reach the servo as they were
+    made. There is no ramp-out, the table's last row is where it ends. On the twin that is T
+    cycles; a late cycle (a slow bus) plays the row of its time, so there may be fewer.
+    Raises the backend's ConfigError for a rate it cannot hold before the first command,
+    GaitError for a table that is not (T, N) finite angles, and what the loop raises.
+    """
+    backend.check_rate(rate_hz)
+    schedule = CycleSchedule(rate_hz)
+    table = CommandTable(commands, schedule.period_s)
+    schedule = CycleSchedule(rate_hz, table.duration_s)
+    records: list[CycleRecord] = []
+    loop = CycleLoop(
+        backend,
+        GaitCycle([table], safety),
+        schedule,
+        None,
+        observers=[records.append, *observers],
+    )
+    loop.start()
+    while schedule.in_gait(gait_time := loop.elapsed_s):
+        loop.step(gait_time, 1.0, scored=True)
+    return records
 
 
 def _ramp_out(
@@ -175,9 +219,3 @@ def _ramp_out(
         if failure is None:
             raise
         failure.add_note(f"the ramp-out after it stopped too: {exc!r}")
-
-
-def _achieved_rate(metrics: RunMetrics, dt: float) -> float:
-    start = metrics.start_time_s or 0.0
-    elapsed = metrics.end_time_s - start
-    return metrics.cycles / elapsed if elapsed > 0 else 1.0 / dt

@@ -60,6 +60,20 @@ class SafetyLayer:
         """The envelope a robot (or mass-spring body) config asks for."""
         return cls(robot.lower_rad, robot.upper_rad, robot.max_speed_rad_s, robot.safety.ramp_s)
 
+    @classmethod
+    def clip_only(cls, robot: RobotConfig | BodyConfig) -> SafetyLayer:
+        """The robot's joint limits and nothing else: no slew limit, no ramp. For command
+        tables made for the servo (step tests, chirps, excitation records), whose every step
+        and speed is the point of the test: inside the limits a row goes out as it is (to the
+        bit where the rest pose is straight, 0 inside the limits). A NaN or a wrong shape still
+        stops the run."""
+        return cls(robot.lower_rad, robot.upper_rad, math.inf, 0.0)
+
+    @property
+    def limits_speed(self) -> bool:
+        """False for a clip-only layer (no slew limit)."""
+        return math.isfinite(self.max_speed_rad_s)
+
     def reset(self, measured_rad: np.ndarray) -> None:
         """Start from the measured pose, so the first command never jumps (even from a pose
         outside the limits: the slew limit then brings the joint in)."""
@@ -88,7 +102,7 @@ class SafetyLayer:
         command += self.rest_rad
         _clip(command, lower, upper, out=command)
         last = self._last
-        if last is not None:
+        if last is not None and self.limits_speed:
             max_step = self.max_speed_rad_s * dt_s
             command -= last
             _clip(command, -max_step, max_step, out=command)
@@ -100,6 +114,6 @@ class SafetyLayer:
                 _clip(command, np.minimum(lower, last), np.maximum(upper, last), out=command)
                 self._inside = bool(np.all((lower <= command) & (command <= upper)))
         else:
-            self._inside = True  # clipped into the limits above
+            self._inside = True  # clipped into the limits above (no slew step to leave them)
         self._last = command
         return command  # type: ignore[no-any-return]

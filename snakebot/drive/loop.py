@@ -15,11 +15,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import ChecksPhysics
 from snakebot.control.cycle import CycleRecord, CycleSchedule, GaitCycle, StopCheck
 from snakebot.control.loop import CycleLoop
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
+from snakebot.control.summary import run_summary
 from snakebot.drive.controller import DriveController
 from snakebot.drive.gate import BACKLOG, KeyGate
 from snakebot.drive.sources import InputSource
@@ -92,7 +92,7 @@ def run_drive(
             controller.notice = gate.notice
         _check_stop(controller, source, stop_check, keys_waiting=gate.waiting > 0)
         done = loop.step(now, 1.0, scored=True)
-        assert done is not None  # records=True
+        assert done is not None  # records=True: the loop returns every record
         status = live.status()
         record = DriveCycle(**vars(done), status=status, keys=keys)
         for observer in observers:
@@ -104,18 +104,11 @@ def run_drive(
                 stop_deadline = now + status.blend_left_s + STOP_GRACE_S
             elif now > stop_deadline:
                 break  # backend.close() still ramps to the safe pose
-    summary = metrics.summary(None)
-    elapsed = metrics.end_time_s - (metrics.start_time_s or 0.0)
-    summary["rate_hz"] = rate_hz
-    summary["achieved_rate_hz"] = metrics.cycles / elapsed if elapsed > 0 else rate_hz
-    summary["overruns"] = backend.stats.overruns
+    summary = run_summary(metrics, backend, rate_hz=rate_hz, gait_period_s=None, interrupted=False)
     summary["stopped_by"] = controller.stop_reason
     summary["keys"] = controller.events
     summary["dropped_keys"] = gate.dropped
     summary["governed_cycles"] = live.governed_cycles
-    summary["interrupted"] = False
-    if isinstance(backend, ChecksPhysics) and (physics := backend.physics_health()) is not None:
-        summary["physics"] = physics  # the twin's physics checks
     return DriveResult(summary, controller.stop_reason or "", loop.cycle)
 
 

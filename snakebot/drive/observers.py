@@ -1,4 +1,4 @@
-"""Drive observers that adapt existing sinks, and the backend readings the display shows."""
+"""The backend readings the drive display and Foxglove show."""
 
 from __future__ import annotations
 
@@ -8,29 +8,6 @@ import numpy as np
 
 from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import OnBus, ReportsHealth
-from snakebot.drive.loop import DriveCycle, DriveObserver
-from snakebot.telemetry import CsvTelemetryWriter
-
-
-def csv_log_observer(log: CsvTelemetryWriter) -> DriveObserver:
-    """Write each drive cycle as a row of ``snakebot run``'s telemetry CSV."""
-
-    def write(cycle: DriveCycle) -> None:
-        state = cycle.state
-        com = None if cycle.body is None else cycle.body.com_m
-        imu = None if cycle.body is None else (cycle.body.head_quat, cycle.body.head_gyro_rad_s)
-        log.write(
-            state.time_s,
-            cycle.cycle,
-            cycle.command_rad,
-            state.position_rad,
-            state.velocity_rad_s,
-            state.effort_nm,
-            com,
-            imu,
-        )
-
-    return write
 
 
 def backend_readings(

@@ -17,11 +17,15 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from snakebot.config.input_file import MAX_NAME_CHARS, read_input, text_problem
 from snakebot.errors import ConfigError, OutputError
+
+if TYPE_CHECKING:
+    from snakebot.control.cycle import CycleRecord
 
 
 def column_names(joint_count: int) -> list[str]:
@@ -36,7 +40,8 @@ def column_names(joint_count: int) -> list[str]:
 
 
 class CsvTelemetryWriter:
-    """Appends one row per control cycle to ``path`` (created or truncated).
+    """Appends one row per control cycle to ``path`` (created or truncated): a
+    :class:`~snakebot.control.cycle.CycleSink`, called with each cycle's record.
 
     OutputError naming the file if it cannot be created or a write fails.
     """
@@ -58,27 +63,31 @@ class CsvTelemetryWriter:
         values = 4 * joint_count + 3 + 7
         self._format = "%.6f,%d," + ",".join(["%.6g"] * values) + "\n"
 
-    def write(
-        self,
-        time_s: float,
-        cycle: int,
-        command: np.ndarray,
-        position: np.ndarray,
-        velocity: np.ndarray,
-        effort: np.ndarray,
-        com: np.ndarray | None,
-        imu: tuple[np.ndarray, np.ndarray | None] | None = None,
-    ) -> None:
-        """Write one cycle; ``com`` None (hardware) is written as NaN, so is ``imu`` (head
-        quaternion (4,), gyro (3,) rad/s) where it or its gyro is None."""
+    def __call__(self, record: CycleRecord) -> None:
+        """Write one cycle's record as a row: its ``cycle`` counted from 0, the command sent,
+        the measured state, and the body's COM and head IMU, NaN where the backend has none
+        (hardware: no COM; a twin without a gyro)."""
         if self._fd is None:
             raise ValueError(f"telemetry log {self.path} is closed")
-        com_values = _NAN3 if com is None else com
-        quat = _NAN4 if imu is None else imu[0]
-        gyro = _NAN3 if imu is None or imu[1] is None else imu[1]
-        row = np.concatenate((command, position, velocity, effort, com_values, quat, gyro)).tolist()
+        state, body = record.state, record.body
+        if body is None:
+            com, quat, gyro = _NAN3, _NAN4, _NAN3
+        else:
+            com, quat = body.com_m, body.head_quat
+            gyro = _NAN3 if body.head_gyro_rad_s is None else body.head_gyro_rad_s
+        row = np.concatenate(
+            (
+                record.command_rad,
+                state.position_rad,
+                state.velocity_rad_s,
+                state.effort_nm,
+                com,
+                quat,
+                gyro,
+            )
+        ).tolist()
         try:
-            _write_all(self._fd, (self._format % (time_s, cycle, *row)).encode())
+            _write_all(self._fd, (self._format % (state.time_s, record.cycle - 1, *row)).encode())
         except OSError as exc:
             raise OutputError(
                 self.path,

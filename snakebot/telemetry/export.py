@@ -11,15 +11,19 @@ from __future__ import annotations
 
 import datetime
 import json
+import math
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from snakebot.control.cycle import CycleRecord
 from snakebot.errors import ConfigError, MissingDependencyError, OutputError
 from snakebot.telemetry.csv_log import TelemetryLog
 from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, Geometry, TelemetryOptions
 from snakebot.telemetry.log_summary import com_path, nominal_period_s
+from snakebot.types import BodyState, JointState
 
 FORMATS = ("mcap", "parquet")
 PARQUET_INSTALL = "pip install 'snakebot[parquet]'"
@@ -39,21 +43,42 @@ def export_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -
         start_epoch_ns=_start_ns(meta),
     )
     with sink:
-        time_s, cycle = log.column("time_s"), log.column("cycle").astype(int)
-        command, position = log.joints("command_rad"), log.joints("position_rad")
-        velocity, effort = log.joints("velocity_rad_s"), log.joints("effort_nm")
-        com = com_path(log)
-        for row in range(len(time_s)):
-            sink.write(
-                float(time_s[row]),
-                int(cycle[row]),
-                command[row],
-                position[row],
-                velocity[row],
-                effort[row],
-                None if com is None else com[row],
-            )
+        for record in log_records(log):
+            sink(record)
     return sink.rows
+
+
+def log_records(log: TelemetryLog) -> Iterator[CycleRecord]:
+    """The cycles of a log as the records the loop made, as far as the log holds them: the
+    logged cycle, time, command and measured state, and the COM (when logged) with the head's
+    orientation (NaN where not logged). A log does not hold the gait's target (the command
+    stands in), the amplitude (NaN), whether the cycle was scored (True) or late (False)."""
+    time_s, cycle = log.column("time_s"), log.column("cycle").astype(int)
+    command, position = log.joints("command_rad"), log.joints("position_rad")
+    velocity, effort = log.joints("velocity_rad_s"), log.joints("effort_nm")
+    com = com_path(log)
+    quat = np.column_stack(
+        [
+            log.column(name) if name in log.columns else np.full(len(time_s), np.nan)
+            for name in ("imu_qw", "imu_qx", "imu_qy", "imu_qz")
+        ]
+    )
+    start = float(time_s[0]) if len(time_s) else 0.0
+    for row in range(len(time_s)):
+        now = float(time_s[row])
+        yield CycleRecord(
+            cycle=int(cycle[row]) + 1,
+            gait_time_s=now - start,
+            target_rad=command[row],
+            command_rad=command[row],
+            state=JointState(now, position[row], velocity[row], effort[row]),
+            body=None if com is None else BodyState(com[row], quat[row]),
+            amplitude=math.nan,
+            scored=True,
+            period_s=now - float(time_s[row - 1]) if row else 0.0,
+            overrun=False,
+            achieved_rate_hz=row / (now - start) if now > start else 0.0,
+        )
 
 
 def export_parquet(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -> int:

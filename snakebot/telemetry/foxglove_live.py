@@ -26,7 +26,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,6 +35,9 @@ from snakebot.telemetry import schemas
 from snakebot.telemetry.scene import LinkPoses, frame_transforms, scene_update
 from snakebot.telemetry.sdk_logs import SendErrors, quiet_sink_errors
 from snakebot.telemetry.ws_gate import MAX_CLIENTS, STALL_S, WebSocketGate
+
+if TYPE_CHECKING:
+    from snakebot.control.cycle import CycleRecord
 
 INSTALL = "pip install 'snakebot[foxglove]'"
 LOCALHOST = "127.0.0.1"
@@ -111,7 +114,8 @@ def open_channels(context: Any, topics: Sequence[str]) -> dict[str, Any]:
 
 
 class FoxgloveTelemetry:
-    """A :class:`~snakebot.telemetry.sink.CycleLog` streaming each cycle to Foxglove and MCAP.
+    """A :class:`~snakebot.control.cycle.CycleSink` streaming each cycle's record to Foxglove
+    and MCAP.
 
     Opening starts the server and creates the file: OutputError naming ``host:port`` when the
     port cannot be bound, OutputError naming the file when it cannot be created or finished,
@@ -223,18 +227,13 @@ class FoxgloveTelemetry:
             self._t0 = time_s
         return self._epoch_ns + round((time_s - self._t0) * 1e9)
 
-    def write(
-        self,
-        time_s: float,
-        cycle: int,
-        command: np.ndarray,
-        position: np.ndarray,
-        velocity: np.ndarray,
-        effort: np.ndarray,
-        com: np.ndarray | None,
-        imu: tuple[np.ndarray, np.ndarray | None] | None = None,
-    ) -> None:
-        """Send one cycle (see :meth:`~snakebot.telemetry.sink.CycleLog.write`)."""
+    def __call__(self, record: CycleRecord) -> None:
+        """Send one cycle's record: ``/joints`` every cycle (its ``cycle`` counted from 0, as
+        in the CSV log), the scene and the status channels at their own rates."""
+        state = record.state
+        time_s, command, position = state.time_s, record.command_rad, state.position_rad
+        com = None if record.body is None else record.body.com_m
+        cycle, velocity, effort = record.cycle - 1, state.velocity_rad_s, state.effort_nm
         now_ns = self.time_ns(time_s)
         error = command - position
         message: dict[str, Any] = {

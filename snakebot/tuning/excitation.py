@@ -14,14 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import SensesBody
 from snakebot.config.schema import RobotConfig
-from snakebot.control.safety import smooth_ramp
+from snakebot.control.runner import play_commands
+from snakebot.control.safety import SafetyLayer, smooth_ramp
 from snakebot.errors import ConfigError
 from snakebot.telemetry import CsvTelemetryWriter
 from snakebot.tuning.responses import chirp_commands
 from snakebot.tuning.trace import FloatArray
-from snakebot.types import JointCommand
 
 
 def chirp_plan(
@@ -63,23 +62,12 @@ def chirp_plan(
     return commands
 
 
-def record(backend: Backend, commands: FloatArray, path: Path, rate_hz: float = 100.0) -> int:
-    """Play commands (K, N) on a connected backend, logging every cycle to ``path``; rows."""
-    dt = 1.0 / rate_hz
-    senses_body = backend if isinstance(backend, SensesBody) else None
+def record(
+    backend: Backend, robot: RobotConfig, commands: FloatArray, path: Path, rate_hz: float = 100.0
+) -> int:
+    """Play commands (K, N) on a connected backend through the control loop behind the
+    robot's clip-only safety layer, logging every cycle to ``path`` (the CSV of ``snakebot
+    run --log``); returns the rows written."""
     with CsvTelemetryWriter(path, backend.joint_count) as log:
-        for cycle, row in enumerate(commands):
-            backend.send_command(JointCommand(row))
-            backend.advance(dt)
-            state = backend.read_state()
-            body = None if senses_body is None else senses_body.body_state()
-            log.write(
-                state.time_s,
-                cycle,
-                row,
-                state.position_rad,
-                state.velocity_rad_s,
-                state.effort_nm,
-                None if body is None else body.com_m,
-            )
+        play_commands(backend, commands, rate_hz, SafetyLayer.clip_only(robot), observers=[log])
         return log.rows

@@ -23,14 +23,15 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import GainRegisters, RobotConfig
+from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
-from snakebot.control.runner import RunPlan, run_gait
+from snakebot.control.runner import RunPlan, play_commands, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.gaits import make_gait
 from snakebot.tuning.feasibility import SATURATION_FRACTION
 from snakebot.tuning.responses import StepMetrics, chirp_commands, rms, step_commands, step_metrics
 from snakebot.tuning.trace import FloatArray
-from snakebot.types import JointCommand, PDGains
+from snakebot.types import PDGains
 
 BackendSession = Callable[[], contextlib.AbstractContextManager[Backend]]
 
@@ -131,7 +132,7 @@ def evaluate_gains(
                 lead_s=test.lead_s,
                 step_s=test.step_s,
             )
-            time_s, position, _ = play(backend, commands, test.rate_hz)
+            time_s, sent, position, _ = play(backend, robot, commands, test.rate_hz)
             t0 = time_s[0] - 1.0 / test.rate_hz
             lead = round(test.lead_s * test.rate_hz)
             steps.append(
@@ -139,8 +140,8 @@ def evaluate_gains(
                     time_s - t0, position[:, joint], hold[joint], commands[-1, joint], test.lead_s
                 )
             )
-            traces.append((time_s - t0, commands[:, joint], position[:, joint]))
-            play(backend, np.tile(hold, (max(lead, 1), 1)), test.rate_hz)
+            traces.append((time_s - t0, sent[:, joint], position[:, joint]))
+            play(backend, robot, np.tile(hold, (max(lead, 1), 1)), test.rate_hz)
         tracking, saturation = _gait_tracking(backend, robot, test)
     reason = _rejection(steps, saturation, test)
     return GainScore(gains, pd, tuple(steps), tracking, saturation, reason, tuple(traces))
@@ -163,26 +164,26 @@ def measure_chirps(
             commands = chirp_commands(
                 hold, joint, amplitude_rad, rate_hz=test.rate_hz, duration_s=duration_s
             )
-            time_s, position, _ = play(backend, commands, test.rate_hz)
-            error = commands[:, joint] - position[:, joint]
-            out[joint] = (rms(error), (time_s - time_s[0], commands[:, joint], position[:, joint]))
+            time_s, sent, position, _ = play(backend, robot, commands, test.rate_hz)
+            error = sent[:, joint] - position[:, joint]
+            out[joint] = (rms(error), (time_s - time_s[0], sent[:, joint], position[:, joint]))
     return out
 
 
 def play(
-    backend: Backend, commands: FloatArray, rate_hz: float
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Send commands (K, N) one per cycle; returns time (K,), positions and efforts (K, N)."""
-    dt = 1.0 / rate_hz
-    time_s, position, effort = [], [], []
-    for row in commands:
-        backend.send_command(JointCommand(row))
-        backend.advance(dt)
-        state = backend.read_state()
-        time_s.append(state.time_s)
-        position.append(state.position_rad)
-        effort.append(state.effort_nm)
-    return np.array(time_s), np.array(position), np.array(effort)
+    backend: Backend, robot: RobotConfig, commands: FloatArray, rate_hz: float
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Play commands (K, N) through the control loop behind the robot's clip-only safety
+    layer (snakebot.control.runner.play_commands), one row per cycle. Returns time (K',) and
+    what was sent, the positions and the efforts (K', N): K' = K on the twin, fewer where a
+    slow bus made cycles late (each then plays the row of its time)."""
+    records = play_commands(backend, commands, rate_hz, SafetyLayer.clip_only(robot))
+    return (
+        np.array([r.time_s for r in records]),
+        np.array([r.command_rad for r in records]),
+        np.array([r.state.position_rad for r in records]),
+        np.array([r.state.effort_nm for r in records]),
+    )
 
 
 def candidate_grid(
@@ -248,14 +249,16 @@ def _gait_tracking(backend: Backend, robot: RobotConfig, test: GainTest) -> tupl
     run = np.zeros(robot.joint_count)
     longest = [0.0]
 
-    def watch(cycle: int, gait_time_s: float) -> None:
+    def watch(record: CycleRecord) -> None:
+        # the effort the cycle measured (a read of its own would cost a bus transaction)
         nonlocal run
-        saturated = np.abs(backend.read_state().effort_nm) >= limit
+        saturated = np.abs(record.state.effort_nm) >= limit
         run = np.where(saturated, run + 1, 0)
         longest[0] = max(longest[0], float(run.max()) / test.rate_hz)
 
     plan = RunPlan(test.gait_s, test.rate_hz)
-    result = run_gait(backend, gait, SafetyLayer.for_robot(robot), plan, metrics, on_cycle=watch)
+    safety = SafetyLayer.for_robot(robot)
+    result = run_gait(backend, gait, safety, plan, metrics, observers=[watch])
     tracking = result.summary["tracking_rms_rad"]
     return float(tracking) if isinstance(tracking, float) else math.nan, longest[0]
 

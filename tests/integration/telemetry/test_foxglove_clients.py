@@ -22,6 +22,7 @@ from websockets.sync.client import connect
 
 from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, TelemetryOptions
 from tests.integration.telemetry.foxglove_client import SUBPROTOCOLS, FoxgloveClient
+from tests.records import record
 
 JOINTS = 12
 
@@ -46,7 +47,7 @@ def write_cycles(sink: FoxgloveTelemetry, first: int, count: int) -> list[float]
     for cycle in range(first, first + count):
         values = rng.normal(size=(4, JOINTS))
         started = time.perf_counter()
-        sink.write(cycle / 100.0, cycle, values[0], values[1], values[2], values[3], None)
+        sink(record(cycle, cycle / 100.0, values[0], values[1], values[2], values[3]))
         took.append(time.perf_counter() - started)
     return took
 

@@ -18,6 +18,7 @@ pytest.importorskip("mcap")
 from mcap.reader import make_reader
 
 from snakebot.telemetry import read_log
+from snakebot.telemetry.sidecar import read_sidecar
 
 DRIVE_SCRIPT = Path(__file__).parents[1] / "drive" / "snake8_forward_left.txt"
 
@@ -86,7 +87,17 @@ def test_a_scripted_drive_records_the_drive_status(tmp_path: Path) -> None:
         "drive", "--script", str(DRIVE_SCRIPT), "--log", str(csv), "--mcap", str(mcap)
     )
     topics, schema_names = read_mcap(mcap)
-    assert len(topics["/joints"]) == len(read_log(csv).values) == summary["control_cycles"]
+    log = read_log(csv)
+    assert len(topics["/joints"]) == len(log.values) == summary["control_cycles"]
+    # A drive's cycles count from 0 as a run's do (the sidecar says so), in the CSV and MCAP.
+    cycles = log.column("cycle").astype(int).tolist()
+    assert cycles == list(range(len(cycles)))
+    assert [m["cycle"] for _, m in topics["/joints"]] == cycles
+    sidecar = read_sidecar(csv)
+    assert sidecar is not None
+    described = {c["name"]: c["description"] for c in sidecar["columns"]}
+    assert described["cycle"] == "control cycle number, from 0"
+    assert "backend_stats" in summary  # the drive's summary has every key of a run's
     drive = [m for _, m in topics["/drive"]]
     assert len(drive) == len(topics["/joints"])
     assert schema_names["/drive"] == "snakebot.DriveStatus"

@@ -26,7 +26,7 @@ def test_fit_recovers_stiffness_damping_and_armature(tmp_path: Path) -> None:
     log_path = tmp_path / "lift.csv"
     with TwinBackend(truth.apply(robot)) as twin:
         plan = chirp_plan(robot, twin.read_state().position_rad, 1, 0.5, duration_s=2.0)
-        assert record(twin, plan, log_path) == len(plan)
+        assert record(twin, robot, plan, log_path) == len(plan)
     result = fit_servo(robot, [load_log(log_path, robot)])
     for field in ("stiffness_scale", "damping_nms", "armature_kgm2"):
         assert getattr(result.after, field) == pytest.approx(getattr(truth, field), rel=0.02)
@@ -113,7 +113,7 @@ def test_fit_tells_which_p_gain_divisor_the_servo_has(config_dir: Path) -> None:
     log_path = config_dir / "lift.csv"
     with TwinBackend(truth_robot) as twin:
         plan = chirp_plan(robot, twin.read_state().position_rad, 1, 0.5, duration_s=2.0)
-        record(twin, plan, log_path)
+        record(twin, robot, plan, log_path)
     result = fit_servo(robot, [load_log(log_path, robot)], ("p_divisor",))
     assert result.after.p_gain_divisor == pytest.approx(128.0, rel=0.02)
     assert result.after.report(robot)["p_gain_divisor"] == result.after.p_gain_divisor

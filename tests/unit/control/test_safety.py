@@ -85,3 +85,21 @@ def test_a_joint_found_outside_its_limits_comes_in_at_the_slew_limit() -> None:
     steps = np.diff([2.5, *path])
     assert np.all(steps <= 0) and np.all(steps >= -VMAX * dt - 1e-12)
     assert path[-1] == pytest.approx(0.0)
+
+
+def test_a_clip_only_layer_sends_a_step_as_it_is_and_only_clips_to_the_limits() -> None:
+    robot = load_robot("snake12")
+    layer = SafetyLayer.clip_only(robot)
+    layer.reset(np.zeros(12))
+    step = np.zeros(12)
+    step[3] = 0.7  # far beyond one cycle of the servo's speed: the step test's whole point
+    assert robot.max_speed_rad_s * 0.01 < 0.7
+    np.testing.assert_array_equal(layer.filter(step, 0.01), step)
+    beyond = np.full(12, 10.0)
+    np.testing.assert_array_equal(layer.filter(beyond, 0.01), robot.upper_rad)
+    with pytest.raises(SafetyLimitError, match="non-finite"):
+        layer.filter(np.full(12, np.nan), 0.01)
+    # The robot's own layer holds the same step back to the servo's speed.
+    limited = SafetyLayer.for_robot(robot)
+    limited.reset(np.zeros(12))
+    assert limited.filter(step, 0.01)[3] == pytest.approx(robot.max_speed_rad_s * 0.01)

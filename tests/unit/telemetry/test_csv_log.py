@@ -10,6 +10,7 @@ import pytest
 
 from snakebot.errors import ConfigError, OutputError
 from snakebot.telemetry import CsvTelemetryWriter, column_names, read_log
+from tests.records import record
 
 
 def test_rows_round_trip(tmp_path: Path) -> None:
@@ -17,8 +18,8 @@ def test_rows_round_trip(tmp_path: Path) -> None:
     with CsvTelemetryWriter(path, 3) as log:
         for cycle in range(5):
             q = np.array([0.1, -0.2, 0.3]) * cycle
-            log.write(cycle * 0.01, cycle, q, q + 0.01, q * 2, q * 3, np.array([cycle, 0.0, 0.02]))
-        log.write(0.05, 5, q, q, q, q, None)
+            log(record(cycle, cycle * 0.01, q, q + 0.01, q * 2, q * 3, np.array([cycle, 0, 0.02])))
+        log(record(5, 0.05, q))
     data = read_log(path)
     assert data.columns == column_names(3)
     assert data.values.shape == (6, len(column_names(3)))
@@ -31,7 +32,7 @@ def test_torn_last_line_is_dropped(tmp_path: Path) -> None:
     path = tmp_path / "run.csv"
     with CsvTelemetryWriter(path, 2) as log:
         for cycle in range(3):
-            log.write(cycle * 0.01, cycle, np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), None)
+            log(record(cycle, cycle * 0.01, np.zeros(2)))
     with path.open("a") as handle:
         handle.write("0.03,3,0.1,0.2")  # a writer killed mid-line
     assert read_log(path).values.shape[0] == 3
@@ -55,12 +56,15 @@ WRITER = """
 import sys
 import numpy as np
 from snakebot.errors import OutputError
+from snakebot.control.cycle import CycleRecord
 from snakebot.telemetry import CsvTelemetryWriter
+from snakebot.types import JointState
 q = np.full(4, 0.123456)
 with CsvTelemetryWriter(sys.argv[1], 4) as log:
     try:
         for cycle in range(100000):
-            log.write(cycle * 0.01, cycle, q, q, q, q, None)
+            state = JointState(cycle * 0.01, q, q, q)
+            log(CycleRecord(cycle + 1, state.time_s, q, q, state, None, 1, True, 0.01, False, 1))
     except OutputError as exc:
         print(log.rows)
         print(exc)
@@ -129,7 +133,7 @@ def _log(tmp_path: Path, rows: int = 4) -> Path:
     with CsvTelemetryWriter(path, 2) as log:
         for cycle in range(rows):
             q = np.full(2, 0.1 * cycle)
-            log.write(cycle * 0.01, cycle, q, q, q, q, np.zeros(3))
+            log(record(cycle, cycle * 0.01, q, q, q, q, np.zeros(3)))
     return path
 
 

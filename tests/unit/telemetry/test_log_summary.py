@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from snakebot.control.cycle import CycleRecord
 from snakebot.telemetry.csv_log import TelemetryLog, column_names
 from snakebot.telemetry.log_summary import summarize
 from snakebot.telemetry.sink import TelemetryTee
+from tests.records import record
 
 
 def make_log(time_s: np.ndarray, com: np.ndarray | None, joints: int = 2) -> TelemetryLog:
@@ -54,7 +56,7 @@ class Sink:
     def __init__(self, fail_close: bool = False) -> None:
         self.rows, self.closed, self.fail_close = 0, False, fail_close
 
-    def write(self, *row: object) -> None:
+    def __call__(self, record: CycleRecord) -> None:
         self.rows += 1
 
     def close(self) -> None:
@@ -66,8 +68,7 @@ class Sink:
 def test_a_tee_writes_to_every_sink_and_closes_them_all() -> None:
     first, second = Sink(fail_close=True), Sink()
     tee = TelemetryTee([first, second])
-    zeros = np.zeros(2)
-    tee.write(0.0, 0, zeros, zeros, zeros, zeros, None)
+    tee(record(0, 0.0, np.zeros(2)))
     assert (tee.rows, first.rows, second.rows) == (1, 1, 1)
     with pytest.raises(OSError, match="disk full"):
         tee.close()
