@@ -26,6 +26,14 @@ class ConfigError(SnakebotError, ValueError):
         super().__init__(f"{where}: {message}")
 
 
+class TerrainError(ConfigError):
+    """A terrain that is not known, fails to load from its plugin, or cannot be registered
+    (``snakebot.backends.terrains``); its source is the ``terrain`` option."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__("terrain", "", message)
+
+
 class GaitError(SnakebotError, ValueError):
     """A gait was asked for with an unknown name or invalid parameters."""
 

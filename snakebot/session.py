@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.backends.capabilities import SensesBody
+from snakebot.backends.capabilities import ReportsTravel, SensesBody
 from snakebot.backends.registry import BackendSpec, get_backend_spec
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
@@ -262,8 +262,8 @@ class Snake:
                 self.backend, built, safety, plan, metrics, log=writer, on_cycle=on_cycle
             )
         # A backend that measures more than the runner (the soft body's travel angle) says so.
-        travel = getattr(self.backend, "travel", None)
-        extra = dict(travel()) if callable(travel) else {}
+        backend = self.backend
+        extra = dict(backend.travel()) if isinstance(backend, ReportsTravel) else {}
         return RunSummary.from_run(
             robot=robot.name,
             gait=name,

@@ -33,7 +33,7 @@ import mujoco
 import numpy as np
 
 from snakebot.backends.twin import GroundFriction, TwinBackend
-from snakebot.backends.twin.terrain import TERRAINS
+from snakebot.backends.twin.terrain import BUILT_IN_TERRAINS
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -160,7 +160,7 @@ def table_part(seconds: float, only: Callable[[str], bool] = lambda name: True) 
         "| warnings | steps/s |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
-    for terrain in TERRAINS:
+    for terrain in BUILT_IN_TERRAINS:
         if not only(terrain):
             continue
         for robot_name, gaits in GAITS.items():
@@ -190,7 +190,7 @@ def main() -> None:
     if args.part in ("friction", "all"):
         friction_part(args.rounds)
     if args.part in ("table", "all"):
-        wanted = set(args.terrain or TERRAINS)
+        wanted = set(args.terrain or BUILT_IN_TERRAINS)
         table_part(args.seconds, lambda name: name in wanted)
 
 

@@ -30,6 +30,7 @@ __all__ = [
     "ChecksPhysics",
     "OnBus",
     "ReportsHealth",
+    "ReportsTravel",
     "Resettable",
     "SensesBody",
     "SensesCurrent",
@@ -100,6 +101,16 @@ class SensesCurrent(Protocol):
 
 
 @runtime_checkable
+class ReportsTravel(Protocol):
+    """Measures how the body travelled over the run beyond what the runner measures (the soft
+    body: its mean axis, the travel angle against it, the ground contact), for the summary."""
+
+    def travel(self) -> Mapping[str, float]:
+        """Figures since connect, by name with the unit in the name (``travel_angle_deg``)."""
+        ...
+
+
+@runtime_checkable
 class Resettable(Protocol):
     """Can be put back to a start pose at once (a simulation: a learning environment's new
     episode). After ``reset`` the body rests at the origin facing +x, straight or in
@@ -113,7 +124,8 @@ class Resettable(Protocol):
 
 @runtime_checkable
 class Simulated(Protocol):
-    """Has a MuJoCo model and data to render or view (the twin, the soft body)."""
+    """Has a MuJoCo model and data to render or view (the twin, the soft body); built at
+    connect, so a backend has this ability once connected."""
 
     model: mujoco.MjModel
     data: mujoco.MjData
@@ -177,6 +189,7 @@ CAPABILITIES: tuple[type, ...] = (
     ReportsHealth,
     ChecksPhysics,
     SensesCurrent,
+    ReportsTravel,
     Resettable,
     Simulated,
     OnBus,

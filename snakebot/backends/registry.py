@@ -138,8 +138,9 @@ def _check_spec(name: str, obj: object) -> BackendSpec:
 
 _TERRAIN = BackendOption(
     "terrain",
-    "flat (default), slope, pegs, rough, step, pipe, pole or cliff, with key=value options, "
-    "e.g. pegs:layout=row,spacing_m=0.15 (docs/terrain.md); a mass-spring body takes flat or cliff",
+    "a terrain of snakebot.backends.terrains by name (flat by default; terrain_names() lists "
+    "them, plugins' too), with key=value options, e.g. pegs:layout=row,spacing_m=0.15 "
+    "(docs/terrain.md); a mass-spring body takes flat or cliff (BODY_TERRAINS)",
     metavar="NAME[:KEY=VALUE,...]",
 )
 _REALTIME = BackendOption("realtime", "pace the simulation to the wall clock", flag=True)

@@ -20,11 +20,14 @@ from snakebot.backends.registry import (
     get_backend_spec,
 )
 from snakebot.cli.common import baud_arg, port_arg
+from snakebot.cli.terrain_options import terrain_help
 from snakebot.errors import BackendOptionError, ConfigError, UsageError
 from snakebot.session import DEFAULT_BACKEND
 
 # argparse types where the command line checks a value before any backend is made
 _TYPES: dict[str, Callable[[str], Any]] = {"port": port_arg, "baud": baud_arg}
+# help made from a registry when the parser is built (plugins' entries included)
+_GENERATED_HELP: dict[str, Callable[[], str]] = {"terrain": terrain_help}
 _CHOICES: dict[str, tuple[str, ...]] = {
     "directional": ("on", "off"),
     "friction_model": ("auto", "pairs", "scale"),
@@ -58,7 +61,8 @@ def add_option_flags(
     declared = _declared_options()
     for name in options:
         option = declared[name]
-        text = (helps or {}).get(name) or option.help
+        generated = _GENERATED_HELP.get(name)
+        text = (helps or {}).get(name) or (generated() if generated else option.help)
         if option.flag:
             parser.add_argument(flag(name), action="store_true", default=None, help=text)
         else:

@@ -23,9 +23,9 @@ from snakebot.cli.common import (
     robot_name,
 )
 from snakebot.cli.terrain_options import (
-    TERRAIN_HELP,
     add_terrain_options,
     refuse_friction_model,
+    terrain_help,
     twin_ground,
 )
 from snakebot.config.body import BodyConfig
@@ -42,7 +42,7 @@ def add_parser(subparsers: Any) -> None:
         "--friction",
         help="AXIAL,LATERAL ground friction (overrides the robot's); MU for a mass-spring body",
     )
-    parser.add_argument("--terrain", metavar="NAME[:KEY=VALUE,...]", help=TERRAIN_HELP)
+    parser.add_argument("--terrain", metavar="NAME[:KEY=VALUE,...]", help=terrain_help())
     add_terrain_options(parser, terrain=False)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     add_force_option(parser)

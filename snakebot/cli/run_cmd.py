@@ -32,7 +32,7 @@ from snakebot.cli.common import (
     robot_name,
 )
 from snakebot.cli.telemetry_options import add_telemetry_options, check_outputs, open_telemetry
-from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, TERRAIN_HELP
+from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, terrain_help
 from snakebot.errors import ConfigError, OutputError, UsageError
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
@@ -111,7 +111,7 @@ def add_parser(subparsers: Any) -> None:
             "friction": "twin ground friction along and across each module; equal values = "
             "isotropic (overrides the robot's ground model); one number MU for a mass-spring "
             "body's floor",
-            "terrain": TERRAIN_HELP,
+            "terrain": terrain_help(),
             "friction_model": FRICTION_MODEL_HELP,
             "realtime": "pace the twin to the wall clock",
             "port": "serial port for --backend dynamixel (default: robot config)",

@@ -7,8 +7,9 @@ import argparse
 import mujoco
 
 from snakebot.backends.softbody import build_body_spec
+from snakebot.backends.softbody.factory import body_terrain_option
 from snakebot.backends.softbody.factory import parse_floor_friction as floor_friction
-from snakebot.backends.twin.cliff import Cliff, parse_terrain
+from snakebot.backends.twin.terrain.cliff import Cliff
 from snakebot.config.body import BodyConfig
 
 
@@ -29,7 +30,7 @@ def softbody_options(
     return (
         friction,
         None if directional is None else directional == "on",
-        parse_terrain(terrain_text, "--terrain") if terrain_text else None,
+        body_terrain_option(terrain_text, "--terrain") if terrain_text else None,
     )
 
 

@@ -17,23 +17,25 @@ if TYPE_CHECKING:
 
 FRICTION_MODEL_CHOICES = ("auto", "pairs", "scale")
 
-TERRAIN_HELP = (
-    "twin terrain: flat (default), slope, pegs, rough, step, pipe, pole or cliff, with "
-    "key=value options, e.g. pegs:layout=row,spacing_m=0.15 (keys and ranges: docs/terrain.md; "
-    "a mass-spring body takes flat or cliff)"
-)
 FRICTION_MODEL_HELP = (
     "twin ground friction: pairs (MuJoCo capsule-plane pairs, fast, floor plane only), scale "
     "(directional friction from contact forces in each link's frame, any ground) or auto "
-    "(pairs on flat, slope, pegs, pole; scale on rough, step, pipe, cliff); default: the robot "
-    "file's twin.friction_model, else auto"
+    "(pairs where the snake lies on the floor plane, scale on any other ground: docs/terrain.md "
+    "says which terrain is which); default: the robot file's twin.friction_model, else auto"
 )
+
+
+def terrain_help() -> str:
+    """``--terrain``'s help, generated from the terrain registry (plugins included)."""
+    from snakebot.backends.terrains import terrain_help as registry_help
+
+    return "twin terrain: " + registry_help()
 
 
 def add_terrain_options(parser: argparse.ArgumentParser, *, terrain: bool = True) -> None:
     """Add ``--terrain`` (unless the command has it already) and ``--friction-model``."""
     if terrain:
-        parser.add_argument("--terrain", metavar="NAME[:KEY=VALUE,...]", help=TERRAIN_HELP)
+        parser.add_argument("--terrain", metavar="NAME[:KEY=VALUE,...]", help=terrain_help())
     parser.add_argument(
         "--friction-model", choices=FRICTION_MODEL_CHOICES, help=FRICTION_MODEL_HELP
     )

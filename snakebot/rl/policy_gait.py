@@ -55,11 +55,6 @@ class PoseSource(Protocol):
         """The pose now."""
 
 
-def knows_pose(backend: Backend) -> bool:
-    """True when ``backend`` measures the body's pose itself (``SensesBody``)."""
-    return isinstance(backend, SensesBody)
-
-
 def state_reader(backend: Backend) -> StateReader:
     """The joint state the runner read last (every backend keeps it: ``last_state``), so no
     extra bus transaction; a read before the first cycle's."""

@@ -18,6 +18,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from snakebot.backends.registry import BACKENDS
+from snakebot.backends.terrains import TERRAINS
 from snakebot.gaits import GAITS
 
 EXAMPLE = Path(__file__).resolve().parent / "example"
@@ -66,12 +67,13 @@ def environment(site: Path) -> dict[str, str]:
 
 @contextlib.contextmanager
 def on_path(site: Path) -> Iterator[None]:
-    """Make the plugins in ``site`` visible to this process (the gait and backend registries
-    re-read their entry points), then remove them and every module imported from ``site``."""
+    """Make the plugins in ``site`` visible to this process (the gait, backend and terrain
+    registries re-read their entry points), then remove them and every module imported from
+    ``site``."""
     sys.path.insert(0, str(site))
     importlib.invalidate_caches()
-    GAITS.refresh()
-    BACKENDS.refresh()
+    for registry in (GAITS, BACKENDS, TERRAINS):
+        registry.refresh()
     try:
         yield
     finally:
@@ -81,5 +83,5 @@ def on_path(site: Path) -> Iterator[None]:
             if origin.startswith(str(site)):
                 del sys.modules[name]
         importlib.invalidate_caches()
-        GAITS.refresh()
-        BACKENDS.refresh()
+        for registry in (GAITS, BACKENDS, TERRAINS):
+            registry.refresh()

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import snakebot as api
+from snakebot.backends import Simulated
 from snakebot.backends.base import Backend
 from snakebot.backends.registry import make_backend
 from snakebot.config import RobotConfig
@@ -200,6 +201,30 @@ def test_the_plugin_backend_through_snakebot_connect(site: Path) -> None:
         unknown = r"unknown backend 'kinematc' \(did you mean 'kinematic'\?\)"
         with pytest.raises(BackendError, match=unknown):
             api.connect("snake8", backend="kinematc")
+
+
+def test_the_plugin_terrain_is_listed_built_and_driven_on(site: Path, tmp_path: Path) -> None:
+    usage = snakebot(site, "run", "--help")
+    assert usage.returncode == 0 and "cliff, ridges, with key=value" in " ".join(
+        usage.stdout.split()
+    )  # the help is the registry's list, the plugin's terrain after the built-ins
+    model = tmp_path / "ridges.xml"
+    built = snakebot(site, "model", "--terrain", "ridges:count=2", "--out", str(model))
+    assert built.returncode == 0, built.stderr
+    xml = model.read_text(encoding="utf-8")
+    assert 'name="ridge_0"' in xml and 'name="ridge_1"' in xml and "ridge_2" not in xml
+    run = snakebot(
+        site, "run", "--terrain", "ridges:height_m=0.02,spacing_m=0.1", "--duration", "1",
+        "--json",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout)["distance_m"] is not None
+    bad = snakebot(site, "run", "--terrain", "ridges:count=0", "--duration", "0.2")
+    assert bad.returncode == 2 and "count" in bad.stderr and "an integer 1..50" in bad.stderr
+    with on_path(site), api.connect("snake8", terrain="ridges:count=4") as snake:
+        backend = snake.backend
+        assert isinstance(backend, Simulated)
+        assert backend.model.geom("ridge_3").size[2] == pytest.approx(0.005)  # half of 1 cm
 
 
 class TestKinematicContract(BackendContract):

@@ -1,5 +1,5 @@
 """A user who installs a gait plugin can still run snakebot's own tests: the tests that list
-gaits and backends see the plugin's entries beside the built-in ones and pass."""
+gaits, backends and terrains see the plugin's entries beside the built-in ones and pass."""
 
 from __future__ import annotations
 
@@ -18,6 +18,8 @@ LISTING_TESTS = [
     "tests/unit/gaits/test_gait_axes.py",
     "tests/unit/cli/test_cli_gaits.py",
     "tests/unit/backends/test_backend_registry.py",
+    "tests/unit/backends/test_terrain_registry.py",
+    "tests/unit/backends/twin/test_terrain_params.py",
     "tests/unit/test_session.py",
 ]
 

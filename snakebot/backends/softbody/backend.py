@@ -21,8 +21,8 @@ from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
-from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.readouts import StepCheck
+from snakebot.backends.twin.terrain.cliff import Cliff
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError
 from snakebot.types import BodyState, JointState, PDGains

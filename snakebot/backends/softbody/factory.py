@@ -6,8 +6,12 @@ from __future__ import annotations
 import math
 
 from snakebot.backends.softbody.backend import SoftBodyBackend
-from snakebot.backends.twin.cliff import Cliff, parse_terrain
+from snakebot.backends.terrains import BODY_TERRAINS
 from snakebot.backends.twin.model_builder import GroundFriction
+from snakebot.backends.twin.terrain.base import Terrain
+from snakebot.backends.twin.terrain.cliff import Cliff
+from snakebot.backends.twin.terrain.flat import Flat
+from snakebot.backends.twin.terrain.registry import parse_terrain
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError
 
@@ -16,7 +20,7 @@ def make_softbody(
     body: BodyConfig,
     *,
     friction: float | str | GroundFriction | tuple[float, float] | None = None,
-    terrain: Cliff | str | None = None,
+    terrain: Terrain | str | None = None,
     realtime: bool = False,
     directional: bool | str | None = None,
 ) -> SoftBodyBackend:
@@ -93,13 +97,19 @@ def directional_option(value: bool | str | None) -> bool | None:
     raise ConfigError("directional", "", f"expected on or off, got {value!r}")
 
 
-def body_terrain_option(value: Cliff | str | None) -> Cliff | None:
-    """A mass-spring body's ground: ``"flat"`` (None), ``"cliff[:key=value,...]"`` or a Cliff;
-    ConfigError (source ``terrain``) otherwise (the rigid twin's other terrains do not apply)."""
-    if value is None or isinstance(value, Cliff):
-        return value
-    if isinstance(value, str):
-        return parse_terrain(value, option="terrain")
+def body_terrain_option(value: Terrain | str | None, option: str = "terrain") -> Cliff | None:
+    """A mass-spring body's ground: flat (None) or a Cliff, from ``--terrain`` text (parsed by
+    the one ``parse_terrain``) or a Terrain; ConfigError (source ``option``) for any other
+    terrain, naming the ones a body takes."""
+    terrain = parse_terrain(value, option) if isinstance(value, str) else value
+    if terrain is None or isinstance(terrain, Flat):
+        return None
+    if isinstance(terrain, Cliff):
+        return terrain
+    name = terrain.name if isinstance(terrain, Terrain) else repr(terrain)
     raise ConfigError(
-        "terrain", "", f"expected 'flat', 'cliff[:key=value,...]' or a Cliff, got {value!r}"
+        option,
+        "",
+        f"a mass-spring body lies on {' or '.join(BODY_TERRAINS)} (cliff:key=value,...), not "
+        f"{name}; the rigid twin takes every terrain",
     )

@@ -19,8 +19,8 @@ import numpy as np
 
 from snakebot.backends.softbody.lattice import Lattice, build_lattice, rest_positions
 from snakebot.backends.softbody.skin import add_skin
-from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.model_builder import SCENE_PATH
+from snakebot.backends.twin.terrain.cliff import Cliff
 from snakebot.config.body import BodyConfig
 
 # Points touch bit 1 (floor, terrain) only; their own bit 4 is nobody's affinity.

@@ -11,7 +11,6 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import Simulated
 from snakebot.backends.pacing import Pacer
-from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.health import DEFAULT_LIMITS, HealthLimits, HealthMonitor
 from snakebot.backends.twin.imu import TwinSensors
@@ -41,7 +40,7 @@ class TwinBackend(Backend):
     """Steps a MuJoCo model of ``robot``; as fast as possible, or paced to the wall clock.
 
     ``friction`` overrides the robot's ground model (``--friction``); ``timestep_s`` overrides
-    ``twin.timestep_s``; ``terrain`` (a Terrain, a Cliff, ``--terrain`` text such as
+    ``twin.timestep_s``; ``terrain`` (a Terrain, ``--terrain`` text such as
     ``"pegs:density=12"``, or None for flat) sets the ground and the start pose;
     ``friction_model`` ("auto", "pairs", "scale"; None: the robot file's) how the ground's
     friction is made. A bad terrain raises ConfigError here, naming the key.
@@ -63,7 +62,7 @@ class TwinBackend(Backend):
         friction: GroundFriction | None = None,
         timestep_s: float | None = None,
         realtime: bool = False,
-        terrain: Terrain | Cliff | str | None = None,
+        terrain: Terrain | str | None = None,
         friction_model: FrictionModel | None = None,
         health: HealthLimits | None = DEFAULT_LIMITS,
         seed: int = 0,
@@ -129,7 +128,6 @@ class TwinBackend(Backend):
                 physics, self.joint_count, servo.torque_limit_nm, servo.no_load_speed_rad_s
             )
             self._force_limit = self.model.actuator_forcerange.copy()
-        self._start_com = self.data.subtree_com[self._head_id].copy()
         self.reset_physics_health()
 
     def reset(self, position_rad: np.ndarray | None = None) -> JointState:
@@ -162,7 +160,6 @@ class TwinBackend(Backend):
             )
             self.model.actuator_forcerange[:] = self._force_limit
             self._apply_gains()
-        self._start_com = data.subtree_com[self._head_id].copy()
         self.reset_physics_health()
         if self._pacer is not None:
             self._pacer = Pacer(self.stats)
@@ -170,9 +167,14 @@ class TwinBackend(Backend):
 
     def reset_physics_health(self, limits: HealthLimits | None = None) -> None:
         """Start the physics-health account afresh (a learning environment's new episode), with
-        ``limits`` from now on when given. Nothing happens with the checks off."""
+        ``limits`` from now on when given, and the servos' electrical figures (energy, current,
+        the distance the cost of transport counts) from here; the physics checks stay off
+        where they are off."""
         if limits is not None:
             self._health_limits = limits
+        if self.electrics is not None:
+            self.electrics.restart_account()
+        self._start_com = self.data.subtree_com[self._head_id].copy()
         if self._health_limits is None:
             return
         servo = servo_dynamics(self.robot.servo.physics, self.robot.gains)
@@ -352,8 +354,8 @@ class TwinBackend(Backend):
         return self._sensors.gyro_rad_s(self.data)
 
     def _present_current_a(self) -> np.ndarray:
-        """Each servo's current (N,) A, signed as its torque: |torque| over the torque
-        constant, as the servo file's electrical model draws it."""
+        """Each servo's current (N,) A, signed as its output torque: the torque over the
+        torque constant (stall torque / ``stall_current_a``), the electrical model's draw."""
         assert self.electrics is not None
         torque = self._servo_torque()
         current: np.ndarray = torque / self.electrics.torque_constant_nm_per_a

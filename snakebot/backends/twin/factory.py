@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.model_builder import GroundFriction
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
@@ -26,7 +25,7 @@ def make_twin(
     robot: RobotConfig | BodyConfig,
     *,
     friction: GroundFriction | str | tuple[float, float] | float | None = None,
-    terrain: Terrain | Cliff | str | None = None,
+    terrain: Terrain | str | None = None,
     friction_model: str | None = None,
     realtime: bool = False,
     directional: bool | str | None = None,
@@ -36,9 +35,9 @@ def make_twin(
     twin for a mass-spring body (``directional`` applies to those only).
 
     ``friction``: AXIAL,LATERAL or FORWARD,BACKWARD,LATERAL (text, a pair or a GroundFriction)
-    over the robot's ground model; ``terrain``: ``NAME[:key=value,...]`` (flat, slope, pegs,
-    rough, step, pipe, pole, cliff: docs/terrain.md; a mass-spring body takes flat or cliff), a
-    Terrain or a Cliff; ``friction_model``: auto, pairs or scale (None: the robot file's);
+    over the robot's ground model; ``terrain``: ``NAME[:key=value,...]`` (a terrain of
+    ``snakebot.backends.terrains``: docs/terrain.md; a mass-spring body takes flat or cliff) or a
+    Terrain; ``friction_model``: auto, pairs or scale (None: the robot file's);
     ``realtime``: pace to the wall clock; ``timestep_s``: the physics step in s. ConfigError
     (source: the option's name) for a bad value.
     """
@@ -52,7 +51,7 @@ def make_twin(
         return make_softbody(
             robot,
             friction=friction,
-            terrain=terrain,  # type: ignore[arg-type]
+            terrain=terrain,
             realtime=realtime,
             directional=directional,
         )
@@ -94,20 +93,20 @@ def ground_friction_option(
     return GroundFriction.parse(f"{axial!r},{lateral!r}", option="friction")
 
 
-def terrain_option(value: Terrain | Cliff | str | None, robot: RobotConfig) -> Terrain:
+def terrain_option(value: Terrain | str | None, robot: RobotConfig) -> Terrain:
     """The ``terrain`` option as a Terrain checked against ``robot``'s size: ``"flat"``,
-    ``"NAME[:key=value,...]"``, a Terrain or a Cliff (None: flat); ConfigError (source
+    ``"NAME[:key=value,...]"`` or a Terrain (None: flat); ConfigError (source
     ``terrain``) naming the key otherwise."""
     from snakebot.backends.twin.model_builder import body_shape
     from snakebot.backends.twin.terrain import Terrain, as_terrain, parse_terrain
 
     if isinstance(value, str):
         terrain = parse_terrain(value, option="terrain")
-    elif value is None or isinstance(value, Cliff | Terrain):
+    elif value is None or isinstance(value, Terrain):
         terrain = as_terrain(value)
     else:
         raise ConfigError(
-            "terrain", "", f"expected NAME[:key=value,...], a Terrain or a Cliff, got {value!r}"
+            "terrain", "", f"expected NAME[:key=value,...] or a Terrain, got {value!r}"
         )
     terrain.check(body_shape(robot))
     return terrain

@@ -39,11 +39,15 @@ class TwinSensors:
         return bool(self._tick_rad or self._position_noise)
 
     def gyro_rad_s(self, data: mujoco.MjData) -> np.ndarray:
-        """The head's angular velocity (3,) in its own frame, rad/s, plus gyro noise."""
+        """The head's angular velocity (3,) in its own frame, rad/s, plus gyro noise.
+
+        Taken in the world frame and turned into the head body's frame (``xmat``): MuJoCo's
+        local frame for a body is its inertial frame, whose axes a capsule's principal axes
+        order differently (the head's yaw came out on the inertial x axis)."""
         mujoco.mj_objectVelocity(
-            self._model, data, mujoco.mjtObj.mjOBJ_BODY, self._head, self._velocity, 1
+            self._model, data, mujoco.mjtObj.mjOBJ_BODY, self._head, self._velocity, 0
         )
-        rate = self._velocity[:3].copy()
+        rate: np.ndarray = self._velocity[:3] @ data.xmat[self._head].reshape(3, 3)
         if self._gyro_noise:
             rate += self._rng.normal(0.0, self._gyro_noise, 3)
         return rate

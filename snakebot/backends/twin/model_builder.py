@@ -15,7 +15,6 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from snakebot.backends.twin.cliff import Cliff
 from snakebot.backends.twin.friction.layout import NUMERIC_NAME
 from snakebot.backends.twin.friction.scale import (
     FRICTION_MODELS,
@@ -150,10 +149,10 @@ def build_spec(
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
     scene_path: Path = SCENE_PATH,
-    terrain: Terrain | Cliff | str | None = None,
+    terrain: Terrain | str | None = None,
     friction_model: FrictionModel | None = None,
 ) -> mujoco.MjSpec:
-    """An ``MjSpec`` of ``robot`` in the scene on ``terrain`` (a Terrain, a Cliff, ``--terrain``
+    """An ``MjSpec`` of ``robot`` in the scene on ``terrain`` (a Terrain, ``--terrain``
     text, or None for flat), with the ground friction of ``friction_model`` (None: the robot
     file's); compile it with :func:`build_model`, or ``to_xml()`` it for a viewer.
 
@@ -272,7 +271,7 @@ def build_model(
     *,
     friction: GroundFriction | None = None,
     timestep_s: float | None = None,
-    terrain: Terrain | Cliff | str | None = None,
+    terrain: Terrain | str | None = None,
     friction_model: FrictionModel | None = None,
 ) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
     """Compile the twin of ``robot``; returns the model and the spec it came from.

@@ -47,6 +47,11 @@ class ServoElectrics:
         self._no_load = no_load_speed_rad_s
         self._stall_s = np.zeros(joint_count)
         self.tripped = np.zeros(joint_count, dtype=bool)
+        self.restart_account()
+
+    def restart_account(self) -> None:
+        """Count energy, charge, peak current and the lowest voltage from now on; the servos'
+        state (supply voltage, overload timers, trips) stays as it is."""
         self.electrical_energy_j = 0.0
         self.copper_loss_j = 0.0
         self.mechanical_energy_j = 0.0

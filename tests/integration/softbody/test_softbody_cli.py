@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from snakebot.backends.twin import TwinBackend
-from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.twin.terrain.cliff import Cliff
 from snakebot.cli.main import main
 from snakebot.config import load_robot
 from snakebot.telemetry import read_log
@@ -83,7 +83,8 @@ def test_model_exports_a_body_with_its_skin(
         (["--robot", "worm", "--backend", "dynamixel"], 1, "runs on the twin only"),
         (["--robot", "snake8", "--directional", "off"], 2, "mass-spring bodies only"),
         (["--robot", "worm", "--friction", "0.1,0.5"], 2, "isotropic"),
-        (["--robot", "worm", "--terrain", "stairs"], 2, "flat, cliff"),
+        (["--robot", "worm", "--terrain", "stairs"], 2, "expected one of flat, slope, pegs"),
+        (["--robot", "worm", "--terrain", "pegs"], 2, "body lies on flat or cliff"),
         (["--robot", "worm", "--terrain", "cliff:height_m=x"], 2, "height_m"),
         (["--robot", "worm", "--terrain", "cliff:edge_m=0.01"], 2, "flat top"),
         (["--robot", "snake8", "--gait", "rectilinear"], 1, "not whole segments"),
@@ -141,3 +142,18 @@ def test_gaits_lists_millers_gaits(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     for name in ("rectilinear", "undulation", "miller_sidewinding"):
         assert name in out
+
+
+def test_the_soft_body_is_its_own_backend_and_twin_picks_it_by_the_file(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--backend softbody`` runs a body file; ``--backend twin`` (the default) runs the same
+    body the same way, chosen by the file's kind; a servo robot on softbody is refused."""
+    argv = ("--robot", "worm", "--gait", "rectilinear", "--duration", "1", "--terrain", "cliff")
+    own = run_json(capsys, *argv, "--backend", "softbody")
+    picked = run_json(capsys, *argv, "--backend", "twin")
+    assert own["backend"] == "softbody" and picked["backend"] == "twin"
+    assert own["distance_m"] == picked["distance_m"] and own["distance_m"] is not None
+    assert own["contact_fraction"] == picked["contact_fraction"]
+    assert main(["run", "--robot", "snake8", "--backend", "softbody", "--duration", "0.2"]) == 1
+    assert "snake8: is not a mass-spring body" in capsys.readouterr().err

@@ -11,7 +11,7 @@ import pytest
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.model_builder import link_name
-from snakebot.backends.twin.terrain import TERRAINS, parse_terrain
+from snakebot.backends.twin.terrain import BUILT_IN_TERRAINS, parse_terrain
 from snakebot.config import load_robot
 from tests.integration.twin.terrain_runs import play
 
@@ -25,7 +25,7 @@ def link_positions(twin: TwinBackend) -> np.ndarray:
 
 
 @pytest.mark.parametrize("robot_name", sorted(GAITS))
-@pytest.mark.parametrize("terrain", sorted(TERRAINS))
+@pytest.mark.parametrize("terrain", sorted(BUILT_IN_TERRAINS))
 def test_a_gait_runs_on_every_terrain_without_physics_warnings(
     robot_name: str, terrain: str
 ) -> None:

@@ -1,39 +1,35 @@
-"""Every terrain by name, and ``NAME[:key=value,...]`` parsing against their declared keys."""
+"""``NAME[:key=value,...]`` parsed against the terrain registry (``snakebot.backends.terrains``):
+the one ``parse_terrain``, for the rigid twin and the mass-spring bodies alike."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from snakebot.backends.twin.cliff import Cliff
+from snakebot.backends.terrains import get_terrain, terrain_names
 from snakebot.backends.twin.terrain.base import Terrain
-from snakebot.backends.twin.terrain.cliff import CliffTerrain
 from snakebot.backends.twin.terrain.flat import Flat
-from snakebot.backends.twin.terrain.pegs import Pegs
-from snakebot.backends.twin.terrain.pipe import Pipe
-from snakebot.backends.twin.terrain.pole import Pole
-from snakebot.backends.twin.terrain.rough import Rough
-from snakebot.backends.twin.terrain.slope import Slope
-from snakebot.backends.twin.terrain.step import Step
-from snakebot.errors import ConfigError
-
-TERRAINS: dict[str, type[Terrain]] = {
-    kind.name: kind for kind in (Flat, Slope, Pegs, Rough, Step, Pipe, Pole, CliffTerrain)
-}
+from snakebot.errors import ConfigError, TerrainError
 
 
 def parse_terrain(text: str, option: str = "terrain") -> Terrain:
-    """The terrain ``text`` names, e.g. ``pegs:layout=row,spacing_m=0.15``.
+    """The terrain ``text`` names, e.g. ``pegs:layout=row,spacing_m=0.15``, a built-in or a
+    plugin's (``snakebot.terrains`` entry points) or one registered at runtime.
 
     ConfigError naming ``option`` and the key: an unknown terrain (listing them), an unknown key
     (listing the terrain's keys), or a value outside its accepted range (stating it).
     """
     name, _, rest = text.partition(":")
     name = name.strip()
-    kind = TERRAINS.get(name)
-    if kind is None:
+    try:
+        kind = get_terrain(name)
+    except TerrainError as exc:
+        if name in terrain_names():  # a plugin's terrain that would not load
+            raise ConfigError(option, "", exc.reason) from None
         raise ConfigError(
-            option, "", f"expected one of {', '.join(TERRAINS)} (NAME:key=value,...), got {text!r}"
-        )
+            option,
+            "",
+            f"expected one of {', '.join(terrain_names())} (NAME:key=value,...), got {text!r}",
+        ) from None
     params = kind.params()
     values: dict[str, Any] = {}
     for item in filter(None, (part.strip() for part in rest.split(","))):
@@ -45,16 +41,16 @@ def parse_terrain(text: str, option: str = "terrain") -> Terrain:
                 option, key or item, f"{name} takes key=value with keys: {accepted}; got {item!r}"
             )
         values[key] = params[key].parse(option, key, raw)
-    return kind(**values)
+    try:
+        return kind(**values)
+    except ConfigError as exc:  # a check between keys (the cliff's edge inside its depth)
+        raise ConfigError(option, exc.key, exc.reason) from None
 
 
-def as_terrain(value: Terrain | Cliff | str | None) -> Terrain:
-    """A Terrain from what a caller passed: a Terrain, a Cliff, ``--terrain`` text, or None
-    (flat)."""
+def as_terrain(value: Terrain | str | None) -> Terrain:
+    """A Terrain from what a caller passed: a Terrain, ``--terrain`` text, or None (flat)."""
     if value is None:
         return Flat()
     if isinstance(value, str):
         return parse_terrain(value)
-    if isinstance(value, Cliff):
-        return CliffTerrain.of(value)
     return value
