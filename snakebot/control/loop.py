@@ -26,12 +26,10 @@ from snakebot.types import JointCommand, JointState
 class CycleLoop:
     """One run's cycles on a connected backend, and which parts still take part.
 
-    ``metrics`` (None: not kept) accounts the scored cycles. ``step`` returns each cycle's
-    ``CycleRecord`` when ``records`` is set or ``observers`` are
-    given (else None: nobody reads it, and the twin's cycle stays as cheap as it was).
-
-    Everything that leaves the loop leaves as the record, observer by observer in order (the
-    telemetry sinks among them: snakebot.telemetry.sink), then ``on_cycle(cycle, gait_time_s)``.
+    Everything that leaves the loop leaves as each cycle's ``CycleRecord``: to ``metrics``
+    (None: not kept; it accounts the scored cycles), then to the observers in order (the
+    telemetry sinks among them: snakebot.telemetry.sink), then ``on_cycle(cycle, gait_time_s)``
+    runs; ``step`` returns the record.
 
     ``stage`` names the part running when an exception leaves ``step`` ("gait", "safety",
     "backend", "metrics", "observer", "hook"); ``leave_out`` drops a failed part from the cycles
@@ -47,11 +45,9 @@ class CycleLoop:
         *,
         on_cycle: CycleHook | None = None,
         observers: Sequence[CycleObserver] = (),
-        records: bool = False,
     ) -> None:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
         self.on_cycle, self.observers = on_cycle, tuple(observers)
-        self.records = records
         self.body_sensor = backend if isinstance(backend, SensesBody) else None
         """The backend where it measures the body (COM, head orientation), else None."""
         self.state: JointState = backend.read_state()
@@ -69,22 +65,23 @@ class CycleLoop:
         self.gaits.reset(self.state.position_rad)
         if self.metrics is not None:
             sensor = self.body_sensor
-            self.metrics.start(self.state.time_s, None if sensor is None else sensor.body_state())
+            body = None if sensor is None else sensor.body_state()
+            self.metrics.start(self.state.time_s, body, self.schedule.period_s)
 
     @property
     def elapsed_s(self) -> float:
         """Robot time since the run started."""
         return self.state.time_s - self.start_s
 
-    def gait_step(self) -> CycleRecord | None:
+    def gait_step(self) -> CycleRecord:
         """One scored gait cycle now: the gait's targets at the robot time since the start,
         ramped in as the schedule ramps (``run_gait``'s gait cycles, a learning env's)."""
         gait_time = self.state.time_s - self.start_s
         return self.step(gait_time, self.schedule.ramp_in(gait_time), scored=True)
 
-    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord | None:
+    def step(self, gait_time_s: float, amplitude: float, scored: bool) -> CycleRecord:
         """One cycle with the targets of ``gait_time_s`` at ``amplitude``; scored cycles count
-        in the metrics. Returns the cycle's record (observers have seen it), or None."""
+        in the metrics. Returns the cycle's record (the metrics and observers have seen it)."""
         backend, schedule = self.backend, self.schedule
         self.stage = "gait"
         before = self.state
@@ -102,15 +99,9 @@ class CycleLoop:
         backend.advance(schedule.period_s)
         self.state = state = backend.read_state()
         body = None if self.body_sensor is None else self.body_sensor.body_state()
-        self.stage = "metrics"
-        if scored and self.metrics is not None:
-            self.metrics.add(command, state, body, schedule.period_s)
         self.cycle += 1
         period = state.time_s - before.time_s
         self._last_period_s = period
-        if not (self.observers or self.records):
-            self._hook(gait_time_s)
-            return None
         elapsed = state.time_s - self.start_s
         record = CycleRecord(
             cycle=self.cycle,
@@ -125,17 +116,17 @@ class CycleLoop:
             overrun=backend.stats.overruns != overruns,
             achieved_rate_hz=self.cycle / elapsed if elapsed > 0 else schedule.rate_hz,
         )
+        self.stage = "metrics"
+        if self.metrics is not None:
+            self.metrics(record)
         self.stage = "observer"
         for index, observer in enumerate(self.observers):
             self._observing = index
             observer(record)
-        self._hook(gait_time_s)
-        return record
-
-    def _hook(self, gait_time_s: float) -> None:
         self.stage = "hook"
         if self.on_cycle is not None:
             self.on_cycle(self.cycle, gait_time_s)
+        return record
 
     def leave_out(self, stage: str) -> None:
         """Drop the part that failed from the cycles that follow."""

@@ -1,13 +1,17 @@
-"""Summary metrics of a run, accumulated per cycle in O(1) memory."""
+"""Summary metrics of a run, accumulated per cycle in O(1) memory: an observer of the records."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from snakebot.types import BodyState, JointState, positive_power_w
+
+if TYPE_CHECKING:
+    from snakebot.control.cycle import CycleRecord
 
 GRAVITY_M_S2 = 9.81
 
@@ -29,14 +33,26 @@ class RunMetrics:
     _positive_work_j: float = 0.0
     _turn_rad: float = 0.0
     _last_yaw: float | None = None
+    control_period_s: float | None = None
     extra: dict[str, object] = field(default_factory=dict)
 
-    def start(self, time_s: float, body: BodyState | None) -> None:
-        """Mark the beginning of the scored window."""
+    def start(
+        self, time_s: float, body: BodyState | None, control_period_s: float | None = None
+    ) -> None:
+        """Mark the beginning of the scored window; ``control_period_s`` is the period each
+        record observed (``__call__``) accounts for (None: the time the cycle took)."""
+        self.control_period_s = control_period_s
         self.start_time_s = time_s
         self.start_com = None if body is None else body.com_m.copy()
         self.end_com = self.start_com
         self._last_yaw = None if body is None else head_yaw_rad(body.head_quat)
+
+    def __call__(self, record: CycleRecord) -> None:
+        """Observe a cycle's record: a scored cycle counts (the ramp-out's do not)."""
+        if record.scored:
+            period = self.control_period_s
+            dt_s = record.period_s if period is None else period
+            self.add(record.command_rad, record.state, record.body, dt_s)
 
     def add(
         self, command: np.ndarray, state: JointState, body: BodyState | None, dt_s: float

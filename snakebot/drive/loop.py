@@ -79,7 +79,7 @@ def run_drive(
     if gate is None:
         gate = KeyGate(controller.settles, backlog=BACKLOG if source.live else None)
     schedule = CycleSchedule(rate_hz)  # open-ended; the live gait blends in and out itself
-    loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics, records=True)
+    loop = CycleLoop(backend, GaitCycle([live], safety), schedule, metrics)
     loop.start()
     live.start(loop.state.position_rad)
     controller.begin()
@@ -92,7 +92,6 @@ def run_drive(
             controller.notice = gate.notice
         _check_stop(controller, source, stop_check, keys_waiting=gate.waiting > 0)
         done = loop.step(now, 1.0, scored=True)
-        assert done is not None  # records=True: the loop returns every record
         status = live.status()
         record = DriveCycle(**vars(done), status=status, keys=keys)
         for observer in observers:

@@ -61,7 +61,8 @@ class CsvTelemetryWriter:
             self._close_quietly()
             raise OutputError(self.path, f"cannot write log file: {_reason(exc)}") from exc
         values = 4 * joint_count + 3 + 7
-        self._format = "%.6f,%d," + ",".join(["%.6g"] * values) + "\n"
+        # bytes %-formatting: the same text as str's, and no encode (a third of a row's cost)
+        self._format = ("%.6f,%d," + ",".join(["%.6g"] * values) + "\n").encode()
 
     def __call__(self, record: CycleRecord) -> None:
         """Write one cycle's record as a row: its ``cycle`` counted from 0, the command sent,
@@ -87,7 +88,7 @@ class CsvTelemetryWriter:
             )
         ).tolist()
         try:
-            _write_all(self._fd, (self._format % (state.time_s, record.cycle - 1, *row)).encode())
+            _write_all(self._fd, self._format % (state.time_s, record.cycle - 1, *row))
         except OSError as exc:
             raise OutputError(
                 self.path,
@@ -134,7 +135,10 @@ _NAN3 = np.full(3, np.nan)
 def _write_all(fd: int, data: bytes) -> None:
     # A write cut short (a file-size limit reached mid-row) is retried so that the error of the
     # next attempt surfaces; the reader drops the torn row it leaves.
-    view = memoryview(data)
+    written = os.write(fd, data)
+    if written == len(data):  # the one write of every cycle
+        return
+    view = memoryview(data)[written:]
     while view:
         view = view[os.write(fd, view) :]
 

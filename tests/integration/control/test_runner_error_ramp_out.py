@@ -16,6 +16,7 @@ import pytest
 
 from snakebot.backends.dynamixel import DynamixelBackend
 from snakebot.config import RobotConfig, load_robot
+from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import CycleHook, RunPlan, RunResult, run_gait
 from snakebot.control.safety import SafetyLayer
@@ -129,6 +130,45 @@ def test_a_failing_per_cycle_hook_ramps_out_and_is_left_out_of_it(
         run(emulated, url, make_gait("sidewinding", 12), tmp_path / "run.csv", hook)
     assert calls[-1] == 80  # not called again during the ramp-out
     assert_ramped_out_after(tmp_path / "run.csv", 0.8)
+
+
+def test_a_failing_observer_alone_is_left_out_of_the_ramp_out(
+    chain: tuple[EmulatedChain, str], tmp_path: Path
+) -> None:
+    emulated, url = chain
+    robot = snake12()
+    failing_saw: list[int] = []
+    other_saw: list[CycleRecord] = []
+
+    def failing(record: CycleRecord) -> None:
+        failing_saw.append(record.cycle)
+        if record.cycle == 80:
+            raise OSError("Foxglove client gone mad")
+
+    backend = DynamixelBackend(
+        robot,
+        port=url,
+        port_handler_factory=EmulatedPortHandler,
+        clock=lambda: emulated.now_s,
+        sleep=emulated.advance,
+    )
+    log_path = tmp_path / "run.csv"
+    with CsvTelemetryWriter(log_path, 12) as log, backend, pytest.raises(OSError, match="mad"):
+        run_gait(
+            backend,
+            make_gait("sidewinding", 12),
+            SafetyLayer.for_robot(robot),
+            RunPlan(duration_s=3.0),
+            RunMetrics(12, robot.body_length_m, robot.total_mass_kg),
+            log=log,
+            observers=[failing, other_saw.append],
+        )
+    assert failing_saw[-1] == 80  # not called again
+    assert_ramped_out_after(log_path, 0.8)  # the log before it went on
+    # the observer after it missed only the cycle it stopped, and went on through the ramp-out
+    cycles = [r.cycle for r in other_saw]
+    assert cycles == [c for c in range(1, len(read_log(log_path).values) + 1) if c != 80]
+    assert other_saw[78].scored and not other_saw[-1].scored
 
 
 def test_a_bus_error_is_raised_at_once_for_the_backend_to_stop(

@@ -71,7 +71,7 @@ def test_clearance_is_the_lowest_capsule_point_above_the_floor(twin: TwinBackend
     expected = centre_z - capsules.radius_m[0] - capsules.half_length_m[0]
     assert standing == pytest.approx(expected, abs=1e-12)
     # a batch's (B, K) samples at once give each sample's own clearance
-    xpos = np.stack([data.geom_xpos, data.geom_xpos + [0.0, 0.0, 0.2]])[:, None]
+    xpos = np.stack([data.geom_xpos, data.geom_xpos + np.array([0.0, 0.0, 0.2])])[:, None]
     xmat = np.stack([data.geom_xmat, data.geom_xmat])[:, None]
     batched = capsules.clearance_m(xpos, xmat)
     assert batched.shape == (2, 1)
