@@ -45,11 +45,13 @@ class CycleLoop:
         *,
         on_cycle: CycleHook | None = None,
         observers: Sequence[CycleObserver] = (),
+        read_body: bool = True,
     ) -> None:
         self.backend, self.gaits, self.schedule, self.metrics = backend, cycle, schedule, metrics
         self.on_cycle, self.observers = on_cycle, tuple(observers)
-        self.body_sensor = backend if isinstance(backend, SensesBody) else None
-        """The backend where it measures the body (COM, head orientation), else None."""
+        self.body_sensor = backend if read_body and isinstance(backend, SensesBody) else None
+        """The backend where it measures the body (COM, head orientation) and ``read_body``
+        asks for it every cycle, else None (a learning env reads it at its policy steps)."""
         self.state: JointState = backend.read_state()
         self.start_s = self.state.time_s
         self.target: np.ndarray = self.state.position_rad.copy()  # the gait's last good target

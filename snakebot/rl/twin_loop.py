@@ -112,8 +112,14 @@ class TwinLoop:
         self.gait.start_phase_rad = phase_rad
         robot = self.robot
         self.metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+        # The body (COM, heading) is read at policy steps, where the task needs it; per cycle
+        # the metrics account the joints only (the positive work).
         self.cycles = CycleLoop(
-            self.backend, GaitCycle([self.gait], self.safety), self.schedule, self.metrics
+            self.backend,
+            GaitCycle([self.gait], self.safety),
+            self.schedule,
+            self.metrics,
+            read_body=False,
         )
         self.cycles.start()  # the gait (phases) and the safety layer from the measured pose
         self.state = self.cycles.state

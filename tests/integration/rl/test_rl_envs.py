@@ -217,3 +217,24 @@ def test_an_episode_past_a_hard_physics_limit_ends_truncated_and_training_goes_o
         assert "physics_health_error" not in info  # the first cycles hold still: credible
     finally:
         env.close()
+
+
+def test_an_episode_after_reset_repeats_the_first_to_the_bit() -> None:
+    # The twin's own reset (Resettable) and a fresh CycleLoop leave nothing of the last
+    # episode behind: pose, time, gait phases, the safety layer's last command, the metrics.
+    env = gymnasium.make(VELOCITY, encoding="dft_shift").unwrapped
+    try:
+        episodes = []
+        for _ in range(2):
+            env.action_space.seed(11)
+            obs, _ = env.reset(seed=4, options={"command": (0.2, 0.1)})
+            rows = [obs]
+            for _ in range(8):
+                obs, reward, _, _, info = env.step(env.action_space.sample())
+                rows += [obs, np.array([reward, info["positive_work_j"]])]
+            assert env.loop.state.time_s == pytest.approx(8 * 0.1)
+            episodes.append(rows)
+        for first, again in zip(*episodes, strict=True):
+            np.testing.assert_array_equal(first, again)
+    finally:
+        env.close()
