@@ -60,7 +60,7 @@ class RunMetrics:
         """Account one control cycle."""
         error = command - state.position_rad
         self._squared_error_sum += float(error @ error)
-        self._max_abs_command = max(self._max_abs_command, float(np.abs(command).max()))
+        self._max_abs_command = max(self._max_abs_command, *map(abs, command.tolist()))
         power = positive_power_w(state.effort_nm, state.velocity_rad_s)
         self._positive_work_j += float(power.sum()) * dt_s
         self.cycles += 1
@@ -124,5 +124,5 @@ class RunMetrics:
 
 def head_yaw_rad(quat: np.ndarray) -> float:
     """Heading of the head module's forward (+x) axis in the world's horizontal plane."""
-    w, x, y, z = (float(v) for v in quat)
+    w, x, y, z = quat.tolist()
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

@@ -112,6 +112,9 @@ class PhasedGait(Gait):
 
     def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
         """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
+        if type(time_s) is float and math.isfinite(time_s):  # the control loop's case
+            row = self.phase0_rad + time_s * self.phase_rates_rad_s  # the same floats as below
+            return shaped(self._at_phases(row[None, :]), True)
         t, scalar = as_times(self.gait_label, time_s)
         phases = self.phase0_rad + t[:, None] * self.phase_rates_rad_s
         return shaped(self._at_phases(phases), scalar)

@@ -21,7 +21,7 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
-from snakebot.backends.twin.readouts import Capsules, StepCheck, servo_torque_nm
+from snakebot.backends.twin.readouts import Capsules, StepCheck, as_slice, servo_torque_nm
 from snakebot.backends.twin.servo_electrical import ServoElectrics
 from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.backends.twin.terrain import Terrain, as_terrain
@@ -85,6 +85,8 @@ class TwinBackend(Backend):
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
         self._pacer: Pacer | None = None
+        self._torque_now: np.ndarray | None = None  # servo torque (N,) at _torque_time_s
+        self._torque_time_s = math.nan
         self._steps_per_period: dict[float, int] = {}
         if robot.servo.physics.extras.stall_current_a is not None:
             self.present_current_a = self._present_current_a  # SensesCurrent: this servo file
@@ -103,6 +105,7 @@ class TwinBackend(Backend):
         joint_ids = [self.model.joint(joint_name(i)).id for i in range(self.joint_count)]
         self._qpos_index = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
+        self._qpos_at, self._dof_at = as_slice(self._qpos_index), as_slice(self._dof_index)
         self._head_id = self.model.body(link_name(0)).id
         # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
         self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
@@ -136,6 +139,7 @@ class TwinBackend(Backend):
         self._require_connected()
         model, data = self.model, self.data
         mujoco.mj_resetData(model, data)
+        self._torque_now = None
         if position_rad is not None:
             pose = np.asarray(position_rad, dtype=float)
             if pose.shape != (self.joint_count,):
@@ -190,16 +194,21 @@ class TwinBackend(Backend):
     # -- the cycle ---------------------------------------------------------------------------
     def _servo_torque(self) -> np.ndarray:
         """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
-        dof = self._dof_index
+        dof = self._dof_at
         return servo_torque_nm(
             self.data.actuator_force, self.model.dof_damping[dof], self.data.qvel[dof]
         )
 
     def _read_state(self) -> JointState:
         data = self.data
-        velocity = data.qvel[self._dof_index].copy()
-        effort = self._servo_torque()
-        position = data.qpos[self._qpos_index].copy()
+        velocity = data.qvel[self._dof_at].copy()
+        # The torque the physics check took at the end of the last advance, if nothing has
+        # stepped or changed the gains since (computing it once a cycle, not twice).
+        effort = self._torque_now
+        self._torque_now = None  # handed over once: no two states share one array
+        if effort is None or self._torque_time_s != data.time:
+            effort = self._servo_torque()
+        position = data.qpos[self._qpos_at].copy()
         if self._sensors.alters_positions:
             position = self._sensors.encoder_rad(position)
         return JointState(
@@ -246,6 +255,7 @@ class TwinBackend(Backend):
 
     def _apply_gains(self) -> None:
         """Write each joint's kp/kv and damping, or none where its torque is off."""
+        self._torque_now = None  # the damping changes the servo torque
         mask = self._torque_mask
         kp, kv = self._kp, self._kv
         electrics = self.electrics
@@ -272,10 +282,13 @@ class TwinBackend(Backend):
         self._step_check.start()
         mujoco.mj_step(self.model, self.data, steps)
         self._step_check.finish(steps)
-        if self.physics_monitor is not None:
-            self.physics_monitor.sample(self.data, dt_s, self._servo_torque())
-        if self.electrics is not None:
-            self._update_electrics(dt_s)
+        if self.physics_monitor is not None or self.electrics is not None:
+            torque = self._servo_torque()  # read_state's effort too, unless changed since
+            self._torque_now, self._torque_time_s = torque, float(self.data.time)
+            if self.physics_monitor is not None:
+                self.physics_monitor.sample(self.data, dt_s, torque)
+            if self.electrics is not None:
+                self._update_electrics(dt_s, torque)
         if self._pacer is not None:
             self._pacer.wait(dt_s)
 
@@ -293,13 +306,12 @@ class TwinBackend(Backend):
         self._steps_per_period[dt_s] = steps
         return steps
 
-    def _update_electrics(self, dt_s: float) -> None:
-        """Currents, supply sag and overload after a period; a trip limps the joint."""
+    def _update_electrics(self, dt_s: float, torque_nm: np.ndarray) -> None:
+        """Currents, supply sag and overload after a period (``torque_nm`` the servos' output
+        torque now); a trip limps the joint."""
         assert self.electrics is not None
         velocity = self.data.qvel[self._dof_index]
-        trips = self.electrics.update(
-            self._servo_torque(), self.data.actuator_force, velocity, dt_s
-        )
+        trips = self.electrics.update(torque_nm, self.data.actuator_force, velocity, dt_s)
         if trips.any() or self.electrics.battery_resistance_ohm is not None:
             self._apply_gains()
         if trips.any() and self.raise_on_overload:

@@ -9,12 +9,13 @@ with ``PhysicsHealthError`` at the time it happened. Thresholds and why: docs/ph
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
-from snakebot.backends.twin.readouts import Capsules, positive_power_w
+from snakebot.backends.twin.readouts import Capsules, as_slice, positive_power_w
 from snakebot.errors import PhysicsHealthError
 
 
@@ -72,9 +73,10 @@ class HealthMonitor:
         self.limits = limits
         self._is_link = np.zeros(model.ngeom, dtype=bool)
         self._is_link[capsules.geoms] = True
+        self._link_flags: list[bool] = self._is_link.tolist()
         self._capsules = capsules
         self._radius = float(capsules.radius_m.max())
-        self._dof = dof_index
+        self._dof = as_slice(dof_index)
         self._head = head_id
         self._no_load = no_load_speed_rad_s
         self._torque_limit = torque_limit_nm
@@ -114,26 +116,31 @@ class HealthMonitor:
         ncon = data.ncon
         grounded = False
         if ncon:
+            # A few dozen contacts: a Python pass over them costs less than numpy's reductions.
             contact = data.contact
-            links = self._is_link[contact.geom[:ncon]]
-            self_contact = links.all(axis=1)
-            depth = -contact.dist[:ncon]
-            if self_contact.any():
-                grounded = not self_contact.all()
-                other = float(depth[self_contact].max())
-                self.max_self_penetration_m = max(self.max_self_penetration_m, other)
-                floor = float(depth[~self_contact].max(initial=0.0))
-            else:
-                grounded = True
-                floor = float(depth.max())
-            self.max_floor_penetration_m = max(self.max_floor_penetration_m, floor)
+            is_link = self._link_flags
+            floor = other = -math.inf
+            for (first, second), dist in zip(
+                contact.geom[:ncon].tolist(), contact.dist[:ncon].tolist(), strict=True
+            ):
+                if is_link[first] and is_link[second]:
+                    if -dist > other:
+                        other = -dist
+                else:
+                    grounded = True
+                    if -dist > floor:
+                        floor = -dist
+            if floor > self.max_floor_penetration_m:
+                self.max_floor_penetration_m = floor
+            if other > self.max_self_penetration_m:
+                self.max_self_penetration_m = other
         if (
             not grounded
             and self._capsules.clearance_m(data.geom_xpos, data.geom_xmat)
             > limits.contact_tolerance_m
         ):
             self._airborne_cycles += 1
-        _, x, y, _ = data.xquat[self._head]
+        _, x, y, _ = data.xquat[self._head].tolist()
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down
             self._upside_down_cycles += 1
 
@@ -143,7 +150,9 @@ class HealthMonitor:
         self._torque[row] = force_nm
         self._dt[row] = dt_s
         self._rows = row + 1
-        self.max_speed_rad_s = max(self.max_speed_rad_s, float(np.abs(velocity).max()))
+        speed = max(map(abs, velocity.tolist()))
+        if speed > self.max_speed_rad_s:
+            self.max_speed_rad_s = speed
         self._window_s += dt_s
 
         time_s = float(data.time)

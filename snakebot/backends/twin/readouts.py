@@ -32,6 +32,7 @@ __all__ = [
     "WARNING_NUMBER",
     "Capsules",
     "StepCheck",
+    "as_slice",
     "divergence_time_s",
     "positive_power_w",
     "servo_torque_nm",
@@ -54,6 +55,14 @@ WARNING_NUMBER = 1
 """Index of the count in a ``mujoco.batch.Batch.warning`` array (B, nwarn, 2): each warning is
 an ``mjWarningStat`` (lastinfo, number). Index 0 is ``lastinfo``, the index of the DOF that
 went bad, which stays 0 when DOF 0 (the floating base) is the first to blow up."""
+
+
+def as_slice(index: npt.NDArray[np.intp]) -> slice | npt.NDArray[np.intp]:
+    """``index`` as a slice where it is a run of consecutive addresses (a view, not a copy: a
+    per-cycle read through it costs a fraction of a fancy index's), else as it is."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
 
 
 def servo_torque_nm(

@@ -103,3 +103,63 @@ def test_a_clip_only_layer_sends_a_step_as_it_is_and_only_clips_to_the_limits() 
     limited = SafetyLayer.for_robot(robot)
     limited.reset(np.zeros(12))
     assert limited.filter(step, 0.01)[3] == pytest.approx(robot.max_speed_rad_s * 0.01)
+
+
+def reference_filter(
+    last: np.ndarray | None, target: np.ndarray, rest: np.ndarray, dt: float, amplitude: float
+) -> np.ndarray:
+    """The safety layer's formula written plainly with np.clip (what main computed before the
+    layer was rewritten in in-place ufuncs): a replay must match it to the bit."""
+    command = np.clip(rest + amplitude * (target - rest), LOWER, UPPER)
+    if last is None:
+        return command
+    max_step = VMAX * dt
+    command = last + np.clip(command - last, -max_step, max_step)
+    return np.clip(command, np.minimum(LOWER, last), np.maximum(UPPER, last))
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    targets=st.lists(arrays(float, N, elements=finite), min_size=1, max_size=20),
+    start=arrays(float, N, elements=st.floats(-3, 3)),
+    rest=arrays(float, N, elements=st.floats(-0.5, 0.5)),
+    dt=st.floats(1e-4, 0.05),
+    amplitudes=st.lists(st.floats(0, 1), min_size=20, max_size=20),
+)
+def test_commands_are_the_plain_formula_to_the_bit(
+    targets: list[np.ndarray],
+    start: np.ndarray,
+    rest: np.ndarray,
+    dt: float,
+    amplitudes: list[float],
+) -> None:
+    # Starts outside the limits too: the layer's shortcut once every joint is inside (the
+    # bounds are then the limits) must give what the general bounds give.
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0, rest_rad=rest)
+    layer.reset(start)
+    last = start
+    rest_inside = np.clip(rest, LOWER, UPPER)
+    for target, amplitude in zip(targets, amplitudes, strict=False):
+        command = layer.filter(target, dt, amplitude)
+        expected = reference_filter(last, target, rest_inside, dt, amplitude)
+        assert command.tobytes() == expected.tobytes()
+        last = command
+
+
+def test_without_a_reset_the_first_command_is_clipped_and_the_next_slew_limited() -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
+    first = layer.filter(np.full(N, 9.0), 0.01)
+    assert first.tobytes() == np.clip(np.full(N, 9.0), LOWER, UPPER).tobytes()
+    second = layer.filter(np.full(N, -9.0), 0.01)
+    assert np.allclose(second, np.maximum(first - VMAX * 0.01, LOWER))
+
+
+def test_an_infinite_target_is_refused_even_among_huge_finite_ones() -> None:
+    layer = SafetyLayer(LOWER, UPPER, VMAX, ramp_s=1.0)
+    layer.reset(np.zeros(N))
+    huge = np.full(N, 1e308)  # their sum overflows; they are finite and clipped
+    assert np.array_equal(layer.filter(huge, 0.01), np.minimum(VMAX * 0.01, UPPER))
+    bad = huge.copy()
+    bad[2] = np.inf
+    with pytest.raises(SafetyLimitError, match=r"joints \[2\]"):
+        layer.filter(bad, 0.01)
