@@ -10,8 +10,9 @@ motors/feetech; servo-families.md §2):
   restart (0x08) or power cycle brings back the saved image (`VirtualServo.saved_eeprom`, what
   the emulator's state file keeps).
 - Position offset (31, sign bit 11): Present Position = Actual - Offset (lerobot), Goal Position
-  in the same frame. Torque Enable 128 makes the present position 2048 by setting the offset
-  (and saves it, as the calibration instruction does), then leaves the torque off.
+  in the same frame. Torque Enable 128 makes the present position the tick centre (2048) by
+  setting the offset (and saves it, as the calibration instruction does), then leaves the
+  torque off.
 - Positions and speeds are sign-magnitude (bit 15), Present Load bit 10; words are little-endian
   on an STS and big-endian on an SCS (END (2); `memory.byte_order`).
 - A Goal Position beyond the angle limits is held at the nearer limit (no error bit exists to
@@ -42,8 +43,7 @@ if TYPE_CHECKING:
 PWM_SIGN_BIT = 10
 """Goal Time's direction bit in motor (PWM) mode (wiki memory-sts.md, memory-scscl.md)."""
 CALIBRATE = 128
-"""Torque Enable value that makes the present position the middle (2048)."""
-MIDDLE = 2048
+"""Torque Enable value that makes the present position the middle (the model's tick centre)."""
 TORQUE_VALUES = (0, 1, 2, CALIBRATE)
 PID_KEYS = ("position_p_gain", "position_i_gain", "position_d_gain")
 SPEED_KEYS = ("goal_speed", "moving_speed")
@@ -142,12 +142,15 @@ def check_write(servo: VirtualServo, plan: WritePlan) -> int:
     return 0
 
 
-def calibrate_middle(servo: VirtualServo, present: int = MIDDLE) -> None:
-    """Make the present position read `present` by setting the Position offset, and save it
-    (torque 128 and the calibration instruction OFSCAL)."""
+def calibrate_middle(servo: VirtualServo, present: int | None = None) -> None:
+    """Make the present position read `present` (by default the model's tick centre, 2048 on
+    an STS) by setting the Position offset, and save it (torque 128 and the calibration
+    instruction OFSCAL)."""
     memory = servo.memory
     if not memory.has("homing_offset"):
         return
+    if present is None:
+        present = memory.table.specs.ticks.centre
     register = memory.by_key["homing_offset"]
     wanted = actual_ticks(memory, servo.state) - present
     memory.set("homing_offset", max(register.minimum, min(register.maximum, wanted)))
