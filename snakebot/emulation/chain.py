@@ -25,6 +25,7 @@ from snakebot.emulation import (
     protocol,
     protocol1,
 )
+from snakebot.emulation.alarms import Fault
 from snakebot.emulation.case import cases_of
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
@@ -289,6 +290,13 @@ class EmulatedChain:
         with self.lock:
             for servo in self._targets(target):
                 servo.latch_error(bits)
+
+    def latch_fault(self, target: Target, fault: Fault) -> None:
+        """Latch `fault` as each servo's firmware reports it (its own bits: Dynamixel's Hardware
+        Error Status, Feetech's status byte)."""
+        with self.lock:
+            for servo in self._targets(target):
+                servo.latch_fault(fault)
 
     def faults_of(self, servo: VirtualServo) -> Faults:
         """The fault settings of one servo."""

@@ -30,8 +30,10 @@ motors/feetech; servo-families.md §2):
 from __future__ import annotations
 
 import math
+from enum import IntFlag
 from typing import TYPE_CHECKING
 
+from snakebot.emulation.alarms import Fault, bits_of
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
@@ -39,6 +41,34 @@ from snakebot.servo_tables.table import decode_magnitude
 
 if TYPE_CHECKING:
     from snakebot.emulation.servo import VirtualServo
+
+
+class StatusBit(IntFlag):
+    """The status byte's error bits, also Servo Status (65), Unload Condition (19) and LED
+    Alarm (20): FTServo_Python's ERRBIT_VOLTAGE, ERRBIT_ANGLE, ERRBIT_OVERHEAT, ERRBIT_OVERELE
+    and ERRBIT_OVERLOAD (servo-families.md §1.3). Not Dynamixel's: 2 is the angle sensor, 8
+    the current."""
+
+    VOLTAGE = 0x01
+    ANGLE = 0x02
+    OVERHEAT = 0x04
+    OVERCURRENT = 0x08
+    OVERLOAD = 0x20
+
+
+FAULT_BITS = {
+    Fault.INPUT_VOLTAGE: StatusBit.VOLTAGE,
+    Fault.ENCODER: StatusBit.ANGLE,
+    Fault.OVERHEATING: StatusBit.OVERHEAT,
+    Fault.OVERCURRENT: StatusBit.OVERCURRENT,
+    Fault.OVERLOAD: StatusBit.OVERLOAD,
+}
+
+
+def fault_bits(found: Fault) -> int:
+    """The status bits that report `found`."""
+    return bits_of(found, FAULT_BITS)
+
 
 PWM_SIGN_BIT = 10
 """Goal Time's direction bit in motor (PWM) mode (wiki memory-sts.md, memory-scscl.md)."""
