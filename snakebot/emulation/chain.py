@@ -286,7 +286,8 @@ class EmulatedChain:
                 self.faults.update(servo, delay_s=delay_s)
 
     def latch_hardware_error(self, target: Target, bits: int = HardwareError.OVERLOAD) -> None:
-        """Latch Hardware Error Status bits, as the firmware does on overload, overheating, ..."""
+        """Latch raw error bits as the model reports them (Hardware Error Status on an X, the
+        status byte on a Feetech servo); `latch_fault` names the fault instead."""
         with self.lock:
             for servo in self._targets(target):
                 servo.latch_error(bits)
