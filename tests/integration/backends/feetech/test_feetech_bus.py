@@ -108,6 +108,7 @@ def test_the_one_pass_sync_read_finds_what_the_sdk_search_finds() -> None:
     assert mine == theirs
     assert mine[5][0] == 0x20 and not any(mine[i][0] for i in IDS if i != 5)
     assert joined == bytes(b for i in IDS for b in theirs[i] or [])
+    assert type(joined) is bytes  # the one-pass result (the SDK search's rows join to bytearray)
 
 
 def test_a_corrupt_reply_falls_back_to_the_sdk_search_and_keeps_the_others() -> None:
