@@ -10,6 +10,7 @@ a pseudo-terminal (`snakebot.emulation.pty_server.PtyServer`). Those import the 
 so they are not imported here.
 """
 
+from snakebot.emulation.alarms import Fault
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import Faults
@@ -40,6 +41,7 @@ __all__ = [
     "EmulatedChain",
     "EmulationError",
     "ExternalMotion",
+    "Fault",
     "Faults",
     "HardwareError",
     "MotionModel",

@@ -25,6 +25,7 @@ from snakebot.emulation import (
     protocol,
     protocol1,
 )
+from snakebot.emulation.alarms import Fault
 from snakebot.emulation.case import cases_of
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.faults import FaultBook, Faults
@@ -285,10 +286,18 @@ class EmulatedChain:
                 self.faults.update(servo, delay_s=delay_s)
 
     def latch_hardware_error(self, target: Target, bits: int = HardwareError.OVERLOAD) -> None:
-        """Latch Hardware Error Status bits, as the firmware does on overload, overheating, ..."""
+        """Latch raw error bits as the model reports them (Hardware Error Status on an X, the
+        status byte on a Feetech servo); `latch_fault` names the fault instead."""
         with self.lock:
             for servo in self._targets(target):
                 servo.latch_error(bits)
+
+    def latch_fault(self, target: Target, fault: Fault) -> None:
+        """Latch `fault` as each servo's firmware reports it (its own bits: Dynamixel's Hardware
+        Error Status, Feetech's status byte)."""
+        with self.lock:
+            for servo in self._targets(target):
+                servo.latch_fault(fault)
 
     def faults_of(self, servo: VirtualServo) -> Faults:
         """The fault settings of one servo."""

@@ -12,6 +12,7 @@ import math
 from enum import IntFlag
 from typing import TYPE_CHECKING
 
+from snakebot.emulation.alarms import Fault, bits_of
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
@@ -40,6 +41,21 @@ class HardwareError(IntFlag):
     MOTOR_ENCODER = 0x08
     ELECTRICAL_SHOCK = 0x10
     OVERLOAD = 0x20
+
+
+FAULT_BITS = {
+    Fault.INPUT_VOLTAGE: HardwareError.INPUT_VOLTAGE,
+    Fault.OVERHEATING: HardwareError.OVERHEATING,
+    Fault.ENCODER: HardwareError.MOTOR_ENCODER,
+    Fault.OVERLOAD: HardwareError.OVERLOAD,
+}
+"""The Hardware Error Status bit of each fault (Protocol 1.0's status byte shares the voltage,
+overheating and overload bits: `VirtualServo.alarm_bits`)."""
+
+
+def fault_bits(found: Fault) -> int:
+    """The Hardware Error Status bits that report `found`."""
+    return bits_of(found, FAULT_BITS)
 
 
 def wrap_turn(position_rad: float) -> float:

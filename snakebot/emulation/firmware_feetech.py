@@ -10,8 +10,9 @@ motors/feetech; servo-families.md §2):
   restart (0x08) or power cycle brings back the saved image (`VirtualServo.saved_eeprom`, what
   the emulator's state file keeps).
 - Position offset (31, sign bit 11): Present Position = Actual - Offset (lerobot), Goal Position
-  in the same frame. Torque Enable 128 makes the present position 2048 by setting the offset
-  (and saves it, as the calibration instruction does), then leaves the torque off.
+  in the same frame. Torque Enable 128 makes the present position the tick centre (2048) by
+  setting the offset (and saves it, as the calibration instruction does), then leaves the
+  torque off.
 - Positions and speeds are sign-magnitude (bit 15), Present Load bit 10; words are little-endian
   on an STS and big-endian on an SCS (END (2); `memory.byte_order`).
 - A Goal Position beyond the angle limits is held at the nearer limit (no error bit exists to
@@ -29,8 +30,10 @@ motors/feetech; servo-families.md §2):
 from __future__ import annotations
 
 import math
+from enum import IntFlag
 from typing import TYPE_CHECKING
 
+from snakebot.emulation.alarms import Fault, bits_of
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
@@ -39,11 +42,38 @@ from snakebot.servo_tables.table import decode_magnitude
 if TYPE_CHECKING:
     from snakebot.emulation.servo import VirtualServo
 
+
+class StatusBit(IntFlag):
+    """The status byte's error bits, also Servo Status (65), Unload Condition (19) and LED
+    Alarm (20): FTServo_Python's ERRBIT_VOLTAGE, ERRBIT_ANGLE, ERRBIT_OVERHEAT, ERRBIT_OVERELE
+    and ERRBIT_OVERLOAD (servo-families.md §1.3). Not Dynamixel's: 2 is the angle sensor, 8
+    the current."""
+
+    VOLTAGE = 0x01
+    ANGLE = 0x02
+    OVERHEAT = 0x04
+    OVERCURRENT = 0x08
+    OVERLOAD = 0x20
+
+
+FAULT_BITS = {
+    Fault.INPUT_VOLTAGE: StatusBit.VOLTAGE,
+    Fault.ENCODER: StatusBit.ANGLE,
+    Fault.OVERHEATING: StatusBit.OVERHEAT,
+    Fault.OVERCURRENT: StatusBit.OVERCURRENT,
+    Fault.OVERLOAD: StatusBit.OVERLOAD,
+}
+
+
+def fault_bits(found: Fault) -> int:
+    """The status bits that report `found`."""
+    return bits_of(found, FAULT_BITS)
+
+
 PWM_SIGN_BIT = 10
 """Goal Time's direction bit in motor (PWM) mode (wiki memory-sts.md, memory-scscl.md)."""
 CALIBRATE = 128
-"""Torque Enable value that makes the present position the middle (2048)."""
-MIDDLE = 2048
+"""Torque Enable value that makes the present position the middle (the model's tick centre)."""
 TORQUE_VALUES = (0, 1, 2, CALIBRATE)
 PID_KEYS = ("position_p_gain", "position_i_gain", "position_d_gain")
 SPEED_KEYS = ("goal_speed", "moving_speed")
@@ -142,12 +172,15 @@ def check_write(servo: VirtualServo, plan: WritePlan) -> int:
     return 0
 
 
-def calibrate_middle(servo: VirtualServo, present: int = MIDDLE) -> None:
-    """Make the present position read `present` by setting the Position offset, and save it
-    (torque 128 and the calibration instruction OFSCAL)."""
+def calibrate_middle(servo: VirtualServo, present: int | None = None) -> None:
+    """Make the present position read `present` (by default the model's tick centre, 2048 on
+    an STS) by setting the Position offset, and save it (torque 128 and the calibration
+    instruction OFSCAL)."""
     memory = servo.memory
     if not memory.has("homing_offset"):
         return
+    if present is None:
+        present = memory.table.specs.ticks.centre
     register = memory.by_key["homing_offset"]
     wanted = actual_ticks(memory, servo.state) - present
     memory.set("homing_offset", max(register.minimum, min(register.maximum, wanted)))

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from snakebot.emulation import firmware
+from snakebot.emulation.alarms import Fault
 from snakebot.emulation.memory import ControlTableMemory, WritePlan
 from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
@@ -27,6 +29,12 @@ GOALS = ("goal_position", "moving_speed")
 PID_KEYS = ("position_p_gain", "position_i_gain", "position_d_gain")
 MULTI_TURN_LIMIT = 4095
 """Both angle limits at 4095 select multi-turn mode on an MX (e-Manual mx-28.md)."""
+
+
+def fault_bits(found: Fault) -> int:
+    """The X series' bits: the emulator keeps a Protocol 1.0 servo's alarms in the same ones
+    (its status byte shares the voltage, overheating and overload bits)."""
+    return firmware.fault_bits(found)
 
 
 def wheel_mode(memory: ControlTableMemory) -> bool:

@@ -87,9 +87,7 @@ def _recovery(servo: VirtualServo) -> None:
 
 
 def _ofscal(servo: VirtualServo, params: bytes) -> None:
-    present = firmware_feetech.MIDDLE
-    if len(params) == 2:
-        present = int.from_bytes(params, servo.memory.order)
+    present = int.from_bytes(params, servo.memory.order) if len(params) == 2 else None
     firmware_feetech.calibrate_middle(servo, present)
 
 

@@ -18,8 +18,8 @@ from snakebot.backends.twin.backend import TwinBackend
 from snakebot.backends.twin.health import HealthLimits
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
+from snakebot.emulation.alarms import Fault
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
-from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.motion import MotorState, ServoCommand
 from snakebot.emulation.servo import VirtualServo
 
@@ -97,7 +97,7 @@ class TwinMotion:
                 cleared[index] = True  # rebooted: the latch is gone
                 self._latched.discard(index)
             elif index not in self._latched:
-                servo.latch_error(HardwareError.OVERLOAD)
+                servo.latch_fault(Fault.OVERLOAD)
                 self._latched.add(index)
         if cleared.any():
             self.twin.reset_overload(cleared)

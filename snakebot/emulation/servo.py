@@ -13,7 +13,7 @@ from dataclasses import replace
 from typing import Protocol
 
 from snakebot.emulation import firmware, firmware_feetech, firmware_p1
-from snakebot.emulation.alarms import StepRules, faults, step_rules
+from snakebot.emulation.alarms import Fault, StepRules, faults, step_rules
 from snakebot.emulation.case import SHARED_KEYS, ServoCase
 from snakebot.emulation.errors import EmulationError
 from snakebot.emulation.firmware import HardwareError
@@ -52,6 +52,9 @@ class Firmware(Protocol):
 
     def refresh_present(self, servo: VirtualServo) -> None:
         """Present values from the motor state."""
+
+    def fault_bits(self, found: Fault) -> int:
+        """The bits of the status byte or error register that report `found`."""
 
 
 class VirtualServo:
@@ -98,6 +101,7 @@ class VirtualServo:
         self.watchdog_trips = 0
         self._since_packet_s = 0.0
         self._overload_s = 0.0
+        self._overcurrent_s = 0.0
         self._watchdog_tripped = False
         self._registered: bytes | None = None
         self._registered_address = 0
@@ -315,6 +319,11 @@ class VirtualServo:
             self.memory.set("hardware_error_status", 0)
         self._alarms = 0
 
+    def latch_fault(self, fault: Fault) -> None:
+        """Latch `fault` in the bits the servo's firmware reports it by (Hardware Error Status
+        on an X, the status byte on an AX or a Feetech servo)."""
+        self.latch_error(self.firmware.fault_bits(fault))
+
     def latch_error(self, bits: int) -> None:
         """Latch hardware error bits; bits in the Shutdown(63) mask also force torque off,
         except an overload on a model with a Holding Torque (Feetech 34/37): its output drops
@@ -326,8 +335,9 @@ class VirtualServo:
         else:
             self._alarms = latched
         unload = bits & memory.get("shutdown")
-        if unload & HardwareError.OVERLOAD and memory.has("holding_torque"):
-            unload &= ~HardwareError.OVERLOAD
+        overload = self.firmware.fault_bits(Fault.OVERLOAD)
+        if unload & overload and memory.has("holding_torque"):
+            unload &= ~overload
             if memory.has("torque_limit"):
                 held = memory.get("holding_torque") * memory.get("max_torque") // 100
                 memory.set("torque_limit", min(memory.get("torque_limit"), held))
@@ -396,6 +406,7 @@ class VirtualServo:
         self.uptime_s = 0.0
         self._since_packet_s = 0.0
         self._overload_s = 0.0
+        self._overcurrent_s = 0.0
         self._watchdog_tripped = False
         self._registered = None
         if self.memory.has("startup_configuration"):
@@ -457,9 +468,12 @@ class VirtualServo:
         return self._rules[1]
 
     def _detect_faults(self, dt_s: float, rules: StepRules) -> None:
-        found, self._overload_s = faults(self.state, rules, dt_s, self._overload_s)
-        if found and found & ~int(self.hardware_error):
-            self.latch_error(found)
+        found, self._overload_s, self._overcurrent_s = faults(
+            self.state, rules, dt_s, self._overload_s, self._overcurrent_s
+        )
+        bits = self.firmware.fault_bits(found) if found else 0
+        if bits & ~int(self.hardware_error):
+            self.latch_error(bits)
 
 
 def _firmware_of(table: ServoTable) -> Firmware:

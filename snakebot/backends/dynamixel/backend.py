@@ -31,6 +31,7 @@ from snakebot.backends.dynamixel.checks import (
     check_settings,
     latency_warning,
     settings_keys,
+    shutdown_name,
     usb_latency_timer_ms,
 )
 from snakebot.backends.dynamixel.faults import (
@@ -320,10 +321,7 @@ class DynamixelBackend(Backend):
                     f"({family.name} has no Reboot)"
                 ),
             )
-        # The register that takes the torque off on a fault: Alarm Shutdown (Dynamixel's
-        # "Shutdown"), Feetech's Unload Condition.
-        name = self.bus.table["shutdown"].name if "shutdown" in self.bus.table else "Shutdown"
-        shutdown = "Alarm Shutdown" if name == "Shutdown" else name
+        shutdown = shutdown_name(self.bus.table)
         return HardwareFaultError(
             self.port,
             faults,
@@ -348,6 +346,7 @@ class DynamixelBackend(Backend):
             self.converter,
             watchdog=self.capabilities.bus_watchdog,
             position_mode=self.bus.table.specs.position_mode,
+            shutdown_register=shutdown_name(self.bus.table),
         )
         self._position_limits = [
             (settings[i]["min_position_limit"], settings[i]["max_position_limit"]) for i in self.ids

@@ -29,6 +29,10 @@ SHUTDOWN_NEEDED = 0x24
 """Alarm Shutdown bits 2 (overheating) and 5 (overload): torque off when either happens."""
 SYSFS_USB_SERIAL = Path("/sys/bus/usb-serial/devices")
 
+SHUTDOWN_DEFAULT_NAME = "Alarm Shutdown"
+"""What the docs call the register that turns torque off on a fault where the datasheet name is
+the bare "Shutdown" (X series 63, AX/MX 18)."""
+
 _DRIVE_REVERSE = 0x01
 _DRIVE_TIME_PROFILE = 0x04
 _DRIVE_TORQUE_ON_GOAL = 0x08
@@ -111,6 +115,14 @@ def settings_keys(table: ServoTable) -> tuple[str, ...]:
     return tuple(key for key in SETTINGS_KEYS if key in table)
 
 
+def shutdown_name(table: ServoTable) -> str:
+    """The datasheet name of the register that turns torque off on a fault (``shutdown``):
+    Feetech's "Unload Condition", Dynamixel's "Alarm Shutdown" (its tables say "Shutdown")."""
+    if "shutdown" not in table or table["shutdown"].name == "Shutdown":
+        return SHUTDOWN_DEFAULT_NAME
+    return table["shutdown"].name
+
+
 def check_settings(
     settings: Mapping[int, Mapping[str, int]],
     ids: Sequence[int],
@@ -118,13 +130,15 @@ def check_settings(
     *,
     watchdog: bool = True,
     position_mode: int = POSITION_MODE,
+    shutdown_register: str = SHUTDOWN_DEFAULT_NAME,
 ) -> tuple[list[str], list[str]]:
     """(errors, warnings) for EEPROM ``settings`` ({id: {key: value}}) against the joints.
 
     ``ids`` are head to tail, in the converter's joint order. Keys a model has no register for
     are left out of ``settings`` and not checked; ``watchdog=False`` (no Bus Watchdog) makes an
     Alarm Shutdown (``shutdown``; Feetech's Unload Condition, the same bits) without the
-    overload and overheating bits an error. ``position_mode`` is the Operating Mode of
+    overload and overheating bits an error, the register named ``shutdown_register``
+    (:func:`shutdown_name` of the model). ``position_mode`` is the Operating Mode of
     position control on the model (``table.specs.position_mode``: 3 Dynamixel, 0 Feetech STS).
     """
     errors: list[str] = []
@@ -141,7 +155,7 @@ def check_settings(
         shutdown = values.get("shutdown")
         if not watchdog and shutdown is not None and shutdown & SHUTDOWN_NEEDED != SHUTDOWN_NEEDED:
             errors.append(
-                f"servo {servo_id}: Alarm Shutdown is {shutdown}, needs bits 2 and 5 "
+                f"servo {servo_id}: {shutdown_register} is {shutdown}, needs bits 2 and 5 "
                 f"(overheating, overload; {SHUTDOWN_NEEDED} or more): with no Bus "
                 "Watchdog it is what turns torque off on a servo held against an "
                 "obstacle after the host died"

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from snakebot.backends.dynamixel.checks import shutdown_name
 from snakebot.backends.dynamixel.faults import (
     StopIncompleteError,
     SyncReadError,
@@ -151,7 +152,8 @@ class StopSequence:
                 f"the port vanished, so the stop policy ({b.stop_policy}) could "
                 f"not be sent: {b.robot.servo.name} servos have no Bus Watchdog, so they hold "
                 "their last goal, torque on, until they are power-cycled or a new session "
-                "connects (their Alarm Shutdown turns torque off on overload or overheating)",
+                f"connects (their {shutdown_name(b.bus.table)} turns torque off on overload or "
+                "overheating)",
             )
         return BusError(
             b.port,

@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from snakebot.backends.dynamixel.backend import DynamixelBackend
-from snakebot.backends.dynamixel.faults import HardwareFaultError
+from snakebot.backends.dynamixel.faults import HardwareFaultError, ServoSettingsError
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics
@@ -200,6 +200,27 @@ def assert_left_per_policy(
         assert servo.torque_enabled == (policy == "hold"), servo.servo_id
 
 
+# What each vendor's datasheet calls the register that turns torque off on a fault.
+SHUTDOWN_REGISTER = {"feetech": "Unload Condition", "dynamixel": "Alarm Shutdown"}
+
+
+def test_a_shutdown_without_overload_and_overheat_refuses_to_connect(
+    fbench: FamilyBench,
+) -> None:
+    """With no Bus Watchdog, the shutdown register is all that protects a stalled servo once
+    the host dies: connect refuses one lacking the overload or overheating bit, naming the
+    register as the servo's datasheet does."""
+    if fbench.family.name.startswith("x-"):
+        pytest.skip("X series: its Bus Watchdog guards it, the Shutdown bits are not required")
+    fbench.chain.servo(4).poke("shutdown", 0x04)  # overheating only
+    backend = fbench.backend(fbench.robot())
+    with pytest.raises(ServoSettingsError) as info:
+        backend.connect()
+    name = SHUTDOWN_REGISTER[fbench.chain.servos[0].vendor]
+    assert info.value.problems[0].startswith(f"servo 4: {name} is 4, needs bits 2 and 5")
+    assert not any(s.torque_enabled for s in fbench.chain.servos)
+
+
 def test_each_family_reads_by_its_own_method(fbench: FamilyBench) -> None:
     backend = fbench.backend(fbench.robot(ramp_s=0.2))
     expected = {
@@ -340,7 +361,8 @@ def test_the_port_vanishing_mid_run_is_a_bus_error_saying_what_the_servos_do(
         fbench.chain.advance(1.0)
         assert all(s.watchdog_tripped for s in fbench.chain.servos)
     else:
-        assert "no Bus Watchdog" in text and "Alarm Shutdown" in text
+        assert "no Bus Watchdog" in text  # and the shutdown register by its datasheet name
+        assert SHUTDOWN_REGISTER[fbench.chain.servos[0].vendor] in text
         fbench.chain.advance(1.0)
         assert all(s.torque_enabled for s in fbench.chain.servos)  # what the text says
 

@@ -6,11 +6,14 @@ model data), and the SDK's result codes turned into the chain's (a silent servo 
 from __future__ import annotations
 
 import pytest
+import scservo_sdk as scs
 
+from snakebot.backends.dynamixel import sdk
 from snakebot.backends.dynamixel.bus import DynamixelBus
 from snakebot.backends.dynamixel.faults import SyncReadError
 from snakebot.backends.feetech.sdk import FeetechLink
 from snakebot.emulation import EmulatedChain, make_chain_for_ids, registered
+from snakebot.emulation.port_feetech import EmulatedScsPortHandler
 
 IDS = tuple(range(1, 13))
 STATE = (
@@ -73,3 +76,53 @@ def test_a_silent_servo_is_named_after_the_retries(model: str) -> None:
     assert info.value.missing_ids == (7,)
     assert sorted(info.value.partial) == [i for i in IDS if i != 7]
     assert "There is no status packet" in str(info.value) or "servo(s) 7" in str(info.value)
+
+
+def stock_sync_read(url: str, address: int, size: int) -> dict[int, list[int] | None]:
+    """What the stock SDK's own GroupSyncRead finds for each ID (error byte, then the block)."""
+    port = EmulatedScsPortHandler(url)
+    assert port.setBaudRate(1_000_000)
+    group = scs.GroupSyncRead(scs.sms_sts(port), address, size)
+    for servo_id in IDS:
+        group.addParam(servo_id)
+    assert group.txRxPacket() == scs.COMM_SUCCESS
+    port.closePort()
+    return dict(group.data_dict)
+
+
+def test_the_one_pass_sync_read_finds_what_the_sdk_search_finds() -> None:
+    """The link checks a whole SYNC_READ reply in one pass; it must hand out exactly what the
+    SDK's byte-by-byte search (rxPacket/readRx) finds in the same reply, status bytes too."""
+    chain = make_chain_for_ids("STS3215", IDS, 1_000_000)
+    for servo in chain.servos:  # distinct values, some negative (bit 15), a status bit
+        servo.poke("homing_offset", 40 * servo.servo_id - 200)
+    chain.latch_hardware_error(5, 0x20)
+    with registered(chain) as url:
+        bus = DynamixelBus(url, 1_000_000, model="STS3215")
+        with bus:
+            reader = bus._link.sync_reader(56, 15, IDS)
+            assert reader.transact(False) == sdk.COMM_SUCCESS
+            mine = {i: [reader.error(i), *reader.data(i)] for i in IDS}
+            joined = reader.joined()
+        theirs = stock_sync_read(url, 56, 15)
+    assert mine == theirs
+    assert mine[5][0] == 0x20 and not any(mine[i][0] for i in IDS if i != 5)
+    assert joined == bytes(b for i in IDS for b in theirs[i] or [])
+    assert type(joined) is bytes  # the one-pass result (the SDK search's rows join to bytearray)
+
+
+def test_a_corrupt_reply_falls_back_to_the_sdk_search_and_keeps_the_others() -> None:
+    """One servo's status packet corrupt: the one-pass check refuses the reply, the SDK's own
+    search still finds the eleven good packets, and the cycle's row set is refused whole."""
+    chain = make_chain_for_ids("STS3215", IDS, 1_000_000)
+    chain.corrupt_replies(4, next_n=1)
+    with registered(chain) as url:
+        bus = DynamixelBus(url, 1_000_000, model="STS3215")
+        with bus:
+            reader = bus._link.sync_reader(56, 15, IDS)
+            result = reader.transact(False)
+            found = [i for i in IDS if reader.available(i)]
+            assert reader.joined() is None
+            assert 4 not in found and len(found) == 11, (result, found)
+            assert reader.transact(False) == sdk.COMM_SUCCESS  # the next read is whole again
+            assert reader.joined() is not None and all(reader.available(i) for i in IDS)
