@@ -29,7 +29,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.dynamixel.checks import check_settings
+from snakebot.backends.dynamixel.checks import check_settings, shutdown_name
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import JointConfig, RobotConfig
@@ -200,6 +200,7 @@ def refusals(
         TickConverter.for_robot(robot),
         watchdog=has_watchdog(chain),
         position_mode=chain.table.specs.position_mode,
+        shutdown_register=shutdown_name(chain.table),
     )
     return [f"{e}: widen the Position Limits in the settings" for e in errors]
 

@@ -12,7 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.dynamixel.checks import LIMIT_KEYS, SETTINGS_KEYS, check_settings
+from snakebot.backends.dynamixel.checks import (
+    LIMIT_KEYS,
+    SETTINGS_KEYS,
+    check_settings,
+    shutdown_name,
+)
 from snakebot.backends.dynamixel.ticks import TickConverter
 from snakebot.config.schema import JointConfig, RobotConfig
 from snakebot.config.servo_settings import GAIN_KEYS, Setting, joint_settings
@@ -127,11 +132,12 @@ def _checked(
         TickConverter.for_robot(chain.robot),
         watchdog=watchdog,
         position_mode=chain.table.specs.position_mode,
+        shutdown_register=shutdown_name(chain.table),
     )
     if errors:
         raise ConfigError(
             chain.robot.source,
             "settings",
-            "`snakebot run --backend dynamixel` would refuse these settings: " + "; ".join(errors),
+            "`snakebot run` on this chain would refuse these settings: " + "; ".join(errors),
         )
     return ChainSettings(chain.robot, chain.table, chain.baud, chain.servos, tuple(notes))

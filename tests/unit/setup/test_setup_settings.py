@@ -90,7 +90,7 @@ def test_settings_that_run_would_refuse_are_rejected(
     robot = load_robot(config_dir / "robots" / "snake12.toml")
     with pytest.raises(ConfigError, match=message) as info:
         load_settings(robot)
-    assert "snakebot run --backend dynamixel` would refuse" in str(info.value)
+    assert "snakebot run` on this chain would refuse" in str(info.value)
 
 
 def test_settings_must_cover_what_run_checks(config_dir: Path) -> None:
@@ -138,6 +138,15 @@ def test_without_a_bus_watchdog_config_apply_refuses_what_run_refuses(config_dir
     # The same value on an X-series chain is the user's choice: its watchdog protects it.
     x_series = edit_robot(config_dir, "snake12", "[settings]", "[settings]\nshutdown = 4")
     assert load_settings(load_robot(x_series)).servos
+
+
+def test_a_feetech_unload_condition_is_refused_by_its_own_name(config_dir: Path) -> None:
+    # No Feetech servo has a Bus Watchdog either; its register is the Unload Condition, and the
+    # message a user reads beside Feetech's manual must say so.
+    path = edit_robot(config_dir, "snake12-sts3215", "[settings]", "[settings]\nshutdown = 4")
+    with pytest.raises(ConfigError, match="Unload Condition is 4, needs bits 2 and 5") as info:
+        load_settings(load_robot(path))
+    assert "Alarm Shutdown" not in str(info.value)
 
 
 def test_without_a_bus_watchdog_alarm_shutdown_must_be_set(config_dir: Path) -> None:

@@ -2,8 +2,8 @@
 
 No Feetech servo has a bus watchdog, so its Unload Condition (19) is what cuts torque on a joint
 held against an obstacle after the host died: connect refuses a servo whose Unload Condition
-lacks the overheating or the overload bit (the bits of Dynamixel's Alarm Shutdown, whose name
-the message keeps), naming the servo.
+lacks the overheating or the overload bit (the bits of Dynamixel's Alarm Shutdown), naming the
+servo and the register by the model's own name.
 """
 
 from __future__ import annotations
@@ -40,6 +40,6 @@ def test_connect_refuses_an_unload_condition_without_heat_and_overload(
             return
         with pytest.raises(ServoSettingsError) as caught:
             backend.connect()
-    assert f"servo 6: Alarm Shutdown is {unload}, needs bits 2 and 5" in str(caught.value)
+    assert f"servo 6: Unload Condition is {unload}, needs bits 2 and 5" in str(caught.value)
     assert "with no Bus Watchdog" in str(caught.value)
     assert not any(s.torque_enabled for s in chain.servos)
