@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from snakebot.backends.base import Backend
     from snakebot.control.cycle import CycleSink
     from snakebot.drive.controller import DriveController
-    from snakebot.drive.loop import DriveObserver, DriveResult
+    from snakebot.drive.run import DriveObserver, DriveResult
     from snakebot.drive.sources import InputSource
     from snakebot.gaits import Gait
     from snakebot.gaits.live import LiveGait
@@ -289,9 +289,9 @@ class Snake:
         layer to the joints at ``rate_hz``. Each ``observers`` entry sees every cycle;
         ``stop_check()`` returning a reason stops the drive (a signal, say). Ends at the rest
         pose; leaving the ``with`` block then applies the stop policy. See
-        snakebot.drive.loop.run_drive for what is raised.
+        snakebot.drive.run.run_drive for what is raised.
         """
-        from snakebot.drive.loop import run_drive
+        from snakebot.drive.run import run_drive
 
         self._require_connected()
         robot = self.robot

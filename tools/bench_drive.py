@@ -24,7 +24,7 @@ import numpy as np
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.safety import SafetyLayer
 from snakebot.drive.display import DriveDisplay
-from snakebot.drive.loop import DriveCycle
+from snakebot.drive.run import DriveCycle
 from snakebot.gaits import LiveControls, LiveGait, make_gait
 from snakebot.types import JointState
 

@@ -1,4 +1,4 @@
-"""Control-cycle cost of DynamixelBackend against a bare dynamixel_sdk loop, per servo family.
+"""Control-cycle cost of ServoChainBackend against a bare dynamixel_sdk loop, per servo family.
 
 One cycle = one Sync Write of N goal positions + one state read (load, velocity, position)
 decoded to SI, by the family's read method: X-series (XL430-W250, Protocol 2.0) one Fast Sync
@@ -13,7 +13,7 @@ rounds (sizes shuffled).
 4 Mbps with return delay 0 (10 bits per byte). ``--families``: 12 servos of each family at
 1 Mbps, with the control rate the bus holds at Return Delay Time 0 and 250 (500 µs): wire time,
 one Return Delay per reply turnaround, 1 ms of USB latency per reply wait (an FTDI adapter at
-latency_timer 1; snakebot.backends.dynamixel.rate) plus the backend's host CPU.
+latency_timer 1; snakebot.backends.chain.rate) plus the backend's host CPU.
 
 Usage: python tools/bench_dynamixel_cycle.py [--rounds 9] [--cycles 300] [--sizes 8 16 32]
        python tools/bench_dynamixel_cycle.py --families [--rounds 9] [--cycles 300]
@@ -37,10 +37,10 @@ from typing import Any
 import dynamixel_sdk as sdk
 import numpy as np
 
-from snakebot.backends.dynamixel.backend import DynamixelBackend
-from snakebot.backends.dynamixel.blocks import resolve_block
-from snakebot.backends.dynamixel.checks import cycle_wire_time_s
-from snakebot.backends.dynamixel.rate import METHOD_NAMES, cycle_budget
+from snakebot.backends.chain.backend import ServoChainBackend
+from snakebot.backends.chain.blocks import resolve_block
+from snakebot.backends.chain.checks import cycle_wire_time_s
+from snakebot.backends.chain.rate import METHOD_NAMES, cycle_budget
 from snakebot.config import load_robot
 from snakebot.config.loader import load_servo_model
 from snakebot.config.schema import RobotConfig
@@ -300,7 +300,7 @@ def make_sides(n: int, cycles: int, kind: Kind | None = None) -> dict[str, Side]
     chain = chain_for(n, kind)
     # The chain's virtual clock, as the servos see it (the Bus Watchdog check runs on it too);
     # slow_every off: only the cycle's two transactions.
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot_for(n, kind),
         port=register_chain(chain),
         baud=BAUD,
@@ -375,7 +375,7 @@ def sizes_table(args: argparse.Namespace) -> None:
         "emulated port (the emulator's own work).\n"
     )
     print(
-        "| N | bare SDK loop: cycle (client) | DynamixelBackend: cycle (client) "
+        "| N | bare SDK loop: cycle (client) | ServoChainBackend: cycle (client) "
         "| ratio cycle | ratio client (min–max) | wire limit 1 / 3 / 4 Mbps, RDT 0 |"
     )
     print("|---|---|---|---|---|---|")
@@ -410,7 +410,7 @@ def families_table(args: argparse.Namespace) -> None:
         "latency per reply wait + the backend's host CPU.\n"
     )
     print(
-        "| family | read | bare SDK loop, client µs | DynamixelBackend, client µs "
+        "| family | read | bare SDK loop, client µs | ServoChainBackend, client µs "
         "| ratio client (min–max) | wire µs, RDT 0 | rate at RDT 0 | rate at RDT 250 (500 µs) |"
     )
     print("|---|---|---|---|---|---|---|---|")

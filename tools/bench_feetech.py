@@ -11,7 +11,7 @@ to identical in-process emulated chains (``dxlemu://``, virtual time: no wire ti
 alternating cycle by cycle (tools/bench_dynamixel_cycle.py's harness); "client" is the cycle
 minus the time inside the emulated port: the host CPU a real bus would see.
 
-The rate is the bus's arithmetic (snakebot.backends.dynamixel.rate, what ``snakebot run``
+The rate is the bus's arithmetic (snakebot.backends.chain.rate, what ``snakebot run``
 refuses a ``--rate`` with) plus the measured host CPU: the wire at 10 bits a byte, one Return
 Delay Time per reply, 1 ms of USB latency per cycle (one reply wait).
 
@@ -31,8 +31,8 @@ import numpy as np
 import scservo_sdk as scs
 from bench_dynamixel_cycle import EmulatorClock, Side, measure, med
 
-from snakebot.backends.dynamixel.backend import DynamixelBackend
-from snakebot.backends.dynamixel.rate import cycle_budget
+from snakebot.backends.chain.backend import ServoChainBackend
+from snakebot.backends.chain.rate import cycle_budget
 from snakebot.config import load_robot
 from snakebot.config.schema import RobotConfig
 from snakebot.emulation import EmulatedChain, make_chain_for_ids, register_chain
@@ -109,7 +109,7 @@ def make_sides(cycles: int) -> dict[str, Side]:
         return handlers[-1]
 
     ours = chain()
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot(),
         port=register_chain(ours),
         baud=BAUD,

@@ -1,6 +1,6 @@
 """Every fault the emulated bus can inject, at several rates, under both stop policies.
 
-Each case runs the real DynamixelBackend and runner (snake12 by default, ``--robot`` another:
+Each case runs the real ServoChainBackend and runner (snake12 by default, ``--robot`` another:
 snake12-ax12a for Protocol 1.0, snake12-sts3215 for Feetech; sidewinding, 100 Hz) through the
 unmodified vendor SDK (dynamixel_sdk, scservo_sdk) on the in-process emulator (``dxlemu://``,
 virtual time), the servos speaking the robot's protocol,
@@ -35,8 +35,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from snakebot.backends.dynamixel import DynamixelBackend
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain import ServoChainBackend
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -347,7 +347,7 @@ def run_case(
     outcome, message = "completed", ""
     trips = 0
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             port_handler_factory=audited_port(audit, table.family),

@@ -1,6 +1,6 @@
 """Soak the Dynamixel control loop in virtual time: hours of 200 Hz cycles, lost cycles, memory.
 
-The real DynamixelBackend and runner drive snake12 (sidewinding) through the unmodified
+The real ServoChainBackend and runner drive snake12 (sidewinding) through the unmodified
 dynamixel_sdk on the in-process emulator (``dxlemu://``, virtual time: the bus clock is the only
 clock, so an hour of control takes as long as the CPU needs, and every lost cycle is the bus's,
 not the host's). Reported: cycles run against cycles planned (lost cycles), overruns, retries,
@@ -23,7 +23,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.config import load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -118,7 +118,7 @@ def soak(
 
     started = time.perf_counter()
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             port_handler_factory=EmulatedPortHandler,

@@ -140,7 +140,7 @@ class StatusNames(Protocol):
 
 
 class BusReport(Protocol):
-    """What a servo bus counts that a display shows (``backends.dynamixel.bus.DynamixelBus``)."""
+    """What a servo bus counts that a display shows (``backends.dynamixel.bus.ServoBus``)."""
 
     @property
     def retry_counts(self) -> Mapping[int, int]:

@@ -38,8 +38,8 @@ from snakebot.cli.telemetry_options import (
 )
 from snakebot.config import RobotConfig, load_robot
 from snakebot.drive.controller import DriveController, GaitChoice
-from snakebot.drive.loop import DriveObserver, DriveResult
 from snakebot.drive.observers import backend_readings
+from snakebot.drive.run import DriveObserver, DriveResult
 from snakebot.drive.setup import (
     DEFAULT_SMOOTHING_S,
     DEFAULT_TRANSITION_S,

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from snakebot.emulation.chain import EmulatedChain
     from snakebot.emulation.physics import TwinMotion
     from snakebot.emulation.pty_server import PtyServer
-    from snakebot.emulation.servo import VirtualServo
+    from snakebot.emulation.virtual_servo import VirtualServo
     from snakebot.servo_tables import ServoTable
 
 

@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from snakebot.backends.dynamixel.faults import decode_hardware_error
+from snakebot.backends.chain.faults import decode_hardware_error
 from snakebot.cli.common import (
     add_bus_options,
     add_dry_run,

@@ -19,7 +19,7 @@ from snakebot.config.schema import (
     ServoModel,
     TwinConfig,
 )
-from snakebot.config.servo_file import (
+from snakebot.config.servos.file import (
     find_servo_file,
     parse_gains,
     parse_servo_file,
@@ -27,8 +27,8 @@ from snakebot.config.servo_file import (
     servo_table,
     torque_limit_fraction,
 )
-from snakebot.config.servo_settings import parse_settings
-from snakebot.config.servo_twin import read_servo_extras
+from snakebot.config.servos.settings import parse_settings
+from snakebot.config.servos.twin import read_servo_extras
 from snakebot.errors import ConfigError
 from snakebot.families import family_for
 from snakebot.servo_tables import ServoTable

@@ -4,7 +4,7 @@ A port string goes to pyserial, whose ``serial_for_url`` opens any URL scheme it
 ``socket://host:port`` makes a TCP connection, ``spy://PORT?file=PATH`` truncates ``PATH`` for a
 traffic dump, ``hwgrep://`` opens whichever port matches a pattern. None of that may come from a
 robot file that was copied from someone else, and none of it is needed to drive servos. The rule,
-enforced here and called by every port opener (``DynamixelBus``, hence the backend and the setup
+enforced here and called by every port opener (``ServoBus``, hence the backend and the setup
 tools' ``Link``) and by the robot-file loader:
 
 - a device path (``/dev/ttyUSB0``, ``/dev/pts/3``, ``COM3``) anywhere;

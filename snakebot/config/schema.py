@@ -9,7 +9,7 @@ from typing import Literal
 
 import numpy as np
 
-from snakebot.config.servo_extras import NO_EXTRAS, ServoExtras
+from snakebot.config.servos.extras import NO_EXTRAS, ServoExtras
 from snakebot.servo import ComplianceMapping, GainMapping, TickModel
 from snakebot.types import PDGains, StopPolicy
 

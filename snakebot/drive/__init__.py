@@ -2,7 +2,7 @@
 and its terminal display. The gait side (integrated phases, blends) is snakebot.gaits.live."""
 
 from snakebot.drive.controller import DriveController, GaitChoice
-from snakebot.drive.loop import DriveCycle, DriveObserver, DriveResult, run_drive
+from snakebot.drive.run import DriveCycle, DriveObserver, DriveResult, run_drive
 from snakebot.drive.sources import (
     DriveInputError,
     InputDeviceError,

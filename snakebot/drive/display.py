@@ -20,7 +20,7 @@ from typing import TextIO
 import numpy as np
 
 from snakebot.drive.keymap import HELP
-from snakebot.drive.loop import DriveCycle
+from snakebot.drive.run import DriveCycle
 from snakebot.gaits.live import LiveStatus
 
 WIDTH = 78

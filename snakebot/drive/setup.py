@@ -1,6 +1,6 @@
 """What a drive starts from: the default gait list and the live gait for a robot.
 
-Shared by ``snakebot drive`` and scripts that call :func:`snakebot.drive.loop.run_drive`; errors
+Shared by ``snakebot drive`` and scripts that call :func:`snakebot.drive.run.run_drive`; errors
 name the parameter (``smoothing_s``), never a command-line flag.
 """
 

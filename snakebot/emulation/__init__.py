@@ -32,7 +32,7 @@ from snakebot.emulation.registry import (
     registered,
     unregister_chain,
 )
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 from snakebot.emulation.wire import BusReply
 
 __all__ = [

@@ -16,8 +16,8 @@ from pathlib import Path
 from snakebot.emulation.case import cases_of
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.errors import EmulationError
-from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.state_file import SavedServo, load_state, restore, save_state
+from snakebot.emulation.virtual_servo import VirtualServo
 from snakebot.servo import FACTORY_BAUD, FACTORY_ID
 from snakebot.servo_tables import ServoTable, table_for_model
 

@@ -22,7 +22,7 @@ from snakebot.emulation.protocol import StatusError
 
 if TYPE_CHECKING:
     from snakebot.emulation.memory import WritePlan
-    from snakebot.emulation.servo import VirtualServo
+    from snakebot.emulation.virtual_servo import VirtualServo
 
 SHARED_KEYS = frozenset({"baud_rate", "protocol_type"})  # held by the one communication module
 

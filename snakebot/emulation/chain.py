@@ -32,8 +32,8 @@ from snakebot.emulation.faults import FaultBook, Faults
 from snakebot.emulation.firmware import HardwareError
 from snakebot.emulation.instructions import Slot
 from snakebot.emulation.motion import STEP_S, ChainPhysics, MotionModel
-from snakebot.emulation.servo import VirtualServo
 from snakebot.emulation.stream import ParserStats
+from snakebot.emulation.virtual_servo import VirtualServo
 from snakebot.emulation.wire import BusReply, byte_time_s, merge_collisions
 from snakebot.servo import FACTORY_BAUD
 from snakebot.servo_tables import ServoTable, table_for_model

@@ -19,7 +19,7 @@ from snakebot.emulation.protocol import StatusError
 from snakebot.servo.ticks import centre_tick
 
 if TYPE_CHECKING:
-    from snakebot.emulation.servo import VirtualServo
+    from snakebot.emulation.virtual_servo import VirtualServo
 
 GOALS = ("goal_pwm", "goal_current", "goal_velocity", "goal_position")
 _MODE_RESETS = (

@@ -40,7 +40,7 @@ from snakebot.emulation.protocol import StatusError
 from snakebot.servo_tables.table import decode_magnitude
 
 if TYPE_CHECKING:
-    from snakebot.emulation.servo import VirtualServo
+    from snakebot.emulation.virtual_servo import VirtualServo
 
 
 class StatusBit(IntFlag):

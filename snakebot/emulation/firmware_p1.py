@@ -23,7 +23,7 @@ from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.protocol import StatusError
 
 if TYPE_CHECKING:
-    from snakebot.emulation.servo import VirtualServo
+    from snakebot.emulation.virtual_servo import VirtualServo
 
 GOALS = ("goal_position", "moving_speed")
 PID_KEYS = ("position_p_gain", "position_i_gain", "position_d_gain")

@@ -22,7 +22,7 @@ from snakebot.emulation.protocol import (
     fast_status_header,
     fast_status_segment,
 )
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 
 FACTORY_RESET_ALL = 0xFF
 

@@ -28,7 +28,7 @@ from snakebot.emulation.protocol1 import (
     Packet,
     build_status,
 )
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 
 _READS = (Instruction.PING, Instruction.READ, Instruction.BULK_READ)
 # Protocol 2.0 error numbers the firmware returns, as Protocol 1.0 bits.

@@ -29,7 +29,7 @@ from snakebot.emulation.protocol_feetech import (
     Packet,
     build_status,
 )
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 
 _READS = (Instruction.PING, Instruction.READ, Instruction.SYNC_READ)
 _MAX_READ = MAX_PACKET_BYTES - 6

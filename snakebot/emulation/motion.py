@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
-    from snakebot.emulation.servo import VirtualServo
+    from snakebot.emulation.virtual_servo import VirtualServo
 
 STEP_S = 0.001
 

@@ -21,7 +21,7 @@ from snakebot.control.metrics import RunMetrics
 from snakebot.emulation.alarms import Fault
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
 from snakebot.emulation.motion import MotorState, ServoCommand
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 
 
 class TwinMotion:
@@ -113,7 +113,7 @@ class TwinMotion:
                 continue
             self._commands[index] = command
             goals_changed = True
-            # The servo's frame: motor = direction * (joint + zero offset); see DynamixelBackend.
+            # The servo's frame: motor = direction * (joint + zero offset); see ServoChainBackend.
             self._goal[index] = (
                 self._direction[index] * command.goal_position_rad - self._zero[index]
             )

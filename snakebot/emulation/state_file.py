@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from snakebot.emulation.errors import EmulationError
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 from snakebot.errors import OutputError
 
 FORMAT = "snakebot-emulator-state"

@@ -4,7 +4,7 @@ play through the runner's control cycle.
 The action (d,) becomes a ``PhasedGait`` through the env's encoding; the gait is played at
 phases that ``GaitClock`` turns by the gait time between control cycles, so the wave never jumps
 when the next action changes the frequency. The environments hold each action for
-``cycles_per_action`` cycles of a ``CycleLoop`` (``snakebot.rl.twin_loop``); ``PolicyGait``
+``cycles_per_action`` cycles of a ``CycleLoop`` (``snakebot.rl.episode``); ``PolicyGait``
 (``snakebot.rl.policy_gait``) is this gait deciding the action itself every 1/action_hz s. One
 gait, one cycle: a policy plays in ``snakebot run`` as it was trained, by construction.
 """

@@ -10,9 +10,9 @@ import numpy as np
 from gymnasium import spaces
 
 from snakebot.gaits.base import FloatArray
+from snakebot.rl.episode import TwinEpisode
 from snakebot.rl.observe import OBS_BOUND
 from snakebot.rl.settings import EnvSettings
-from snakebot.rl.twin_loop import TwinLoop
 
 RENDER_SIZE = (480, 640)  # height, width in pixels
 
@@ -31,7 +31,7 @@ class SnakeEnv(gymnasium.Env[np.ndarray, np.ndarray]):
             )
         self.settings = settings
         self.render_mode = render_mode
-        self.loop = TwinLoop(settings)
+        self.loop = TwinEpisode(settings)
         robot = self.loop.robot
         self.robot = robot
         self.limits = (robot.lower_rad, robot.upper_rad)

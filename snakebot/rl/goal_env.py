@@ -15,9 +15,9 @@ import numpy as np
 
 from snakebot.gaits.base import FloatArray
 from snakebot.rl.base_env import SnakeEnv
+from snakebot.rl.episode import StepOutcome
 from snakebot.rl.observe import goal_observation
 from snakebot.rl.settings import GoalSettings, split_kwargs
-from snakebot.rl.twin_loop import StepOutcome
 
 
 class SnakeGoalEnv(SnakeEnv):

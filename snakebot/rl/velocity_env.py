@@ -15,9 +15,9 @@ from typing import Any
 import numpy as np
 
 from snakebot.rl.base_env import SnakeEnv
+from snakebot.rl.episode import StepOutcome
 from snakebot.rl.observe import velocity_observation
 from snakebot.rl.settings import VelocitySettings, split_kwargs
-from snakebot.rl.twin_loop import StepOutcome
 
 
 class SnakeVelocityEnv(SnakeEnv):

@@ -29,8 +29,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.dynamixel.checks import check_settings, shutdown_name
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain.checks import check_settings, shutdown_name
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import JointConfig, RobotConfig
 from snakebot.errors import ConfigError, OutputError

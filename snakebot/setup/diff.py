@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from snakebot.backends.dynamixel.faults import decode_hardware_error
+from snakebot.backends.chain.faults import decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.servo_tables import table_for_model
 from snakebot.setup.bauds import factory_baud, model_bauds, preferred

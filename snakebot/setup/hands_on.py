@@ -14,7 +14,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from snakebot.backends.dynamixel.faults import ServoStatusError, decode_hardware_error
+from snakebot.backends.chain.faults import ServoStatusError, decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.servo.ticks import rad_to_ticks, ticks_to_rad
 from snakebot.setup.errors import SetupError

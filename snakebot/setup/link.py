@@ -1,10 +1,10 @@
-"""One serial port for the setup tools: a DynamixelBus whose baud rate they switch, raw probes.
+"""One serial port for the setup tools: a ServoBus whose baud rate they switch, raw probes.
 
-The link under it is the family's vendor's (``snakebot.backends.dynamixel.links``: the Dynamixel
+The link under it is the family's vendor's (``snakebot.backends.chain.links``: the Dynamixel
 SDK, or Feetech's ``scservo_sdk``). Device paths (``/dev/ttyUSB0``, ``COM3``) open through the
 vendor SDK's port handler, the emulator's ``dxlemu://NAME`` URLs through pyserial's
 ``serial_for_url``. Any other URL is refused before
-anything opens (snakebot.config.ports, checked by DynamixelBus): ``socket://`` would connect to a
+anything opens (snakebot.config.ports, checked by ServoBus): ``socket://`` would connect to a
 host, ``spy://...?file=`` truncate a file.
 """
 
@@ -16,9 +16,10 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Any
 
-from snakebot.backends.dynamixel import links, sdk
-from snakebot.backends.dynamixel.bus import DynamixelBus
-from snakebot.backends.dynamixel.faults import ServoStatusError
+from snakebot.backends.chain import links
+from snakebot.backends.chain.bus import ServoBus
+from snakebot.backends.chain.faults import ServoStatusError
+from snakebot.backends.dynamixel import sdk
 from snakebot.errors import BusError
 from snakebot.families import ServoFamily, family_for
 from snakebot.servo import FACTORY_BAUD
@@ -103,7 +104,7 @@ class Link:
             protocol = family.protocol
         self.family: ServoFamily = family_for(table_for_model(model), protocol)
         # The bus checks the port (snakebot.config.ports) before it builds the handler.
-        self.bus = DynamixelBus(
+        self.bus = ServoBus(
             port,
             baud,
             model=model,
@@ -127,7 +128,7 @@ class Link:
             old.close()
             self._open = False
         self.family = family
-        self.bus = DynamixelBus(
+        self.bus = ServoBus(
             self.port,
             old.baud,
             family=family,
@@ -169,7 +170,7 @@ class Link:
         now_ms: float = getattr(self.handler, "getCurrentTime")()  # noqa: B009 - SDK, untyped
         return now_ms / 1000.0
 
-    def at(self, baud: int) -> DynamixelBus:
+    def at(self, baud: int) -> ServoBus:
         """The bus, with the port (re)opened at ``baud`` if it is not there already."""
         if not self._open or self.bus.baud != baud:
             self.bus.baud = baud
@@ -178,7 +179,7 @@ class Link:
         return self.bus
 
     @contextmanager
-    def retries(self, count: int) -> Iterator[DynamixelBus]:
+    def retries(self, count: int) -> Iterator[ServoBus]:
         """The bus with ``retries`` set to ``count`` for the block (searches fail fast)."""
         saved = self.bus.retries
         self.bus.retries = count

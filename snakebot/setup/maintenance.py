@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-from snakebot.backends.dynamixel.faults import decode_hardware_error
+from snakebot.backends.chain.faults import decode_hardware_error
 from snakebot.errors import BusError
 from snakebot.families import ServoFamily, family_for
 from snakebot.servo_tables import Register, ServoTable, table_for_model
@@ -21,7 +21,7 @@ from snakebot.setup.link import Link, unanswered_ok
 
 BOOT_TIMEOUT_S = 3.0
 RESET_KEEP = {(False, False): "all", (True, False): "keep_id", (True, True): "keep_id_baud"}
-"""(keep ID, keep baud) -> DynamixelBus.factory_reset option (e-Manual Factory Reset 0xFF/01/02)."""
+"""(keep ID, keep baud) -> ServoBus.factory_reset option (e-Manual Factory Reset 0xFF/01/02)."""
 
 
 def wait_for_boot(link: Link, servo_id: int, baud: int, timeout_s: float = BOOT_TIMEOUT_S) -> int:

@@ -12,15 +12,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.dynamixel.checks import (
+from snakebot.backends.chain.checks import (
     LIMIT_KEYS,
     SETTINGS_KEYS,
     check_settings,
     shutdown_name,
 )
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config.schema import JointConfig, RobotConfig
-from snakebot.config.servo_settings import GAIN_KEYS, Setting, joint_settings
+from snakebot.config.servos.settings import GAIN_KEYS, Setting, joint_settings
 from snakebot.errors import ConfigError
 from snakebot.families import family_for
 from snakebot.servo_tables import ServoTable, table_for_model

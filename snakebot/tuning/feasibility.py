@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import RobotConfig
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.tuning.trace import FloatArray, Trace
 
 SATURATION_FRACTION = 0.95

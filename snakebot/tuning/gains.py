@@ -21,13 +21,13 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from snakebot.backends.base import Backend
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import GainRegisters, RobotConfig
 from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, play_commands, run_gait
 from snakebot.control.safety import SafetyLayer
 from snakebot.gaits import make_gait
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.tuning.feasibility import SATURATION_FRACTION
 from snakebot.tuning.responses import StepMetrics, chirp_commands, rms, step_commands, step_metrics
 from snakebot.tuning.trace import FloatArray

@@ -26,9 +26,9 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from snakebot.backends.twin import TwinBackend
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config.schema import MAX_ACTUATOR_DELAY_S, RobotConfig
 from snakebot.errors import ConfigError
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.telemetry import read_log
 from snakebot.tuning.commands import ArrayCommands
 from snakebot.tuning.engine import TwinBatch

@@ -11,8 +11,8 @@ import warnings
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend, DynamixelBus
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain import ServoBus, ServoChainBackend
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config import RobotConfig
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -26,9 +26,9 @@ WAVE_RAD = 0.15  # small: the test must be safe on a snake lying on a desk
 DURATION_S = 2.0
 
 
-def open_bus(port: str, robot: RobotConfig) -> DynamixelBus:
+def open_bus(port: str, robot: RobotConfig) -> ServoBus:
     """The robot's bus: its model's family speaks (Dynamixel, or Feetech's scservo_sdk)."""
-    bus = DynamixelBus(port, robot.bus.baud, model=robot.servo.name, protocol=robot.bus.protocol)
+    bus = ServoBus(port, robot.bus.baud, model=robot.servo.name, protocol=robot.bus.protocol)
     bus.open()
     return bus
 
@@ -80,7 +80,7 @@ def test_a_small_wave_runs_for_two_seconds_and_is_tracked(port: str, robot: Robo
         upper_rad=robot.upper_rad,
     )
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
-    backend = DynamixelBackend(robot, port=port)
+    backend = ServoChainBackend(robot, port=port)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # settings advice was checked above
         with backend:
@@ -102,7 +102,7 @@ def test_a_small_wave_runs_for_two_seconds_and_is_tracked(port: str, robot: Robo
 
 
 def test_the_stop_policy_is_left_applied(port: str, robot: RobotConfig) -> None:
-    backend = DynamixelBackend(robot, port=port)
+    backend = ServoChainBackend(robot, port=port)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         backend.connect()

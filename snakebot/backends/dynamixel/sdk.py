@@ -367,7 +367,7 @@ class SdkLink:
 
 
 def link(handler: PortHandlerLike, family: ServoFamily) -> SdkLink:
-    """The Dynamixel link over ``handler`` (``snakebot.backends.dynamixel.links.link_for``)."""
+    """The Dynamixel link over ``handler`` (``snakebot.backends.chain.links.link_for``)."""
     return SdkLink(handler, family)
 
 

@@ -261,7 +261,7 @@ class FeetechLink:
 
 
 def link(handler: ScsPortHandlerLike, family: ServoFamily) -> FeetechLink:
-    """The Feetech link over ``handler`` (``snakebot.backends.dynamixel.links.link_for``)."""
+    """The Feetech link over ``handler`` (``snakebot.backends.chain.links.link_for``)."""
     return FeetechLink(handler, family)
 
 

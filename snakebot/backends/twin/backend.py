@@ -22,11 +22,11 @@ from snakebot.backends.twin.model_builder import (
     link_name,
 )
 from snakebot.backends.twin.readouts import Capsules, StepCheck, as_slice, servo_torque_nm
-from snakebot.backends.twin.servo_electrical import ServoElectrics
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.backends.twin.terrain import Terrain, as_terrain
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, ServoFaultError
+from snakebot.servo.dynamics import servo_dynamics
+from snakebot.servo.electrical import ServoElectrics
 from snakebot.types import BodyState, JointState, PDGains
 
 JointSelection = int | slice | Sequence[int] | np.ndarray

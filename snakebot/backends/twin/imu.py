@@ -11,7 +11,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from snakebot.config.servo_extras import ServoExtras
+from snakebot.config.servos.extras import ServoExtras
 
 
 class TwinSensors:

@@ -24,11 +24,11 @@ from snakebot.backends.twin.friction.scale import (
     bind_scale_friction,
     python_callback_paused,
 )
-from snakebot.backends.twin.servo_model import ServoDynamics, history_samples, servo_dynamics
 from snakebot.backends.twin.terrain import BodyShape, Terrain, as_terrain
 from snakebot.config.paths import scene_path
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError
+from snakebot.servo.dynamics import ServoDynamics, history_samples, servo_dynamics
 
 SCENE_PATH = scene_path()
 """The twin's scene (floor, light, tracking camera), shipped as package data."""

@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.cycle import CycleRecord
@@ -91,7 +91,7 @@ def test_a_late_cycle_is_flagged_and_the_next_step_gets_the_time_that_passed() -
 
     fast = make_gait("serpenoid", 12, {"omega": 12.0, "amplitude": 1.4})  # slew-limited
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             port_handler_factory=EmulatedPortHandler,

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
@@ -45,7 +45,7 @@ def run_with_fault(
     robot: RobotConfig = dataclasses.replace(
         base, safety=dataclasses.replace(base.safety, ramp_s=0.3, stop_policy=policy)
     )
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot,
         port=url,
         port_handler_factory=EmulatedPortHandler,

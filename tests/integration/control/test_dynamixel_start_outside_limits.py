@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.config import load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -35,7 +35,7 @@ def test_a_joint_resting_outside_its_limits_is_brought_in_never_stepped() -> Non
     servo.poke("goal_position", 2048)  # a stale goal it must not jump to either
     goals: list[int] = []
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             port_handler_factory=EmulatedPortHandler,

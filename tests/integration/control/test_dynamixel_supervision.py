@@ -14,8 +14,8 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
-from snakebot.backends.dynamixel.faults import TrackingError, WatchdogTripError
+from snakebot.backends.chain import ServoChainBackend
+from snakebot.backends.chain.faults import TrackingError, WatchdogTripError
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, RunResult, run_gait
@@ -72,7 +72,7 @@ def run(
 ) -> RunResult:
     clock = SkewedClock(chain)
     config = robot(policy)
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         config, port=url, port_handler_factory=EmulatedPortHandler, clock=clock, sleep=chain.advance
     )
 
@@ -211,7 +211,7 @@ def test_a_trip_during_the_stop_ramp_is_cleared_and_the_ramp_done_again(
             clock.stall_unseen(0.15)
         emulated.advance(dt)
 
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         config, port=url, port_handler_factory=EmulatedPortHandler, clock=clock, sleep=sleep
     )
     with backend:

@@ -11,7 +11,7 @@ import os
 
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelSettingsWarning
+from snakebot.backends.chain import ServoSettingsWarning
 from snakebot.cli.main import main
 from tests.pty_emulator import emulator
 
@@ -28,7 +28,7 @@ def test_twin_through_the_bus_travels_like_the_twin(capsys: pytest.CaptureFixtur
     assert main(["run", "--backend", "sim", *ARGS]) == 0
     direct = json.loads(capsys.readouterr().out)
     with emulator("--robot", "snake12", "--physics") as emu:
-        with pytest.warns(DynamixelSettingsWarning, match="config apply"):  # factory settings
+        with pytest.warns(ServoSettingsWarning, match="config apply"):  # factory settings
             assert main(["run", "--backend", "dynamixel", "--port", emu.port, *ARGS]) == 0
         over_bus = json.loads(capsys.readouterr().out)
         twin = emu.stop()[-1]  # the twin's summary, printed on exit

@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
@@ -64,7 +64,7 @@ def run(
     chain: EmulatedChain, url: str, gait: Gait, log_path: Path, on_cycle: CycleHook | None = None
 ) -> RunResult:
     robot = snake12()
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot,
         port=url,
         port_handler_factory=EmulatedPortHandler,
@@ -145,7 +145,7 @@ def test_a_failing_observer_alone_is_left_out_of_the_ramp_out(
         if record.cycle == 80:
             raise OSError("Foxglove client gone mad")
 
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot,
         port=url,
         port_handler_factory=EmulatedPortHandler,
@@ -201,7 +201,7 @@ def test_a_ramp_out_on_a_late_host_still_ends_on_the_rest_pose(
             emulated.advance(0.06)
 
     robot = snake12()
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot,
         port=url,
         port_handler_factory=EmulatedPortHandler,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from snakebot.backends.dynamixel.backend import DynamixelBackend
+from snakebot.backends.chain.backend import ServoChainBackend
 from snakebot.config import load_robot
 from snakebot.drive.observers import backend_readings
 from snakebot.emulation import make_chain_for_ids, registered
@@ -18,7 +18,7 @@ def test_an_ax_overload_shows_by_name_before_the_slow_check_stops_the_run() -> N
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             port_handler_factory=EmulatedPortHandler,

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel.bus import DynamixelBus
+from snakebot.backends.chain.bus import ServoBus
 from snakebot.config import load_robot
 from snakebot.telemetry import read_log
 from tests.conftest import edit_robot
@@ -38,7 +38,7 @@ IDS = range(1, 13)
 def registers(port: str, key: str) -> list[int]:
     """One register of every servo, read one by one with retries (a loaded machine answers
     late: the emulator runs the twin in real time beside the tests)."""
-    with DynamixelBus(port, 1_000_000, retries=10) as bus:
+    with ServoBus(port, 1_000_000, retries=10) as bus:
         return [bus.read(servo_id, key) for servo_id in IDS]
 
 

@@ -44,7 +44,7 @@ def moving_chain(n: int, *, acceleration: int = 0) -> EmulatedChain:
 def run_cycles(
     chain: EmulatedChain, cycles: int, between: Callable[[EmulatedChain], None] | None = None
 ) -> list[list[int]]:
-    """Sync Write of travelling-sine goals + Fast Sync Read, as DynamixelBackend cycles; returns
+    """Sync Write of travelling-sine goals + Fast Sync Read, as ServoChainBackend cycles; returns
     Present Position of every servo per cycle."""
     ids = [s.servo_id for s in chain.servos]
     with registered(chain, "cost") as url:

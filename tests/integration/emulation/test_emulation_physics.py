@@ -9,12 +9,12 @@ import dynamixel_sdk as dxl
 import numpy as np
 import pytest
 
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
 from snakebot.config.schema import GainRegisters
 from snakebot.emulation import EmulatedChain, registered
 from snakebot.emulation.physics import TwinMotion, make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.types import PDGains
 
 BAUD = 1_000_000

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import snakebot.rl
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
 from snakebot.control.metrics import RunMetrics
@@ -76,7 +76,7 @@ def test_a_goal_policy_on_the_bus_is_refused_naming_the_missing_pose_source(
         tmp_path / "goal", GOAL, [0, 0, 0, 0], 2 * 8 + 2 + 2, encoding="sinusoid"
     )
     robot = load_robot("snake8")
-    bus = DynamixelBackend(robot, port="/dev/null")  # never connected
+    bus = ServoChainBackend(robot, port="/dev/null")  # never connected
     with pytest.raises(ConfigError, match="no pose source"):
         policy_gait_for_backend(str(folder), robot, bus, (1.0, 0.0), 100.0)
 

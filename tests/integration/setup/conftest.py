@@ -15,7 +15,7 @@ from snakebot.cli.main import main
 from snakebot.emulation.bench import ServoBench, robot_servos
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.registry import registered
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 
 MODEL = "XL430-W250"
 ROBOT_BAUD = 1_000_000

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 from tests.integration.setup.conftest import ROBOT_BAUD, Bus, Cli
 
 MODEL = "XL430-W250"

@@ -8,12 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from snakebot.backends.dynamixel.backend import DynamixelBackend
-from snakebot.backends.dynamixel.faults import DynamixelSettingsWarning
+from snakebot.backends.chain.backend import ServoChainBackend
+from snakebot.backends.chain.faults import ServoSettingsWarning
 from snakebot.config import load_robot
 from snakebot.emulation.bench import scramble
 from snakebot.emulation.port import EmulatedPortHandler
-from snakebot.emulation.servo import HardwareError, VirtualServo
+from snakebot.emulation.virtual_servo import HardwareError, VirtualServo
 from snakebot.setup import Link, Step, apply, load_settings, plan_apply, survey
 from tests.conftest import edit_robot
 from tests.integration.setup.conftest import ROBOT_BAUD, Bus, Cli
@@ -31,9 +31,9 @@ SETTINGS_KEYS = (
 
 
 def connect_backend(bus: Bus) -> list[str]:
-    """Connect and close DynamixelBackend on the bus; the settings warnings it gave."""
+    """Connect and close ServoChainBackend on the bus; the settings warnings it gave."""
     chain = bus.chain
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         load_robot("snake12"),
         port=bus.url,
         baud=ROBOT_BAUD,
@@ -42,10 +42,10 @@ def connect_backend(bus: Bus) -> list[str]:
         sleep=chain.advance,
     )
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", DynamixelSettingsWarning)
+        warnings.simplefilter("always", ServoSettingsWarning)
         backend.connect()
         backend.close()
-    return [str(w.message) for w in caught if issubclass(w.category, DynamixelSettingsWarning)]
+    return [str(w.message) for w in caught if issubclass(w.category, ServoSettingsWarning)]
 
 
 def test_apply_on_a_scrambled_chain_leaves_diff_empty_and_run_accepts_it(

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config import load_robot
 from tests.conftest import SHIPPED_ROBOT_FILES, edit_robot
 from tests.integration.setup.conftest import Bus, Cli

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from snakebot.emulation.servo import HardwareError
+from snakebot.emulation.virtual_servo import HardwareError
 from tests.conftest import edit_robot
 from tests.integration.setup.conftest import Bus, Cli
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
+from snakebot.backends.chain import ServoChainBackend
 from snakebot.config import load_robot
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.errors import ConfigError
@@ -119,7 +119,7 @@ def test_every_port_opener_refuses_other_urls(listener: Listener, tmp_path: Path
     robot = load_robot("snake12")
     for url in (listener.url, f"spy:///dev/null?file={victim}"):
         with pytest.raises(ConfigError, match="is not a serial port"):
-            DynamixelBackend(robot, port=url, port_handler_factory=EmulatedPortHandler).connect()
+            ServoChainBackend(robot, port=url, port_handler_factory=EmulatedPortHandler).connect()
         with pytest.raises(ConfigError, match="is not a serial port"), Link(url, 1_000_000):
             pass
     assert listener.connections == []

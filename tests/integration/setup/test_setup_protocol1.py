@@ -19,7 +19,7 @@ from snakebot.config import load_robot
 from snakebot.emulation.bench import robot_servos
 from snakebot.emulation.chain import EmulatedChain
 from snakebot.emulation.registry import registered
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 from snakebot.servo_tables import table_for_model
 from tests.conftest import edit_robot
 from tests.integration.setup.conftest import ROBOT_BAUD, Bus, Cli

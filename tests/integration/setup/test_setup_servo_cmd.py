@@ -6,7 +6,7 @@ import json
 from dataclasses import replace
 
 from snakebot.emulation.bench import new_servo
-from snakebot.emulation.servo import HardwareError, VirtualServo
+from snakebot.emulation.virtual_servo import HardwareError, VirtualServo
 from tests.integration.setup.conftest import ROBOT_BAUD, Bus, Cli
 
 SNAKE12 = ("--robot", "snake12")  # real servos: no default robot

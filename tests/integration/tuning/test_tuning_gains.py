@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelSettingsWarning
-from snakebot.backends.dynamixel.backend import DynamixelBackend
+from snakebot.backends.chain import ServoSettingsWarning
+from snakebot.backends.chain.backend import ServoChainBackend
 from snakebot.backends.twin import TwinBackend
 from snakebot.cli.main import main
 from snakebot.config import load_robot
@@ -121,7 +121,7 @@ def test_search_over_the_emulated_bus_lowers_tracking_error() -> None:
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             baud=1_000_000,
@@ -149,7 +149,7 @@ def test_cli_tunes_gains_over_a_physics_emulator(
     argv = ["tune", "gains", "--robot", str(path), "--joints", "0", "--gait", "serpenoid"]
     argv += ["--gait-duration", "1", "--budget", "6", "--no-chirp", "--json"]
     with emulator("--robot", str(path), "--physics") as emu:
-        with pytest.warns(DynamixelSettingsWarning, match="config apply"):  # factory settings
+        with pytest.warns(ServoSettingsWarning, match="config apply"):  # factory settings
             code = main([*argv, "--backend", "dynamixel", "--port", emu.port])
         emu.stop()
     assert code == 0

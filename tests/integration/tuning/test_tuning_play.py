@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain import ServoChainBackend
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import load_robot
 from snakebot.control.cycle import CycleRecord
@@ -54,7 +54,7 @@ def test_a_step_table_reaches_the_servo_in_one_cycle_and_never_beyond_its_limit(
     def on_the_bus(record: CycleRecord) -> None:
         goals.append(servo.peek("goal_position"))
 
-    backend = DynamixelBackend(
+    backend = ServoChainBackend(
         robot,
         port=url,
         port_handler_factory=EmulatedPortHandler,

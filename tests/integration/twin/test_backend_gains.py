@@ -7,9 +7,9 @@ import pytest
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.model_builder import joint_name
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
 from snakebot.config.schema import GainRegisters
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.types import PDGains
 
 SOFT = load_robot("snake8").servo.gains_of(GainRegisters(position_p=100, position_d=500))

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from snakebot.backends.twin import GroundFriction, TwinBackend, build_model
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError, SimulationDivergedError
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.types import JointCommand
 from tests.integration.twin.robots import robot_with_joints, with_gains
 

@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from snakebot.backends.twin import TwinBackend
-from snakebot.backends.twin.servo_model import servo_dynamics
 from snakebot.config import RobotConfig, load_robot
 from snakebot.emulation import registered
 from snakebot.emulation.physics import make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
 from snakebot.errors import ConfigError, ServoFaultError
+from snakebot.servo.dynamics import servo_dynamics
 from snakebot.telemetry import read_log
 from snakebot.types import JointCommand
 
@@ -91,14 +91,14 @@ def test_a_robots_fitted_p_gain_divisor_changes_what_its_registers_mean(config_d
     assert twin_kp == pytest.approx(2 * stiffness(shipped))
     # The Dynamixel backend turns the SI gains back with the same mapping: the servos get the
     # robot file's registers, and the emulated twin behind them the same stiffness as the twin.
-    from snakebot.backends.dynamixel.backend import DynamixelBackend
+    from snakebot.backends.chain.backend import ServoChainBackend
 
     chain, motion = make_twin_chain(robot, 1_000_000)
     for servo in chain.servos:
         servo.poke("return_delay_time", 0)
     with (
         registered(chain) as url,
-        DynamixelBackend(
+        ServoChainBackend(
             robot,
             port=url,
             baud=1_000_000,

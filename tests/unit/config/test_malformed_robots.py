@@ -708,7 +708,7 @@ def test_docs_list_every_range_as_the_code_has_it() -> None:
 
 
 def test_docs_list_the_twin_servo_model_ranges() -> None:
-    from snakebot.config.servo_twin import BOUNDS
+    from snakebot.config.servos.twin import BOUNDS
 
     docs = (Path(__file__).resolve().parents[3] / "docs" / "config.md").read_text(encoding="utf-8")
     for key, limits in BOUNDS.items():

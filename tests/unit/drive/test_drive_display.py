@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from snakebot.drive.display import WIDTH, DriveDisplay, Frame, render
-from snakebot.drive.loop import DriveCycle
+from snakebot.drive.run import DriveCycle
 from snakebot.gaits.live import LiveGait
 from snakebot.types import JointState
 

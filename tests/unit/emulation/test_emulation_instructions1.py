@@ -10,7 +10,7 @@ from snakebot.emulation.protocol1 import (
     build_instruction,
     parse_packets,
 )
-from snakebot.emulation.servo import VirtualServo
+from snakebot.emulation.virtual_servo import VirtualServo
 
 BAUD = 1_000_000
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from snakebot.backends.dynamixel.checks import check_settings
-from snakebot.backends.dynamixel.ticks import TickConverter
+from snakebot.backends.chain.checks import check_settings
+from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.emulation.bench import ServoBench, new_servo, robot_servos, scramble
 from snakebot.emulation.chain import EmulatedChain

@@ -8,9 +8,9 @@ from __future__ import annotations
 import pytest
 import scservo_sdk as scs
 
+from snakebot.backends.chain.bus import ServoBus
+from snakebot.backends.chain.faults import SyncReadError
 from snakebot.backends.dynamixel import sdk
-from snakebot.backends.dynamixel.bus import DynamixelBus
-from snakebot.backends.dynamixel.faults import SyncReadError
 from snakebot.backends.feetech.sdk import FeetechLink
 from snakebot.emulation import EmulatedChain, make_chain_for_ids, registered
 from snakebot.emulation.port_feetech import EmulatedScsPortHandler
@@ -26,7 +26,7 @@ STATE = (
 )
 
 
-def settle(bus: DynamixelBus, chain: EmulatedChain, seconds: float) -> None:
+def settle(bus: ServoBus, chain: EmulatedChain, seconds: float) -> None:
     for _ in range(round(seconds / 0.01)):
         chain.advance(0.01)
 
@@ -35,7 +35,7 @@ def settle(bus: DynamixelBus, chain: EmulatedChain, seconds: float) -> None:
 def test_goals_out_and_state_back_match_the_servos(model: str) -> None:
     chain = make_chain_for_ids(model, IDS, 1_000_000)
     with registered(chain) as url:
-        bus = DynamixelBus(url, 1_000_000, model=model)
+        bus = ServoBus(url, 1_000_000, model=model)
         with bus:
             assert isinstance(bus._link, FeetechLink)
             assert bus.ping(1) == bus.table.model_number
@@ -70,7 +70,7 @@ def test_a_silent_servo_is_named_after_the_retries(model: str) -> None:
     chain = make_chain_for_ids(model, IDS, 1_000_000)
     chain.silence(7)
     with registered(chain) as url:
-        bus = DynamixelBus(url, 1_000_000, model=model)
+        bus = ServoBus(url, 1_000_000, model=model)
         with bus, pytest.raises(SyncReadError) as info:
             bus.sync_read(("present_position",), list(IDS))
     assert info.value.missing_ids == (7,)
@@ -98,7 +98,7 @@ def test_the_one_pass_sync_read_finds_what_the_sdk_search_finds() -> None:
         servo.poke("homing_offset", 40 * servo.servo_id - 200)
     chain.latch_hardware_error(5, 0x20)
     with registered(chain) as url:
-        bus = DynamixelBus(url, 1_000_000, model="STS3215")
+        bus = ServoBus(url, 1_000_000, model="STS3215")
         with bus:
             reader = bus._link.sync_reader(56, 15, IDS)
             assert reader.transact(False) == sdk.COMM_SUCCESS
@@ -117,7 +117,7 @@ def test_a_corrupt_reply_falls_back_to_the_sdk_search_and_keeps_the_others() -> 
     chain = make_chain_for_ids("STS3215", IDS, 1_000_000)
     chain.corrupt_replies(4, next_n=1)
     with registered(chain) as url:
-        bus = DynamixelBus(url, 1_000_000, model="STS3215")
+        bus = ServoBus(url, 1_000_000, model="STS3215")
         with bus:
             reader = bus._link.sync_reader(56, 15, IDS)
             result = reader.transact(False)

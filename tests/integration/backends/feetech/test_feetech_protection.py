@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import pytest
 
-from snakebot.backends.dynamixel import DynamixelBackend
-from snakebot.backends.dynamixel.faults import ServoSettingsError
+from snakebot.backends.chain import ServoChainBackend
+from snakebot.backends.chain.faults import ServoSettingsError
 from snakebot.config import load_robot
 from snakebot.emulation import make_chain_for_ids, registered
 from snakebot.emulation.port_feetech import EmulatedScsPortHandler
@@ -27,7 +27,7 @@ def test_connect_refuses_an_unload_condition_without_heat_and_overload(
         servo.poke("return_delay_time", 0)  # as `config apply` leaves them
     chain.servo(6).poke("shutdown", unload)
     with registered(chain) as url:
-        backend = DynamixelBackend(
+        backend = ServoChainBackend(
             robot,
             port=url,
             port_handler_factory=EmulatedScsPortHandler,
