@@ -104,6 +104,8 @@ class HealthMonitor:
         self._torque = np.zeros((_ROWS, joints))
         self._dt = np.zeros(_ROWS)
         self._rows = 0
+        self._data: mujoco.MjData | None = None
+        self._qvel = np.zeros(joints)
 
     def sample(self, data: mujoco.MjData, dt_s: float, force_nm: np.ndarray) -> None:
         """Account one control period ending now; raise PhysicsHealthError past a hard limit.
@@ -144,7 +146,10 @@ class HealthMonitor:
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down
             self._upside_down_cycles += 1
 
-        velocity = data.qvel[self._dof]
+        if data is not self._data:  # the joints' speeds as a view into this data, made once
+            self._data, self._qvel = data, data.qvel[self._dof]
+        # A fancy index (joints not at consecutive addresses) copies: read it every cycle.
+        velocity = self._qvel if isinstance(self._dof, slice) else data.qvel[self._dof]
         row = self._rows
         self._velocity[row] = velocity
         self._torque[row] = force_nm
