@@ -118,6 +118,7 @@ class TwinBackend(Backend):
             self._qvel_view = self.data.qvel[self._dof_at]
             self._damping_view = self.model.dof_damping[self._dof_at]
         self._force_view = self.data.actuator_force
+        self._ctrl_view = self.data.ctrl
         # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
         self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
         self._torque_mask = np.ones(self.joint_count, dtype=bool)
@@ -233,7 +234,7 @@ class TwinBackend(Backend):
         )
 
     def _send_command(self, position_rad: np.ndarray) -> None:
-        self.data.ctrl[:] = position_rad
+        self._ctrl_view[:] = position_rad
 
     def _set_gains(self, gains: PDGains) -> None:
         self._store_gains(slice(None), gains)
@@ -289,7 +290,7 @@ class TwinBackend(Backend):
 
     def send_command_unchecked(self, position_rad: np.ndarray) -> None:
         """Set goals (rad, (N,)) without the shape check: the emulator bridge's hot path."""
-        self.data.ctrl[:] = position_rad
+        self._ctrl_view[:] = position_rad
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)

@@ -106,6 +106,7 @@ class HealthMonitor:
         self._rows = 0
         self._data: mujoco.MjData | None = None
         self._qvel = np.zeros(joints)
+        self._head_quat = np.zeros(4)
 
     def sample(self, data: mujoco.MjData, dt_s: float, force_nm: np.ndarray) -> None:
         """Account one control period ending now; raise PhysicsHealthError past a hard limit.
@@ -113,6 +114,9 @@ class HealthMonitor:
         ``force_nm`` (N,) is each servo's output torque.
         """
         limits = self.limits
+        if data is not self._data:  # views into this data (speeds, head orientation), made once
+            self._data, self._qvel = data, data.qvel[self._dof]
+            self._head_quat = data.xquat[self._head]
         self.cycles += 1
         self.time_s += dt_s
         ncon = data.ncon
@@ -142,12 +146,10 @@ class HealthMonitor:
             > limits.contact_tolerance_m
         ):
             self._airborne_cycles += 1
-        _, x, y, _ = data.xquat[self._head].tolist()
+        _, x, y, _ = self._head_quat.tolist()
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down
             self._upside_down_cycles += 1
 
-        if data is not self._data:  # the joints' speeds as a view into this data, made once
-            self._data, self._qvel = data, data.qvel[self._dof]
         # A fancy index (joints not at consecutive addresses) copies: read it every cycle.
         velocity = self._qvel if isinstance(self._dof, slice) else data.qvel[self._dof]
         row = self._rows
