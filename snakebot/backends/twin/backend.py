@@ -107,6 +107,18 @@ class TwinBackend(Backend):
         self._dof_index = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
         self._qpos_at, self._dof_at = as_slice(self._qpos_index), as_slice(self._dof_index)
         self._head_id = self.model.body(link_name(0)).id
+        # Views into the model and data read every cycle, made once (MjData's buffers live as
+        # long as it does; an attribute access builds a new array each time); a joint index
+        # that is not a run of addresses stays a fancy index, a copy at every read.
+        self._com_view = self.data.subtree_com[self._head_id]
+        self._quat_view = self.data.xquat[self._head_id]
+        self._views = isinstance(self._qpos_at, slice) and isinstance(self._dof_at, slice)
+        if self._views:
+            self._qpos_view = self.data.qpos[self._qpos_at]
+            self._qvel_view = self.data.qvel[self._dof_at]
+            self._damping_view = self.model.dof_damping[self._dof_at]
+        self._force_view = self.data.actuator_force
+        self._ctrl_view = self.data.ctrl
         # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
         self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
         self._torque_mask = np.ones(self.joint_count, dtype=bool)
@@ -194,6 +206,8 @@ class TwinBackend(Backend):
     # -- the cycle ---------------------------------------------------------------------------
     def _servo_torque(self) -> np.ndarray:
         """Each servo's output torque (N,), N·m: the drive less its back-EMF and gear damping."""
+        if self._views:
+            return servo_torque_nm(self._force_view, self._damping_view, self._qvel_view)
         dof = self._dof_at
         return servo_torque_nm(
             self.data.actuator_force, self.model.dof_damping[dof], self.data.qvel[dof]
@@ -201,14 +215,15 @@ class TwinBackend(Backend):
 
     def _read_state(self) -> JointState:
         data = self.data
-        velocity = data.qvel[self._dof_at].copy()
+        views = self._views
+        velocity = (self._qvel_view if views else data.qvel[self._dof_at]).copy()
         # The torque the physics check took at the end of the last advance, if nothing has
         # stepped or changed the gains since (computing it once a cycle, not twice).
         effort = self._torque_now
         self._torque_now = None  # handed over once: no two states share one array
         if effort is None or self._torque_time_s != data.time:
             effort = self._servo_torque()
-        position = data.qpos[self._qpos_at].copy()
+        position = (self._qpos_view if views else data.qpos[self._qpos_at]).copy()
         if self._sensors.alters_positions:
             position = self._sensors.encoder_rad(position)
         return JointState(
@@ -219,7 +234,7 @@ class TwinBackend(Backend):
         )
 
     def _send_command(self, position_rad: np.ndarray) -> None:
-        self.data.ctrl[:] = position_rad
+        self._ctrl_view[:] = position_rad
 
     def _set_gains(self, gains: PDGains) -> None:
         self._store_gains(slice(None), gains)
@@ -275,7 +290,7 @@ class TwinBackend(Backend):
 
     def send_command_unchecked(self, position_rad: np.ndarray) -> None:
         """Set goals (rad, (N,)) without the shape check: the emulator bridge's hot path."""
-        self.data.ctrl[:] = position_rad
+        self._ctrl_view[:] = position_rad
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
@@ -365,7 +380,7 @@ class TwinBackend(Backend):
         """Centre of mass of the whole snake and the head's orientation."""
         self._require_connected()
         return BodyState(
-            com_m=self.data.subtree_com[self._head_id].copy(),
-            head_quat=self.data.xquat[self._head_id].copy(),
+            com_m=self._com_view.copy(),
+            head_quat=self._quat_view.copy(),
             head_gyro_rad_s=self._sensors.gyro_rad_s(self.data),
         )

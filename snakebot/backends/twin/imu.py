@@ -32,6 +32,9 @@ class TwinSensors:
         self._tick_rad = rad_per_tick if extras.quantise_encoder else 0.0
         self._rng = np.random.default_rng(seed)
         self._velocity = np.zeros(6)
+        self._angular = self._velocity[:3]
+        self._data: mujoco.MjData | None = None
+        self._head_frame = np.zeros((3, 3))
 
     @property
     def alters_positions(self) -> bool:
@@ -44,10 +47,12 @@ class TwinSensors:
         Taken in the world frame and turned into the head body's frame (``xmat``): MuJoCo's
         local frame for a body is its inertial frame, whose axes a capsule's principal axes
         order differently (the head's yaw came out on the inertial x axis)."""
+        if data is not self._data:  # the head's frame as a view into this data, made once
+            self._data, self._head_frame = data, data.xmat[self._head].reshape(3, 3)
         mujoco.mj_objectVelocity(
             self._model, data, mujoco.mjtObj.mjOBJ_BODY, self._head, self._velocity, 0
         )
-        rate: np.ndarray = self._velocity[:3] @ data.xmat[self._head].reshape(3, 3)
+        rate: np.ndarray = self._angular @ self._head_frame
         if self._gyro_noise:
             rate += self._rng.normal(0.0, self._gyro_noise, 3)
         return rate
