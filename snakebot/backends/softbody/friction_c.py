@@ -24,6 +24,8 @@ from snakebot.backends.twin.friction.scale_c import (
     libmujoco,
 )
 
+__all__ = ["C_SOURCE", "CompileError", "CompiledStepper", "load"]
+
 C_SOURCE = r"""
 #include <math.h>
 #include <stdint.h>
