@@ -11,13 +11,16 @@ times velocity is the muscles' power.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
+from typing import Literal
 
 import mujoco
 import numpy as np
 
 from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
+from snakebot.backends.softbody import friction_c
 from snakebot.backends.softbody.friction import DirectionalFriction
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
@@ -44,7 +47,10 @@ class SoftBodyBackend(Backend):
 
     Options: ``friction`` (floor coefficient, overrides ``ground.friction``), ``directional``
     (Miller's rule on or off, overrides ``ground.directional``), ``terrain`` (a Cliff, or None
-    for the flat floor) and ``realtime``. Control periods must be whole numbers of timesteps.
+    for the flat floor), ``realtime`` and ``implementation``: "c" steps the physics and the rule
+    in compiled C (friction_c; numpy with a warning where nothing compiles), "numpy" keeps the
+    Python loop with the numpy rule (the reference; both agree bit for bit). Control periods
+    must be whole numbers of timesteps.
 
     A mass-spring muscle has no position loop: its stiffness and damping are the body file's
     springs, so ``set_gains`` records the gains and changes nothing. Torque off relaxes every
@@ -59,6 +65,7 @@ class SoftBodyBackend(Backend):
         directional: bool | None = None,
         terrain: Cliff | None = None,
         realtime: bool = False,
+        implementation: Literal["c", "numpy"] = "c",
     ) -> None:
         super().__init__()
         self.robot = body  # the config under the name the other backends use
@@ -70,6 +77,7 @@ class SoftBodyBackend(Backend):
         self.terrain = terrain
         self.gains: PDGains | None = None
         self._realtime = realtime
+        self.implementation = implementation
         self._pacer: Pacer | None = None
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
         self._command = np.zeros(self.joint_count)
@@ -91,6 +99,19 @@ class SoftBodyBackend(Backend):
             built.point_geoms, self.model.ngeom, built.start_positions
         )
         self.friction_rule.enabled = self.directional
+        self._stepper: friction_c.CompiledStepper | None = None
+        if self.implementation == "c":
+            try:
+                self._stepper = friction_c.CompiledStepper(
+                    self.model, self.data, self.friction_rule
+                )
+            except friction_c.CompileError as exc:
+                warnings.warn(
+                    f"the soft body steps in Python, about half as fast as C: {exc}",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                self.implementation = "numpy"
         # Views into MjData: point displacements and world velocities, (P, 3) each.
         self._displacement = self.data.qpos.reshape(-1, 3)
         self._velocity = self.data.qvel.reshape(-1, 3)
@@ -192,6 +213,12 @@ class SoftBodyBackend(Backend):
         self._step_check.start()
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
+        if self._stepper is not None:
+            self._stepper.advance(steps)
+            self._previous = self.start_positions + self._stepper.previous
+            self._previous_time = self._stepper.previous_time_s
+            self._finish_advance(steps, dt_s)
+            return
         for step in range(steps):
             if step == steps - 1:
                 self._previous = self.positions()
@@ -199,6 +226,9 @@ class SoftBodyBackend(Backend):
             mujoco.mj_step(model, data)
             if rule.enabled and data.ncon:
                 rule.apply(displacement, velocity, data.contact.geom)
+        self._finish_advance(steps, dt_s)
+
+    def _finish_advance(self, steps: int, dt_s: float) -> None:
         self._step_check.finish(steps)
         self._track()
         if self._pacer is not None:

@@ -170,6 +170,11 @@ def _mujoco_dir() -> Path:
     return Path(mujoco.__file__).resolve().parent
 
 
+def libmujoco() -> Path:
+    """The libmujoco shared library the Python bindings load (the callback links the same)."""
+    return _libmujoco()
+
+
 def _libmujoco() -> Path:
     found = sorted(_mujoco_dir().glob("libmujoco.so*")) + sorted(
         _mujoco_dir().glob("libmujoco*.dylib")
@@ -185,8 +190,9 @@ def object_path() -> Path:
     return cache_dir() / f"scale_friction_{key[:16]}.so"
 
 
-def compile_object(target: Path) -> Path:
-    """Compile the source into ``target`` with the first of $CC, cc, gcc, clang on PATH.
+def compile_object(target: Path, source_text: str = C_SOURCE) -> Path:
+    """Compile ``source_text`` (this module's source unless given) into ``target`` with the
+    first of $CC, cc, gcc, clang on PATH.
 
     CompileError if there is no compiler or it fails (its output in the message).
     """
@@ -199,7 +205,7 @@ def compile_object(target: Path) -> Path:
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as scratch:
         source = Path(scratch) / "scale_friction.c"
-        source.write_text(C_SOURCE)
+        source.write_text(source_text)
         built = Path(scratch) / target.name
         command = [
             compiler, "-O2", "-shared", "-fPIC", "-std=c99",
