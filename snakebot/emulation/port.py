@@ -14,13 +14,13 @@ from dynamixel_sdk import PortHandler
 
 from snakebot.emulation.registry import install_url_handler
 
+_SdkPortHandler: Any = object  # an SDK's PortHandler comes after the mixin in the MRO
 
-class EmulatedPortHandler(PortHandler):  # type: ignore[misc]
-    """A `dynamixel_sdk.PortHandler` whose port name is a pyserial URL.
 
-    Any positive baud rate is accepted (the stock handler rejects 4.5 Mbps, which X-series and
-    the emulator support). Timeouts use the port's `clock_ms()` when it has one.
-    """
+class UrlPortHandler(_SdkPortHandler):  # type: ignore[misc]
+    """What both vendors' emulated port handlers add to their SDK's PortHandler (mixed in before
+    it): the port name is a pyserial URL, any positive baud rate is accepted, and timeouts use the
+    port's `clock_ms()` when it has one."""
 
     is_open: bool
     ser: Any
@@ -51,3 +51,11 @@ class EmulatedPortHandler(PortHandler):  # type: ignore[misc]
         if callable(clock) and self.is_open:
             return float(clock())
         return float(super().getCurrentTime())
+
+
+class EmulatedPortHandler(UrlPortHandler, PortHandler):  # type: ignore[misc]
+    """A `dynamixel_sdk.PortHandler` whose port name is a pyserial URL.
+
+    Any positive baud rate is accepted (the stock handler rejects 4.5 Mbps, which X-series and
+    the emulator support). Timeouts use the port's `clock_ms()` when it has one.
+    """
