@@ -47,14 +47,23 @@ if TYPE_CHECKING:
 FloatArray = npt.NDArray[np.float64]
 SlipModel = Literal["auto", "static", "no_lateral_slip"]
 SLIP_MODELS: tuple[str, ...] = ("auto", "static", "no_lateral_slip")
+LevelBy = Literal["shape", "gravity"]
+CLEAR_RATIO = 0.6
+"""The smaller cross extent of the chassis must be under this fraction of the larger for its
+axis to be taken as the ground's normal; closer than that the last normal is kept."""
 
 
 @dataclass(frozen=True)
 class OdometryConfig:
     """How the odometry weighs what it sees (see the module doc).
 
-    ``slip``: auto, static or no_lateral_slip. ``contact_height_m``: the height above the
-    lowest module at which a module's contact weight has fallen to exp(-1/2). ``axial_weight``:
+    ``slip``: auto, static or no_lateral_slip. ``contact_modules``: the modules that count as
+    touching the ground are the ``contact_modules`` lowest and any within ``contact_height_m``
+    of the highest of those (all of them, for a body lying flat); they give the translation.
+    The turn is fitted on a wider base: every module weighed by a Gaussian of its height above
+    the lowest (``turn_height_m``). ``level_by``: the ground's
+    normal from the body's shape (the chassis axis of least extent; the head's z for a chain
+    that bends in yaw only), or from the IMU's gravity where there is one. ``axial_weight``:
     with no_lateral_slip, the weight of a module's along-axis motion against its sideways motion
     (0 < w <= 1). ``use_imu``: read the head IMU when the cycle record has one.
     ``gyro_noise_rad_s``: the gyro's noise (standard deviation per reading) the fusion assumes.
@@ -63,7 +72,10 @@ class OdometryConfig:
     """
 
     slip: SlipModel = "auto"
-    contact_height_m: float = 0.008
+    contact_modules: int = 3
+    contact_height_m: float = 0.001
+    turn_height_m: float = 0.008
+    level_by: LevelBy = "shape"
     axial_weight: float = 0.02
     use_imu: bool = True
     gyro_noise_rad_s: float = 0.005
@@ -72,8 +84,14 @@ class OdometryConfig:
     def __post_init__(self) -> None:
         if self.slip not in SLIP_MODELS:
             raise ValueError(f"slip must be one of {', '.join(SLIP_MODELS)}, got {self.slip!r}")
-        if not (self.contact_height_m > 0 and math.isfinite(self.contact_height_m)):
-            raise ValueError(f"contact_height_m must be > 0, got {self.contact_height_m}")
+        if not (self.contact_height_m >= 0 and math.isfinite(self.contact_height_m)):
+            raise ValueError(f"contact_height_m must be >= 0, got {self.contact_height_m}")
+        if not (self.turn_height_m > 0 and math.isfinite(self.turn_height_m)):
+            raise ValueError(f"turn_height_m must be > 0, got {self.turn_height_m}")
+        if self.contact_modules < 2:
+            raise ValueError(f"contact_modules must be >= 2, got {self.contact_modules}")
+        if self.level_by not in ("shape", "gravity"):
+            raise ValueError(f"level_by must be shape or gravity, got {self.level_by!r}")
         if not (0 < self.axial_weight <= 1):
             raise ValueError(f"axial_weight must be in (0, 1], got {self.axial_weight}")
         if not (self.gyro_noise_rad_s > 0 and math.isfinite(self.gyro_noise_rad_s)):
@@ -107,6 +125,8 @@ class _Levelled:
     head_heading_rad: float
     head_to_level: FloatArray
     up_head: FloatArray
+    """Up (3,) in the head's frame as the gyro's heading rate takes it (the IMU's gravity
+    where there is one, else the ground normal of the levelling)."""
 
 
 class ChassisOdometry:
@@ -183,12 +203,13 @@ class ChassisOdometry:
             y = -(s * head_in_level[0] + c * head_in_level[1])
             pose = PlanarPose(float(time_s), x, y, yaw, 0.0)
         else:
-            dx, dy, dyaw, variance = self._motion(self._last, level)
+            dyaw, variance = self._turn(self._last, level)
             gyro_step = self._gyro_yaw_step(level, gyro_rad_s, float(time_s) - pose.time_s)
             if gyro_step is not None:
                 gyro_variance = (self.config.gyro_noise_rad_s * (float(time_s) - pose.time_s)) ** 2
                 gyro_weight = variance / (variance + gyro_variance)
                 dyaw = gyro_weight * gyro_step + (1.0 - gyro_weight) * dyaw
+            dx, dy = self._translation(self._last, level, dyaw)
             c, s = math.cos(pose.yaw_rad), math.sin(pose.yaw_rad)
             step_x, step_y = c * dx - s * dy, s * dx + c * dy
             pose = PlanarPose(
@@ -216,16 +237,13 @@ class ChassisOdometry:
     ) -> _Levelled:
         """The chassis laid into the ground plane: where "up" is, then the modules in it."""
         rotation = frame.rotation
-        if up_in_head is not None:
+        if up_in_head is not None and self.config.level_by == "gravity":
             up_head = np.asarray(up_in_head, dtype=float)
             up_head = up_head / np.linalg.norm(up_head)
-        elif self.geometry.planar:
-            up_head = np.array([0.0, 0.0, 1.0])
         else:
-            # The chassis axis of least extent, on the side of the last up.
-            axis = rotation[:, 1] if frame.extent_m[1] < frame.extent_m[2] else rotation[:, 2]
-            up_head = axis if axis @ self._up_head >= 0 else -axis
+            up_head = self._shape_up(frame)
         self._up_head = up_head
+        gyro_up = up_head if up_in_head is None else np.asarray(up_in_head, dtype=float)
         forward = rotation[:, 0] - (rotation[:, 0] @ up_head) * up_head
         norm = float(np.linalg.norm(forward))
         if norm < 1e-6:  # the body stands on end: keep the chassis's y in the plane instead
@@ -245,8 +263,24 @@ class ChassisOdometry:
             tangent=tangent,
             head_heading_rad=math.atan2(float(head_x[1]), float(head_x[0])),
             head_to_level=head_to_level,
-            up_head=up_head,
+            up_head=gyro_up / np.linalg.norm(gyro_up),
         )
+
+    def _shape_up(self, frame: ChassisFrame) -> FloatArray:
+        """The ground's normal (3,) in the head's frame from the body's shape: the head's z for
+        a chain that bends in yaw only; else the chassis axis of clearly least extent (y or z),
+        on the side of the last normal. A body with no clear least extent (straight, or round
+        in section) keeps the last normal (the head's z at the start)."""
+        last = self._up_head
+        if self.geometry.planar:
+            return np.array([0.0, 0.0, 1.0])
+        extent, rotation = frame.extent_m, frame.rotation
+        small, large = sorted((float(extent[1]), float(extent[2])))
+        if large <= 0 or small >= CLEAR_RATIO * large:
+            return last
+        axis = rotation[:, 1] if extent[1] < extent[2] else rotation[:, 2]
+        up: FloatArray = axis if axis @ last >= 0 else -axis
+        return up
 
     @staticmethod
     def chassis_points(frame: ChassisFrame) -> FloatArray:
@@ -255,46 +289,65 @@ class ChassisOdometry:
         return points
 
     def _weights(self, level: _Levelled) -> FloatArray:
-        height = level.height_m - level.height_m.min()
-        weights: FloatArray = np.exp(-0.5 * (height / self.config.contact_height_m) ** 2)
+        """1 for the modules taken to touch the ground, 0 for the others."""
+        height = level.height_m
+        count = min(self.config.contact_modules, height.size)
+        reference = np.partition(height, count - 1)[count - 1]
+        weights: FloatArray = (height <= reference + self.config.contact_height_m).astype(float)
         return weights
 
-    def _motion(self, last: _Levelled, now: _Levelled) -> tuple[float, float, float, float]:
-        """The planar motion (dx, dy, dyaw) of the levelled chassis since ``last``, in the last
-        chassis's axes, and the fit's variance of dyaw (rad²)."""
-        weights = np.sqrt(self._weights(last) * self._weights(now))
-        tangent = now.tangent
+    def _metric(self, level: _Levelled, weights: FloatArray) -> FloatArray:
+        """Per module the weighted 2x2 metric of its planar residual (M, 2, 2): isotropic for
+        static contacts; along its axis ``axial_weight`` of across it with no lateral slip."""
+        tangent = level.tangent
         if self.slip == "no_lateral_slip":
             normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
-            along = self.config.axial_weight
-            # W_i = along * t t^T + n n^T per module
-            metric = along * tangent[:, :, None] * tangent[:, None, :]
-            metric += normal[:, :, None] * normal[:, None, :]
+            metric = self.config.axial_weight * tangent[:, :, None] * tangent[:, None, :]
+            metric = metric + normal[:, :, None] * normal[:, None, :]
         else:
             metric = np.broadcast_to(np.eye(2), (tangent.shape[0], 2, 2))
-        metric = metric * weights[:, None, None]
+        out: FloatArray = metric * weights[:, None, None]
+        return out
+
+    def _turn(self, last: _Levelled, now: _Levelled) -> tuple[float, float]:
+        """The levelled chassis's yaw change since ``last`` (rad) and its variance (rad²): the
+        rigid planar motion that best keeps the low modules where they were (weights: a
+        Gaussian of the height above the lowest), by Gauss-Newton from no motion, twice."""
+        scale = self.config.turn_height_m
+        weights = np.exp(-0.5 * ((last.height_m - last.height_m.min()) / scale) ** 2)
+        weights *= np.exp(-0.5 * ((now.height_m - now.height_m.min()) / scale) ** 2)
+        metric = self._metric(now, np.sqrt(weights))
         points, target = now.planar_m, last.planar_m
-        dx = dy = dyaw = 0.0
+        motion = np.zeros(3)  # dx, dy, dyaw
         normal_matrix = np.eye(3)
         residual = np.zeros_like(points)
-        for _ in range(2):  # a Gauss-Newton step, then one more at the turned points
-            c, s = math.cos(dyaw), math.sin(dyaw)
-            turned = points @ np.array([[c, s], [-s, c]])
-            residual = turned + np.array([dx, dy]) - target  # (M, 2)
+        for _ in range(2):
+            turned = points @ _rotation_2d(float(motion[2])).T
+            residual = turned + motion[:2] - target  # (M, 2)
             # d residual / d(dx, dy, dyaw): [I, J p] with J p = (-p_y, p_x)
             jac = np.zeros((points.shape[0], 2, 3))
             jac[:, 0, 0] = jac[:, 1, 1] = 1.0
             jac[:, 0, 2], jac[:, 1, 2] = -turned[:, 1], turned[:, 0]
             weighted_jac = metric @ jac  # (M, 2, 3)
-            normal_matrix = np.einsum("mij,mik->jk", jac, weighted_jac)
+            normal_matrix = np.einsum("mij,mik->jk", jac, weighted_jac) + 1e-9 * np.eye(3)
             gradient = np.einsum("mij,mi->j", weighted_jac, residual)
-            normal_matrix += 1e-9 * np.eye(3)
-            step = np.linalg.solve(normal_matrix, -gradient)
-            dx, dy, dyaw = dx + step[0], dy + step[1], dyaw + step[2]
+            motion = motion + np.linalg.solve(normal_matrix, -gradient)
         cost = float(np.einsum("mi,mij,mj->", residual, metric, residual))
-        dof = max(float(weights.sum()) * 2.0 - 3.0, 1.0)
+        dof = max(float(np.sqrt(weights).sum()) * 2.0 - 3.0, 1.0)
         variance = cost / dof * float(np.linalg.inv(normal_matrix)[2, 2])
-        return dx, dy, dyaw, max(variance, 1e-12)
+        return float(motion[2]), max(variance, 1e-12)
+
+    def _translation(self, last: _Levelled, now: _Levelled, dyaw: float) -> tuple[float, float]:
+        """The shift (dx, dy) m that, after turning by ``dyaw``, best keeps the modules that
+        touch the ground in both cycles where they were (weighted least squares)."""
+        weights = self._weights(last) * self._weights(now)
+        if not weights.any():
+            weights = self._weights(now)
+        metric = self._metric(now, weights)
+        gap = last.planar_m - now.planar_m @ _rotation_2d(dyaw).T  # (M, 2)
+        total = metric.sum(axis=0) + 1e-12 * np.eye(2)
+        shift = np.linalg.solve(total, np.einsum("mij,mj->i", metric, gap))
+        return float(shift[0]), float(shift[1])
 
     def _gyro_yaw_step(
         self, now: _Levelled, gyro_rad_s: npt.ArrayLike | None, dt_s: float
@@ -317,6 +370,11 @@ class ChassisOdometry:
         height = float(-level.height_m.min()) + self.config.radius_m
         com = np.array([pose.x_m, pose.y_m, height])
         return BodyState(com_m=com, head_quat=rotation_to_quat(head_rotation))
+
+
+def _rotation_2d(angle_rad: float) -> FloatArray:
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([[c, -s], [s, c]])
 
 
 def heading_rate(gyro_rad_s: FloatArray, up_in_head: FloatArray) -> float:
