@@ -33,7 +33,11 @@ import numpy.typing as npt
 FloatArray = npt.NDArray[np.float64]
 
 DEGENERATE_RATIO = 1e-6
-"""An extent below this fraction of the body's length along x counts as none (FK noise)."""
+"""An extent below this fraction of the body's extent along x counts as none (float noise)."""
+
+MIN_EXTENT_M = 0.002
+"""A cross extent (RMS) below this counts as none: encoder noise alone bends a straight
+12-module chain by about 1 mm, which would set the axes at random."""
 
 
 @dataclass(frozen=True)
@@ -62,10 +66,14 @@ class VirtualChassis:
 
     ``update(positions)`` takes the module centres (M, 3) in the head's frame (FK of the
     measured joints: ``ChainGeometry.module_centres``) and returns that cycle's ``ChassisFrame``;
-    ``reset`` forgets the history (the next frame starts from the head's axes).
+    ``reset`` forgets the history (the next frame starts from the head's axes). A cross extent
+    under ``min_extent_m`` (RMS, m) counts as none (a straight body, to the encoders' noise).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, min_extent_m: float = MIN_EXTENT_M) -> None:
+        if not (min_extent_m >= 0 and np.isfinite(min_extent_m)):
+            raise ValueError(f"min_extent_m must be >= 0, got {min_extent_m}")
+        self.min_extent_m = float(min_extent_m)
         self._last: ChassisFrame | None = None
 
     @property
@@ -95,7 +103,10 @@ class VirtualChassis:
         x = axes[0]
         if x @ (points[0] - points[-1]) < 0:
             x = -x
-        floor = DEGENERATE_RATIO * max(float(singular[0]), 1e-12)
+        floor = max(
+            DEGENERATE_RATIO * max(float(singular[0]), 1e-12),
+            self.min_extent_m * np.sqrt(points.shape[0]),
+        )
         y, z = self._cross_axes(centred, x, axes[1], axes[2], singular, floor)
         rotation = np.column_stack([x, y, z])
         frame = ChassisFrame(
