@@ -36,12 +36,20 @@ def steered_gait(
             f"--to steers {', '.join(STEERABLE_GAITS)} (travel along the body, a yaw offset "
             f"turns it); not {gait_name}"
         )
-    odometry = ChassisOdometry(
-        ChainGeometry.of_robot(robot), OdometryConfig(radius_m=robot.link.radius_m)
-    )
+    odometry = odometry_for(robot)
     yaw_mask = [joint.axis == "yaw" for joint in robot.joints]
     steering = GoToPoint(gait, odometry, parse_point(point), yaw_mask)
     return f"{gait_name}:to", steering, steering
+
+
+def odometry_for(robot: RobotConfig | BodyConfig) -> ChassisOdometry:
+    """The odometry of ``robot``'s chain with the default settings (docs/estimation.md);
+    UsageError for a mass-spring body (no joints to measure)."""
+    if isinstance(robot, BodyConfig):
+        raise UsageError(f"the odometry reads servo joints; {robot.name} is a body file")
+    return ChassisOdometry(
+        ChainGeometry.of_robot(robot), OdometryConfig(radius_m=robot.link.radius_m)
+    )
 
 
 def steering_summary(steering: GoToPoint) -> dict[str, object]:

@@ -31,10 +31,11 @@ from snakebot.cli.common import (
     report_dry_run,
     robot_name,
 )
-from snakebot.cli.goto_options import steered_gait, steering_summary
+from snakebot.cli.goto_options import odometry_for, steered_gait, steering_summary
 from snakebot.cli.telemetry_options import add_telemetry_options, check_outputs, open_telemetry
 from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, terrain_help
 from snakebot.errors import ConfigError, OutputError, UsageError
+from snakebot.estimation import ChassisOdometry
 from snakebot.estimation.goto import STEERABLE_GAITS, GoToPoint
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
@@ -102,6 +103,12 @@ def add_parser(subparsers: Any) -> None:
         help="go to a point X,Y m from the snake (X ahead, Y left) and stop there, steering "
         "the gait by the odometry of the measured joints (docs/estimation.md); "
         f"gaits {', '.join(STEERABLE_GAITS)}",
+    )
+    parser.add_argument(
+        "--odometry",
+        action="store_true",
+        help="with a goal --policy: its pose from the odometry of the measured joints and the "
+        "head IMU (docs/estimation.md), so it runs on the servos with no motion capture",
     )
     add_backend_argument(parser)
     parser.add_argument(
@@ -184,10 +191,12 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--command goes with --policy (a trained policy's command)")
     if args.to is not None and args.policy is not None:
         raise UsageError("--to steers a gait; a --policy steers itself (drop one)")
+    if args.odometry and args.policy is None:
+        raise UsageError("--odometry is a goal --policy's pose source (--to has its own)")
     if args.duration is None:
         args.duration = TO_DURATION_S if args.to is not None else DEFAULT_DURATION_S
     snake, spec = prepare(args, BACKEND_OPTIONS)
-    observers: list[Any] = []
+    observers: list[ChassisOdometry] = []
     steering: GoToPoint | None = None
     if args.policy is None:
         gait_name, gait = build_gait(snake.robot, args)
@@ -197,7 +206,9 @@ def run(args: argparse.Namespace) -> int:
     else:  # a closed-loop gait: it reads the backend it drives
         from snakebot.cli.policy_options import policy_gait
 
-        gait_name, gait = policy_gait(snake.robot, snake.backend, args)
+        odometry = odometry_for(snake.robot) if args.odometry else None
+        gait_name, gait = policy_gait(snake.robot, snake.backend, args, pose=odometry)
+        observers.extend([] if odometry is None else [odometry])
     if (args.video or args.viewer) and spec.hardware:
         raise ConfigError(
             "--video" if args.video else "--viewer",
@@ -250,6 +261,8 @@ def run(args: argparse.Namespace) -> int:
         log = telemetry.log
         with flag_errors():
             stack.enter_context(snake)
+        for estimator in observers:  # a pose before the first cycle's gait asks for one
+            estimator.start(snake.read_state())
         hooks = _cycle_hooks(stack, snake.backend, args)
         summary = snake.run(
             gait,

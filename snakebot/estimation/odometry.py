@@ -39,7 +39,7 @@ import numpy.typing as npt
 
 from snakebot.estimation.chassis import ChassisFrame, VirtualChassis
 from snakebot.estimation.kinematics import ChainGeometry
-from snakebot.types import BodyState
+from snakebot.types import BodyState, JointState
 
 if TYPE_CHECKING:
     from snakebot.control.cycle import CycleRecord
@@ -167,6 +167,11 @@ class ChassisOdometry:
     def pose(self) -> PlanarPose | None:
         """The latest planar pose, or None before the first update."""
         return self._pose
+
+    def start(self, state: JointState) -> PlanarPose:
+        """Start the estimate at a joint state read before the first cycle (so a pose exists
+        when the first cycle's gait asks for it); no IMU."""
+        return self.update(state.time_s, state.position_rad)
 
     def __call__(self, record: CycleRecord) -> None:
         """Observe one cycle: its measured joints, and of ``record.body`` the head IMU only."""
