@@ -242,13 +242,15 @@ class ChassisOdometry:
     ) -> _Levelled:
         """The chassis laid into the ground plane: where "up" is, then the modules in it."""
         rotation = frame.rotation
-        if up_in_head is not None and self.config.level_by == "gravity":
-            up_head = np.asarray(up_in_head, dtype=float)
-            up_head = up_head / np.linalg.norm(up_head)
+        gravity = None if up_in_head is None else np.asarray(up_in_head, dtype=float)
+        if gravity is not None and self.config.level_by == "gravity":
+            up_head = gravity / np.linalg.norm(gravity)
         else:
             up_head = self._shape_up(frame)
+            if gravity is not None and up_head @ gravity < 0:  # the IMU knows which side is up
+                up_head = -up_head
         self._up_head = up_head
-        gyro_up = up_head if up_in_head is None else np.asarray(up_in_head, dtype=float)
+        gyro_up = up_head if gravity is None else gravity
         forward = rotation[:, 0] - (rotation[:, 0] @ up_head) * up_head
         norm = float(np.linalg.norm(forward))
         if norm < 1e-6:  # the body stands on end: keep the chassis's y in the plane instead
@@ -281,7 +283,7 @@ class ChassisOdometry:
             return np.array([0.0, 0.0, 1.0])
         extent, rotation = frame.extent_m, frame.rotation
         small, large = sorted((float(extent[1]), float(extent[2])))
-        if large <= 0 or small >= CLEAR_RATIO * large:
+        if large <= self.chassis.min_extent_m or small >= CLEAR_RATIO * large:
             return last
         axis = rotation[:, 1] if extent[1] < extent[2] else rotation[:, 2]
         up: FloatArray = axis if axis @ last >= 0 else -axis
