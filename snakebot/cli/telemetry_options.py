@@ -222,6 +222,7 @@ def _open_ros2_mcap(
         rate_hz=rate_hz,
         geometry=robot_geometry(robot, backend),
         readings=backend_readings(backend),
+        robot_name=metadata["robot"],
         metadata=metadata,
     )
     return stack.enter_context(recorder)

@@ -1,13 +1,17 @@
 """A cycle-record sink writing MCAP in the ROS 2 message encoding (CDR) with standard types.
 
 What rosbag2 (``ros2 bag play run.mcap``), Foxglove and rosbags read with no snakebot installed
-(docs/ros2.md): ``/joint_states`` and ``/snakebot/joint_commands_sent`` (sensor_msgs/JointState)
-every cycle, ``/tf`` (tf2_msgs/TFMessage: the twin's simulated link poses, elsewhere the forward
-kinematics of the measured joints) at ``tf_rate_hz``, ``/diagnostics``
-(diagnostic_msgs/DiagnosticArray: one status per servo with its health readings and hardware
-errors where the backend has them, one for the run's metrics) at ``status_rate_hz``. Every
-message is stamped, and logged, at the wall clock of the start plus robot time, as the JSON
-recording is (:mod:`snakebot.telemetry.foxglove_live`), so stamps rise with the cycles.
+(docs/ros2.md). The topics are those ``snakebot ros2`` publishes, plus two a node cannot:
+``/joint_states`` (sensor_msgs/JointState) every cycle; ``/body_pose``
+(geometry_msgs/TransformStamped ``world`` -> ``snakebot_body``) every cycle where the backend
+senses the body (the twin); ``/diagnostics`` (diagnostic_msgs/DiagnosticArray: one status per
+servo with its health readings and hardware errors where the backend has them, then the run's)
+and ``/run_metrics`` (that run status alone) at ``status_rate_hz``; and only in the recording
+``/snakebot/joint_commands_sent`` (sensor_msgs/JointState, the positions the safety layer sent)
+every cycle and ``/tf`` (tf2_msgs/TFMessage: the twin's simulated link poses, elsewhere the
+forward kinematics of the measured joints) at ``tf_rate_hz``. Every message is stamped, and
+logged, at the wall clock of the start plus robot time, as the JSON recording is
+(:mod:`snakebot.telemetry.foxglove_live`), so stamps rise with the cycles.
 
 Written with ``mcap-ros2-support``'s writer, which needs only the message definitions
 (:mod:`snakebot.telemetry.ros2_msgs`), not rclpy. The open chunk is closed every
@@ -39,7 +43,7 @@ if TYPE_CHECKING:
 
 INSTALL = "pip install 'snakebot[ros2-mcap]'"
 MCAP_FLUSH_S = 1.0
-WORLD_FRAME = "world"
+NODE_NAME = "snakebot"  # the statuses' prefix, as ``snakebot ros2``'s node names them
 
 
 @dataclass(frozen=True)
@@ -98,7 +102,8 @@ class Ros2McapRecorder:
     messages (see the module docstring for the topics).
 
     ``joint_names`` (N,) and ``servo_ids`` (N,) are head to tail; ``geometry`` gives ``/tf``
-    (None: no ``/tf``); ``metadata`` goes into the file's ``snakebot`` metadata record.
+    (None: no ``/tf``); ``robot_name`` is the run status's hardware ID; ``metadata`` goes into
+    the file's ``snakebot`` metadata record.
     Opening creates the file: OutputError naming it when it cannot be written,
     MissingDependencyError without mcap-ros2-support.
     """
@@ -112,9 +117,10 @@ class Ros2McapRecorder:
         rate_hz: float,
         geometry: Geometry | None = None,
         readings: Ros2Readings | None = None,
+        robot_name: str = "",
         metadata: Mapping[str, str] | None = None,
         tf_rate_hz: float = 30.0,
-        status_rate_hz: float = 4.0,
+        status_rate_hz: float = 1.0,
         start_epoch_ns: int | None = None,
     ) -> None:
         if len(joint_names) != len(servo_ids):
@@ -125,6 +131,7 @@ class Ros2McapRecorder:
         self.joint_names = tuple(joint_names)
         self.servo_ids = tuple(int(i) for i in servo_ids)
         self.rate_hz = rate_hz
+        self.robot_name = robot_name
         self.tf_rate_hz = tf_rate_hz
         self.status_rate_hz = status_rate_hz
         self._geometry = geometry
@@ -192,6 +199,12 @@ class Ros2McapRecorder:
                 ros2_msgs.joint_state(now_ns, self.joint_names, record.command_rad),
                 now_ns,
             )
+            if record.body is not None:
+                body = record.body
+                pose = ros2_msgs.transform_stamped(
+                    now_ns, ros2_msgs.WORLD_FRAME, ros2_msgs.BODY_FRAME, body.com_m, body.head_quat
+                )
+                self._write(ros2_msgs.BODY_POSE_TOPIC, pose, now_ns)
             self.rows += 1
             self._window.add(state.time_s, record.tracking_error_rad, com)
             if self._geometry is not None and state.time_s >= self._next_tf:
@@ -217,7 +230,7 @@ class Ros2McapRecorder:
             self._poses = geometry.poses()
             self._link_names = tuple(link_name(i) for i in range(geometry.link_count))
         xpos, xquat = self._poses.poses(position_rad)
-        message = ros2_msgs.tf_message(now_ns, WORLD_FRAME, self._link_names, xpos, xquat)
+        message = ros2_msgs.tf_message(now_ns, ros2_msgs.WORLD_FRAME, self._link_names, xpos, xquat)
         self._write(ros2_msgs.TF_TOPIC, message, now_ns)
 
     def _write_diagnostics(self, now_ns: int, time_s: float, com: np.ndarray | None) -> None:
@@ -238,21 +251,20 @@ class Ros2McapRecorder:
         }
         metrics.update({f"alert{i}": text for i, text in enumerate(alerts)})
         window.restart()
-        statuses = [
-            ros2_msgs.diagnostic_status(
-                "snakebot: run",
-                ros2_msgs.WARN if alerts else ros2_msgs.OK,
-                "; ".join(alerts) or "OK",
-                metrics,
-            )
-        ]
+        run = ros2_msgs.diagnostic_status(
+            f"{NODE_NAME}: run",
+            ros2_msgs.WARN if alerts else ros2_msgs.OK,
+            "; ".join(alerts) or "OK",
+            metrics,
+            hardware_id=self.robot_name,
+        )
         health = dict(readings.health()) if readings.health is not None else {}
         faults = dict(readings.faults()) if readings.faults is not None else {}
-        if health or faults:
-            statuses += self._servo_statuses(health, faults)
+        statuses = [*self._servo_statuses(health, faults), run]
         self._write(
             ros2_msgs.DIAGNOSTICS_TOPIC, ros2_msgs.diagnostic_array(now_ns, statuses), now_ns
         )
+        self._write(ros2_msgs.RUN_METRICS_TOPIC, run, now_ns)
 
     def _servo_statuses(
         self, health: Mapping[str, np.ndarray], faults: Mapping[int, Sequence[str]]
@@ -265,7 +277,7 @@ class Ros2McapRecorder:
             values["hardware_errors"] = ", ".join(errors)
             statuses.append(
                 ros2_msgs.diagnostic_status(
-                    f"snakebot: {name}",
+                    f"{NODE_NAME}: {name}",
                     ros2_msgs.ERROR if errors else ros2_msgs.OK,
                     ", ".join(errors) or "OK",
                     values,

@@ -24,11 +24,21 @@ anything subscribes to: replaying a recording must not command a robot)."""
 TF_TOPIC = "/tf"
 """tf2_msgs/msg/TFMessage: ``world`` -> ``link0`` (head) ... ``link<N>`` (tail)."""
 DIAGNOSTICS_TOPIC = "/diagnostics"
-"""diagnostic_msgs/msg/DiagnosticArray: servo health and the run's metrics."""
+"""diagnostic_msgs/msg/DiagnosticArray: one status per servo (health, hardware errors), then the
+run's."""
+RUN_METRICS_TOPIC = "/run_metrics"
+"""diagnostic_msgs/msg/DiagnosticStatus: the run's status alone."""
+BODY_POSE_TOPIC = "/body_pose"
+"""geometry_msgs/msg/TransformStamped: ``world`` -> ``snakebot_body`` (the centre of mass, the
+head's orientation) every cycle, where the backend senses the body (the twin)."""
+WORLD_FRAME = "world"
+BODY_FRAME = "snakebot_body"
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+TRANSFORM_STAMPED = "geometry_msgs/msg/TransformStamped"
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
+DIAGNOSTIC_STATUS = "diagnostic_msgs/msg/DiagnosticStatus"
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 """diagnostic_msgs/DiagnosticStatus levels."""
@@ -71,6 +81,14 @@ DEFINITIONS: dict[str, str] = {
         ("geometry_msgs/Vector3", _VECTOR3),
         ("geometry_msgs/Quaternion", _QUATERNION),
     ),
+    TRANSFORM_STAMPED: _definition(
+        _TRANSFORM_STAMPED,
+        ("std_msgs/Header", _HEADER),
+        ("builtin_interfaces/Time", _TIME),
+        ("geometry_msgs/Transform", _TRANSFORM),
+        ("geometry_msgs/Vector3", _VECTOR3),
+        ("geometry_msgs/Quaternion", _QUATERNION),
+    ),
     DIAGNOSTIC_ARRAY: _definition(
         "std_msgs/Header header\nDiagnosticStatus[] status\n",
         ("std_msgs/Header", _HEADER),
@@ -78,6 +96,7 @@ DEFINITIONS: dict[str, str] = {
         ("diagnostic_msgs/DiagnosticStatus", _DIAGNOSTIC_STATUS),
         ("diagnostic_msgs/KeyValue", _KEY_VALUE),
     ),
+    DIAGNOSTIC_STATUS: _definition(_DIAGNOSTIC_STATUS, ("diagnostic_msgs/KeyValue", _KEY_VALUE)),
 }
 """ROS 2 type name -> its message definition (``ros2msg`` schema text)."""
 
@@ -85,7 +104,9 @@ TOPIC_TYPES: dict[str, str] = {
     JOINT_STATES_TOPIC: JOINT_STATE,
     COMMAND_TOPIC: JOINT_STATE,
     TF_TOPIC: TF_MESSAGE,
+    BODY_POSE_TOPIC: TRANSFORM_STAMPED,
     DIAGNOSTICS_TOPIC: DIAGNOSTIC_ARRAY,
+    RUN_METRICS_TOPIC: DIAGNOSTIC_STATUS,
 }
 """Topic -> ROS 2 type name."""
 
@@ -115,6 +136,23 @@ def joint_state(
     }
 
 
+def transform_stamped(
+    time_ns: int, parent: str, child: str, position_m: np.ndarray, quat_wxyz: np.ndarray
+) -> dict[str, Any]:
+    """A geometry_msgs/TransformStamped: ``parent`` -> ``child`` at ``position_m`` (3,) m with
+    the orientation ``quat_wxyz`` (4,) in MuJoCo's (w, x, y, z), written in ROS's x, y, z, w."""
+    x, y, z = (float(v) for v in position_m)
+    w, qx, qy, qz = (float(v) for v in quat_wxyz)
+    return {
+        "header": header(time_ns, parent),
+        "child_frame_id": child,
+        "transform": {
+            "translation": {"x": x, "y": y, "z": z},
+            "rotation": {"x": qx, "y": qy, "z": qz, "w": w},
+        },
+    }
+
+
 def tf_message(
     time_ns: int,
     parent: str,
@@ -123,21 +161,13 @@ def tf_message(
     quats_wxyz: np.ndarray,
 ) -> dict[str, Any]:
     """A tf2_msgs/TFMessage: ``parent`` -> each of ``children`` at positions (L, 3) m and
-    orientations (L, 4) as MuJoCo's (w, x, y, z), written in ROS's (x, y, z, w) order."""
-    stamp = header(time_ns, parent)
-    transforms = []
-    for child, p, q in zip(children, positions_m.tolist(), quats_wxyz.tolist(), strict=True):
-        transforms.append(
-            {
-                "header": stamp,
-                "child_frame_id": child,
-                "transform": {
-                    "translation": {"x": p[0], "y": p[1], "z": p[2]},
-                    "rotation": {"x": q[1], "y": q[2], "z": q[3], "w": q[0]},
-                },
-            }
-        )
-    return {"transforms": transforms}
+    orientations (L, 4) as (w, x, y, z) (see :func:`transform_stamped`)."""
+    return {
+        "transforms": [
+            transform_stamped(time_ns, parent, child, p, q)
+            for child, p, q in zip(children, positions_m, quats_wxyz, strict=True)
+        ]
+    }
 
 
 def diagnostic_status(

@@ -27,6 +27,7 @@ from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
+from snakebot.config import load_robot
 from snakebot.control.cycle import CycleRecord
 from snakebot.telemetry import read_log
 from snakebot.telemetry.ros2_mcap import Ros2McapRecorder, Ros2Readings
@@ -35,8 +36,10 @@ from snakebot.types import JointState
 TYPES = {
     "/joint_states": "sensor_msgs/msg/JointState",
     "/snakebot/joint_commands_sent": "sensor_msgs/msg/JointState",
+    "/body_pose": "geometry_msgs/msg/TransformStamped",
     "/tf": "tf2_msgs/msg/TFMessage",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    "/run_metrics": "diagnostic_msgs/msg/DiagnosticStatus",
 }
 
 
@@ -133,13 +136,35 @@ def test_a_twin_run_opens_in_rosbags_and_mcap_ros2_with_the_standard_types(
     assert abs(head.x - log.column("com_x_m")[-1]) < 0.4  # the head went where the body went
     assert head.x > 0.1  # and the body moved
 
+    # The body pose every cycle: the centre of mass, as in the CSV, the head's orientation.
+    poses = [m for _, m in topics["/body_pose"]]
+    assert len(poses) == len(states)
+    assert {(m.header.frame_id, m.child_frame_id) for m in poses} == {("world", "snakebot_body")}
+    assert [stamp_ns(m) for m in poses] == stamps.tolist()
+    com = np.array([[m.transform.translation.x, m.transform.translation.y] for m in poses])
+    assert np.allclose(com, np.c_[log.column("com_x_m"), log.column("com_y_m")], **close)
+    rotation = poses[-1].transform.rotation
+    quat = [rotation.w, rotation.x, rotation.y, rotation.z]
+    assert np.allclose(quat, [log.column(f"imu_q{a}")[-1] for a in "wxyz"], **close)
+
     diagnostics = [m for _, m in topics["/diagnostics"]]
-    assert 11 <= len(diagnostics) <= 13  # 4 Hz
-    run = [next(s for s in m.status if s.name == "snakebot: run") for m in diagnostics]
-    values = [{kv.key: kv.value for kv in s.values} for s in run]
+    assert len(diagnostics) == 3  # 1 Hz over 3 s of robot time
+    for message in diagnostics:  # a status per servo, then the run's
+        assert [s.name for s in message.status] == [f"snakebot: {n}" for n in names] + [
+            "snakebot: run"
+        ]
+        servos = [s.hardware_id for s in message.status[:-1]]
+        assert servos == [f"servo {i}" for i in load_robot(summary["robot"]).servo_ids]
+    run = [m for _, m in topics["/run_metrics"]]
+    assert [m.name for m in run] == ["snakebot: run"] * 3
+    assert {m.hardware_id for m in run} == {summary["robot"]}
+    assert [[(kv.key, kv.value) for kv in m.values] for m in run] == [
+        [(kv.key, kv.value) for kv in d.status[-1].values] for d in diagnostics
+    ]
+    values = [{kv.key: kv.value for kv in m.values} for m in run]
     assert {v["rate_hz"] for v in values} == {"100"}
     cycles = [int(v["cycles"]) for v in values]
-    assert cycles == sorted(cycles) and cycles[-1] > 250
+    assert cycles == sorted(cycles) and cycles[-1] >= 200
     assert float(values[-1]["achieved_rate_hz"]) == pytest.approx(100.0, rel=1e-3)
     assert float(values[-1]["distance_m"]) > 0.1
 
@@ -159,13 +184,24 @@ def test_servo_health_and_hardware_errors_become_diagnostic_statuses(tmp_path: P
         overruns=lambda: 3,
     )
     with Ros2McapRecorder(
-        path, joint_names=["joint0", "joint1"], servo_ids=[3, 7], rate_hz=100.0, readings=readings
+        path,
+        joint_names=["joint0", "joint1"],
+        servo_ids=[3, 7],
+        rate_hz=100.0,
+        readings=readings,
+        status_rate_hz=4.0,
     ) as recorder:
         for cycle in range(1, 31):
             recorder(_record(cycle, 0.01 * cycle, 2))
     assert recorder.rows == 30
     topics = read_rosbags_any(path)
-    assert set(topics) == {"/joint_states", "/snakebot/joint_commands_sent", "/diagnostics"}
+    # No body (hardware): no /body_pose; no geometry given: no /tf.
+    assert set(topics) == {
+        "/joint_states",
+        "/snakebot/joint_commands_sent",
+        "/diagnostics",
+        "/run_metrics",
+    }
     assert len(topics["/joint_states"]) == 30
     statuses = {s.name: s for s in topics["/diagnostics"][-1].status}
     assert set(statuses) == {"snakebot: run", "snakebot: joint0", "snakebot: joint1"}
