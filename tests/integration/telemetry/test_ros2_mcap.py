@@ -8,6 +8,7 @@ the CSV log of the same run.
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -273,6 +274,49 @@ def test_a_stopped_run_finishes_the_file_and_a_killed_one_keeps_all_but_a_second
             pass
         assert len(stamps) >= rows - 100 - 50  # a second at 100 Hz, and the CSV went on meanwhile
         assert np.all(np.diff(stamps) > 0)
+
+
+@pytest.mark.pty
+@pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals need POSIX")
+def test_a_run_over_the_emulated_bus_records_servo_health_as_diagnostics(tmp_path: Path) -> None:
+    from tests.pty_emulator import emulator
+
+    mcap = tmp_path / "bus.mcap"
+    with emulator("--robot", "snake8") as emu:
+        summary = snakebot(
+            "run",
+            "--backend",
+            "dynamixel",
+            "--port",
+            emu.port,
+            "--robot",
+            "snake8",
+            "--duration",
+            "2",
+            "--mcap",
+            str(mcap),
+            "--mcap-encoding",
+            "ros2",
+        )
+    topics = read_rosbags_any(mcap)
+    assert "/body_pose" not in topics  # nothing measures where a real snake is
+    # Wall-clock cycles, as many as the bus held, and the ramp-out's after them.
+    assert len(topics["/joint_states"]) > summary["control_cycles"] > 50
+    assert len(topics["/tf"]) >= 30  # the forward kinematics of the measured joints
+    servo_ids = load_robot("snake8").servo_ids
+    readings = 0
+    for message in topics["/diagnostics"]:
+        servos = message.status[:-1]
+        assert [s.hardware_id for s in servos] == [f"servo {i}" for i in servo_ids]
+        for status in servos:
+            values = {kv.key: kv.value for kv in status.values}
+            assert values["servo_id"] == status.hardware_id.removeprefix("servo ")
+            if "temperature_c" in values:
+                readings += 1
+                assert 0 < float(values["temperature_c"]) < 80
+                assert 5 < float(values["input_voltage_v"]) < 20
+                assert (status.level, status.message, values["hardware_errors"]) == (0, "OK", "")
+    assert readings >= len(servo_ids)  # every servo's health, once it was read
 
 
 def test_the_ros2_encoding_goes_with_an_mcap_file() -> None:
