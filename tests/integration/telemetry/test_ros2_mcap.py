@@ -169,6 +169,18 @@ def test_a_twin_run_opens_in_rosbags_and_mcap_ros2_with_the_standard_types(
     assert float(values[-1]["achieved_rate_hz"]) == pytest.approx(100.0, rel=1e-3)
     assert float(values[-1]["distance_m"]) > 0.1
 
+    # The CSV log rebuilds the same file (a killed run's MCAP loses its last second, the CSV
+    # nothing): the same topics and types, every row, its numbers.
+    exported = tmp_path / "run.export.mcap"
+    snakebot("log", "export", str(csv), "--format", "mcap", "--mcap-encoding", "ros2")
+    again = read_rosbags(exported)
+    assert len(again["/joint_states"]) == len(states)
+    assert np.array_equal(
+        [m.position for _, m in again["/joint_states"]], log.joints("position_rad")
+    )
+    assert np.all(np.diff([t for t, _ in again["/joint_states"]]) > 0)
+    assert [m.name for _, m in again["/run_metrics"]] == ["snakebot: run"] * 3
+
 
 def _record(cycle: int, time_s: float, joints: int) -> CycleRecord:
     q = np.full(joints, 0.1 * cycle)
@@ -319,12 +331,17 @@ def test_a_run_over_the_emulated_bus_records_servo_health_as_diagnostics(tmp_pat
     assert readings >= len(servo_ids)  # every servo's health, once it was read
 
 
-def test_the_ros2_encoding_goes_with_an_mcap_file() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "snakebot", "run", "--duration", "1", "--mcap-encoding", "ros2"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert result.returncode == 2
-    assert "--mcap-encoding ros2 goes with --mcap FILE" in result.stderr
+def test_the_ros2_encoding_goes_with_an_mcap_file(tmp_path: Path) -> None:
+    for argv, message in (
+        (["run", "--duration", "1"], "--mcap-encoding ros2 goes with --mcap FILE"),
+        (["log", "export", str(tmp_path / "x.csv"), "--format", "parquet"], "--format mcap"),
+    ):
+        result = subprocess.run(
+            [sys.executable, "-m", "snakebot", *argv, "--mcap-encoding", "ros2"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert result.returncode == 2, result.stderr
+        assert message in result.stderr
+    assert not (tmp_path / "x.export.parquet").exists()
