@@ -160,9 +160,9 @@ def run_export(args: argparse.Namespace) -> int:
     if ros2 and args.format != "mcap":
         raise UsageError("--mcap-encoding ros2 goes with --format mcap")
     if ros2:
-        from snakebot.telemetry.ros2_mcap import ros2_writer_module
+        from snakebot.telemetry.ros2_mcap import mcap_writer_module
 
-        ros2_writer_module()  # a missing extra is said before the log is read
+        mcap_writer_module()  # a missing extra is said before the log is read
     elif args.format == "mcap":
         from snakebot.telemetry.foxglove_live import foxglove_module
 

@@ -114,9 +114,9 @@ def check_outputs(args: argparse.Namespace, *others: tuple[Path | None, str]) ->
     from snakebot.telemetry.sidecar import sidecar_path
 
     if ros2_recording(args):
-        from snakebot.telemetry.ros2_mcap import ros2_writer_module
+        from snakebot.telemetry.ros2_mcap import mcap_writer_module
 
-        ros2_writer_module()  # a missing extra stops the run before a file is touched
+        mcap_writer_module()  # a missing extra stops the run before a file is touched
     elif getattr(args, "mcap_encoding", "json") != "json" and args.mcap is None:
         raise UsageError(f"--mcap-encoding {args.mcap_encoding} goes with --mcap FILE")
     outputs: list[tuple[Path | None, str]] = [(args.log, "log")]

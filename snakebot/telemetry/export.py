@@ -52,7 +52,7 @@ def export_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -
 
 def export_ros2_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -> int:
     """Write ``log`` to MCAP at ``path`` as standard ROS 2 messages in CDR; returns the cycles
-    written (MissingDependencyError without mcap-ros2-support)."""
+    written (MissingDependencyError without the mcap package)."""
     from snakebot.telemetry.ros2_mcap import Ros2McapRecorder
 
     meta = sidecar or {}

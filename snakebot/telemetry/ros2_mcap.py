@@ -13,10 +13,11 @@ forward kinematics of the measured joints) at ``tf_rate_hz``. Every message is s
 logged, at the wall clock of the start plus robot time, as the JSON recording is
 (:mod:`snakebot.telemetry.foxglove_live`), so stamps rise with the cycles.
 
-Written with ``mcap-ros2-support``'s writer, which needs only the message definitions
-(:mod:`snakebot.telemetry.ros2_msgs`), not rclpy. The open chunk is closed every
+The messages are encoded by :mod:`snakebot.telemetry.ros2_msgs` (CDR, with the standard
+definitions as ``ros2msg`` schemas) and written by the ``mcap`` package's writer with the
+``ros2`` profile: no rclpy, no ROS installation. The open chunk is closed every
 :data:`MCAP_FLUSH_S` of robot time: a killed run keeps all but that much, and ``close`` (any end
-of the run: an error, Ctrl-C, SIGTERM) finishes the file. A cycle costs about 0.1 ms.
+of the run: an error, Ctrl-C, SIGTERM) finishes the file.
 """
 
 from __future__ import annotations
@@ -86,15 +87,15 @@ def backend_readings(backend: Backend) -> Ros2Readings:
     return Ros2Readings(health, faults, alerts, lambda: backend.stats.overruns)
 
 
-def ros2_writer_module() -> Any:
-    """``mcap_ros2.writer``, or MissingDependencyError with the install command."""
+def mcap_writer_module() -> Any:
+    """``mcap.writer``, or MissingDependencyError with the install command."""
     try:
-        import mcap_ros2.writer
+        import mcap.writer
     except ImportError as exc:
         raise MissingDependencyError(
-            f"MCAP recordings in the ROS 2 encoding need mcap-ros2-support: {INSTALL}"
+            f"MCAP recordings in the ROS 2 encoding need the mcap package: {INSTALL}"
         ) from exc
-    return mcap_ros2.writer
+    return mcap.writer
 
 
 class Ros2McapRecorder:
@@ -105,7 +106,7 @@ class Ros2McapRecorder:
     (None: no ``/tf``); ``robot_name`` is the run status's hardware ID; ``metadata`` goes into
     the file's ``snakebot`` metadata record.
     Opening creates the file: OutputError naming it when it cannot be written,
-    MissingDependencyError without mcap-ros2-support.
+    MissingDependencyError without the mcap package.
     """
 
     def __init__(
@@ -125,7 +126,7 @@ class Ros2McapRecorder:
     ) -> None:
         if len(joint_names) != len(servo_ids):
             raise ValueError(f"{len(joint_names)} joint names for {len(servo_ids)} servo IDs")
-        writer_module = ros2_writer_module()
+        writer_module = mcap_writer_module()
         self.path = Path(path)
         self.rows = 0
         self.joint_names = tuple(joint_names)
@@ -139,18 +140,23 @@ class Ros2McapRecorder:
         self._epoch_ns = time.time_ns() if start_epoch_ns is None else start_epoch_ns
         self._stream: IO[bytes] | None = None
         self._writer: Any = None
+        self._channels: dict[str, int] = {}
+        self._schemas: dict[str, int] = {}
         with self._failures("cannot write the MCAP file"):
             self._stream = self.path.open("wb")
-            self._writer = writer_module.Writer(self._stream)
-            self._schemas = {
-                name: self._writer.register_msgdef(name, text)
-                for name, text in ros2_msgs.DEFINITIONS.items()
-            }
+            compression = writer_module.CompressionType.ZSTD
+            self._writer = writer_module.Writer(self._stream, compression=compression)
+            self._writer.start(profile="ros2", library="snakebot")
             if metadata:
                 self._writer.add_metadata("snakebot", dict(metadata))
             self._flush()  # the header: a full disk or a device that refuses it fails here
+        self._measured = ros2_msgs.JointStates(self.joint_names)
+        self._sent = ros2_msgs.JointStates(self.joint_names, measured=False)
+        self._body = ros2_msgs.Transforms(
+            ros2_msgs.WORLD_FRAME, [ros2_msgs.BODY_FRAME], single=True
+        )
         self._poses: LinkPoses | None = None
-        self._link_names: tuple[str, ...] = ()
+        self._links: ros2_msgs.Transforms | None = None
         self._t0: float | None = None
         self._next_tf = self._next_status = -math.inf
         self._next_flush = 0.0
@@ -183,27 +189,13 @@ class Ros2McapRecorder:
         if com is not None and self._start_com is None:
             self._start_com = com.copy()
         with self._failures("cannot write the MCAP file"):
-            self._write(
-                ros2_msgs.JOINT_STATES_TOPIC,
-                ros2_msgs.joint_state(
-                    now_ns,
-                    self.joint_names,
-                    state.position_rad,
-                    state.velocity_rad_s,
-                    state.effort_nm,
-                ),
-                now_ns,
+            measured = self._measured(
+                now_ns, state.position_rad, state.velocity_rad_s, state.effort_nm
             )
-            self._write(
-                ros2_msgs.COMMAND_TOPIC,
-                ros2_msgs.joint_state(now_ns, self.joint_names, record.command_rad),
-                now_ns,
-            )
+            self._write(ros2_msgs.JOINT_STATES_TOPIC, measured, now_ns)
+            self._write(ros2_msgs.COMMAND_TOPIC, self._sent(now_ns, record.command_rad), now_ns)
             if record.body is not None:
-                body = record.body
-                pose = ros2_msgs.transform_stamped(
-                    now_ns, ros2_msgs.WORLD_FRAME, ros2_msgs.BODY_FRAME, body.com_m, body.head_quat
-                )
+                pose = self._body(now_ns, record.body.com_m, record.body.head_quat)
                 self._write(ros2_msgs.BODY_POSE_TOPIC, pose, now_ns)
             self.rows += 1
             self._window.add(state.time_s, record.tracking_error_rad, com)
@@ -217,21 +209,32 @@ class Ros2McapRecorder:
                 self._next_flush += MCAP_FLUSH_S
                 self._flush()
 
-    def _write(self, topic: str, message: Mapping[str, Any], time_ns: int) -> None:
-        schema = self._schemas[ros2_msgs.TOPIC_TYPES[topic]]
-        self._writer.write_message(topic, schema, message, log_time=time_ns)
+    def _write(self, topic: str, data: bytes, time_ns: int) -> None:
+        channel = self._channels.get(topic)
+        if channel is None:  # on its first message: a topic never written has no channel
+            channel = self._channels[topic] = self._register(topic)
+        self._writer.add_message(channel, log_time=time_ns, data=data, publish_time=time_ns)
+
+    def _register(self, topic: str) -> int:
+        kind = ros2_msgs.TOPIC_TYPES[topic]
+        schema = self._schemas.get(kind)
+        if schema is None:
+            text = ros2_msgs.DEFINITIONS[kind].encode()
+            schema = self._schemas[kind] = self._writer.register_schema(kind, "ros2msg", text)
+        channel: int = self._writer.register_channel(topic, "cdr", schema)
+        return channel
 
     def _write_tf(self, now_ns: int, position_rad: np.ndarray) -> None:
         geometry = self._geometry
         assert geometry is not None
-        if self._poses is None:
+        if self._poses is None or self._links is None:
             from snakebot.backends.twin.model_builder import link_name
 
             self._poses = geometry.poses()
-            self._link_names = tuple(link_name(i) for i in range(geometry.link_count))
+            links = [link_name(i) for i in range(geometry.link_count)]
+            self._links = ros2_msgs.Transforms(ros2_msgs.WORLD_FRAME, links)
         xpos, xquat = self._poses.poses(position_rad)
-        message = ros2_msgs.tf_message(now_ns, ros2_msgs.WORLD_FRAME, self._link_names, xpos, xquat)
-        self._write(ros2_msgs.TF_TOPIC, message, now_ns)
+        self._write(ros2_msgs.TF_TOPIC, self._links(now_ns, xpos, xquat), now_ns)
 
     def _write_diagnostics(self, now_ns: int, time_s: float, com: np.ndarray | None) -> None:
         readings, window = self._readings, self._window
@@ -264,11 +267,11 @@ class Ros2McapRecorder:
         self._write(
             ros2_msgs.DIAGNOSTICS_TOPIC, ros2_msgs.diagnostic_array(now_ns, statuses), now_ns
         )
-        self._write(ros2_msgs.RUN_METRICS_TOPIC, run, now_ns)
+        self._write(ros2_msgs.RUN_METRICS_TOPIC, ros2_msgs.diagnostic_status_message(run), now_ns)
 
     def _servo_statuses(
         self, health: Mapping[str, np.ndarray], faults: Mapping[int, Sequence[str]]
-    ) -> list[dict[str, Any]]:
+    ) -> list[ros2_msgs.Status]:
         statuses = []
         for index, (name, servo) in enumerate(zip(self.joint_names, self.servo_ids, strict=True)):
             errors = list(faults.get(servo, ()))
@@ -287,9 +290,8 @@ class Ros2McapRecorder:
         return statuses
 
     def _flush(self) -> None:
-        """Close the open chunk and write it out (mcap-ros2-support keeps its mcap Writer,
-        whose ``flush`` does that, as ``_writer``; the pin in the extra holds it there)."""
-        self._writer._writer.flush()
+        """Close the open chunk and write it out."""
+        self._writer.flush()
 
     def _abandon(self) -> None:
         """Give up on a file that failed to write: what was flushed before stays on disk."""

@@ -1,9 +1,9 @@
-"""The ROS 2 messages a snakebot recording carries: their definitions, topics and contents.
+"""The ROS 2 messages a snakebot recording carries: their definitions, topics and CDR bytes.
 
-Pure data, no ROS import: each message is built as the plain dict an MCAP ``ros2msg`` writer
-encodes to CDR, and each definition is the ``.msg`` text of the standard type with its
-dependencies appended the way rosbag2 stores them (a line of 80 ``=``, then ``MSG: pkg/Type``),
-so rosbag2, Foxglove and rosbags decode the file with no snakebot installed. The fields and
+No ROS import: each message is encoded to CDR here (:mod:`snakebot.telemetry.cdr`), and each
+definition is the ``.msg`` text of the standard type with its dependencies appended the way
+rosbag2 stores them (a line of 80 ``=``, then ``MSG: pkg/Type``), so rosbag2, Foxglove and
+rosbags decode the file with no snakebot installed. The fields and
 their order are those of the ROS 2 Kilted messages (sensor_msgs, diagnostic_msgs, tf2_msgs,
 geometry_msgs, std_msgs, builtin_interfaces); the tests decode what is written against the
 type store of a ROS installation's definitions (rosbags), not only against this text.
@@ -12,9 +12,11 @@ type store of a ROS installation's definitions (rosbags), not only against this 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
+
+from snakebot.telemetry.cdr import CdrWriter, fill_stamp
 
 JOINT_STATES_TOPIC = "/joint_states"
 """sensor_msgs/msg/JointState: what every joint measured, every cycle."""
@@ -111,63 +113,16 @@ TOPIC_TYPES: dict[str, str] = {
 """Topic -> ROS 2 type name."""
 
 
-def header(time_ns: int, frame_id: str = "") -> dict[str, Any]:
-    """A std_msgs/Header stamped ``time_ns`` (ns since the Unix epoch)."""
-    sec, nanosec = divmod(int(time_ns), 1_000_000_000)
-    return {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": frame_id}
+@dataclass(frozen=True)
+class Status:
+    """A diagnostic_msgs/DiagnosticStatus: ``level`` (OK, WARN, ERROR, STALE), ``name``,
+    ``message``, ``hardware_id`` and the key-value strings ``values``."""
 
-
-def joint_state(
-    time_ns: int,
-    names: Sequence[str],
-    position_rad: np.ndarray,
-    velocity_rad_s: np.ndarray | None = None,
-    effort_nm: np.ndarray | None = None,
-) -> dict[str, Any]:
-    """A sensor_msgs/JointState: ``names`` head to tail with their (N,) positions (rad) and,
-    where given, velocities (rad/s) and efforts (N m); a missing array is sent empty, as ROS
-    does for a quantity that is not measured."""
-    return {
-        "header": header(time_ns),
-        "name": list(names),
-        "position": np.asarray(position_rad, dtype=float).tolist(),
-        "velocity": [] if velocity_rad_s is None else np.asarray(velocity_rad_s).tolist(),
-        "effort": [] if effort_nm is None else np.asarray(effort_nm).tolist(),
-    }
-
-
-def transform_stamped(
-    time_ns: int, parent: str, child: str, position_m: np.ndarray, quat_wxyz: np.ndarray
-) -> dict[str, Any]:
-    """A geometry_msgs/TransformStamped: ``parent`` -> ``child`` at ``position_m`` (3,) m with
-    the orientation ``quat_wxyz`` (4,) in MuJoCo's (w, x, y, z), written in ROS's x, y, z, w."""
-    x, y, z = (float(v) for v in position_m)
-    w, qx, qy, qz = (float(v) for v in quat_wxyz)
-    return {
-        "header": header(time_ns, parent),
-        "child_frame_id": child,
-        "transform": {
-            "translation": {"x": x, "y": y, "z": z},
-            "rotation": {"x": qx, "y": qy, "z": qz, "w": w},
-        },
-    }
-
-
-def tf_message(
-    time_ns: int,
-    parent: str,
-    children: Sequence[str],
-    positions_m: np.ndarray,
-    quats_wxyz: np.ndarray,
-) -> dict[str, Any]:
-    """A tf2_msgs/TFMessage: ``parent`` -> each of ``children`` at positions (L, 3) m and
-    orientations (L, 4) as (w, x, y, z) (see :func:`transform_stamped`)."""
-    return {
-        "transforms": [
-            transform_stamped(time_ns, parent, child, p, q)
-            for child, p, q in zip(children, positions_m, quats_wxyz, strict=True)
-        ]
-    }
+    level: int
+    name: str
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...]
 
 
 def diagnostic_status(
@@ -176,21 +131,115 @@ def diagnostic_status(
     message: str,
     values: Mapping[str, object],
     hardware_id: str = "",
-) -> dict[str, Any]:
-    """A diagnostic_msgs/DiagnosticStatus; ``values`` become its key-value strings (a float
-    with 6 significant digits, None as an empty string)."""
-    return {
-        "level": level,
-        "name": name,
-        "message": message,
-        "hardware_id": hardware_id,
-        "values": [{"key": key, "value": _text(value)} for key, value in values.items()],
-    }
+) -> Status:
+    """A status whose ``values`` become key-value strings (a float with 6 significant digits,
+    None as an empty string)."""
+    pairs = tuple((key, _text(value)) for key, value in values.items())
+    return Status(level, name, message, hardware_id, pairs)
 
 
-def diagnostic_array(time_ns: int, statuses: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-    """A diagnostic_msgs/DiagnosticArray of ``statuses`` (see :func:`diagnostic_status`)."""
-    return {"header": header(time_ns), "status": list(statuses)}
+class JointStates:
+    """sensor_msgs/JointState messages in CDR for joints ``names`` (head to tail): the layout
+    is made once, each message fills in its stamp and arrays. ``measured``: with velocities and
+    efforts (else those are sent empty, as ROS does for what is not measured)."""
+
+    def __init__(self, names: Sequence[str], *, measured: bool = True) -> None:
+        self.names = tuple(names)
+        self.measured = measured
+        zeros = np.zeros(len(self.names))
+        cdr = CdrWriter()
+        self._stamp = cdr.header(0)
+        cdr.strings(self.names)
+        self._arrays = [cdr.float64s(zeros)]
+        self._arrays += [cdr.float64s(zeros if measured else ()) for _ in range(2)]
+        self._template = cdr.data()
+        self._size = 8 * len(self.names)
+
+    def __call__(
+        self,
+        time_ns: int,
+        position_rad: np.ndarray,
+        velocity_rad_s: np.ndarray | None = None,
+        effort_nm: np.ndarray | None = None,
+    ) -> bytes:
+        """One message: positions (N,) rad and, when ``measured``, velocities (N,) rad/s and
+        efforts (N,) N m; ValueError for arrays of another length."""
+        arrays = [position_rad]
+        if self.measured:
+            if velocity_rad_s is None or effort_nm is None:
+                raise ValueError("measured joint states need velocities and efforts")
+            arrays += [velocity_rad_s, effort_nm]
+        buffer = bytearray(self._template)
+        fill_stamp(buffer, self._stamp, time_ns)
+        for offset, values in zip(self._arrays, arrays, strict=False):
+            data = np.ascontiguousarray(values, dtype="<f8").tobytes()
+            if len(data) != self._size:
+                raise ValueError(f"{len(data) // 8} values for {len(self.names)} joints")
+            buffer[offset : offset + self._size] = data
+        return bytes(buffer)
+
+
+class Transforms:
+    """``parent`` -> each of ``children`` in CDR: a tf2_msgs/TFMessage, or with one child and
+    ``single`` a geometry_msgs/TransformStamped. The layout is made once; each message fills in
+    the stamp and the poses."""
+
+    def __init__(self, parent: str, children: Sequence[str], *, single: bool = False) -> None:
+        if single and len(children) != 1:
+            raise ValueError(f"a TransformStamped has one child, not {len(children)}")
+        cdr = CdrWriter()
+        if not single:
+            cdr.uint32(len(children))
+        self._stamps: list[int] = []
+        self._poses: list[int] = []
+        for child in children:
+            self._stamps.append(cdr.header(0, parent))
+            cdr.string(child)
+            self._poses.append(cdr.float64(0.0))
+            for _ in range(6):
+                cdr.float64(0.0)
+        self._template = cdr.data()
+
+    def __call__(self, time_ns: int, positions_m: np.ndarray, quats_wxyz: np.ndarray) -> bytes:
+        """One message: positions (L, 3) m and orientations (L, 4) in MuJoCo's (w, x, y, z)
+        order (ROS's is x, y, z, w); (3,) and (4,) for a single transform."""
+        poses = np.empty((len(self._poses), 7), dtype="<f8")
+        poses[:, :3] = np.reshape(positions_m, (-1, 3))
+        quats = np.reshape(quats_wxyz, (-1, 4))
+        poses[:, 3:6], poses[:, 6] = quats[:, 1:], quats[:, 0]
+        buffer = bytearray(self._template)
+        for stamp, offset, pose in zip(self._stamps, self._poses, poses, strict=True):
+            fill_stamp(buffer, stamp, time_ns)
+            buffer[offset : offset + 56] = pose.tobytes()
+        return bytes(buffer)
+
+
+def _status(cdr: CdrWriter, status: Status) -> None:
+    cdr.uint8(status.level)
+    cdr.string(status.name)
+    cdr.string(status.message)
+    cdr.string(status.hardware_id)
+    cdr.uint32(len(status.values))
+    for key, value in status.values:
+        cdr.string(key)
+        cdr.string(value)
+
+
+def diagnostic_status_message(status: Status) -> bytes:
+    """A diagnostic_msgs/DiagnosticStatus in CDR."""
+    cdr = CdrWriter()
+    _status(cdr, status)
+    return cdr.data()
+
+
+def diagnostic_array(time_ns: int, statuses: Sequence[Status]) -> bytes:
+    """A diagnostic_msgs/DiagnosticArray of ``statuses`` in CDR."""
+    cdr = CdrWriter()
+    cdr.header(time_ns)
+    cdr.uint32(len(statuses))
+    for status in statuses:
+        _status(cdr, status)
+    return cdr.data()
 
 
 def _text(value: object) -> str:
