@@ -5,7 +5,8 @@ axial in strain. ``send_command`` sets the muscles' rest lengths (snakebot.backe
 muscles); ``advance`` steps MuJoCo and applies Miller's directional friction after every step;
 ``read_state`` measures the channels from the lattice's shape, so tracking errors compare like
 with like. Efforts are generalised muscle forces (N·m for bends, N·m per unit strain), so effort
-times velocity is the muscles' power.
+times velocity is the muscles' power; its positive part is integrated over every physics step
+(``MuscleMap.power_rows``) into ``JointState.positive_work_j``.
 """
 
 from __future__ import annotations
@@ -81,6 +82,7 @@ class SoftBodyBackend(Backend):
         self._pacer: Pacer | None = None
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
         self._command = np.zeros(self.joint_count)
+        self._work_j = np.zeros(self.joint_count)  # positive muscle work per joint since connect
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
 
@@ -156,6 +158,7 @@ class SoftBodyBackend(Backend):
             yaw, pitch, axial, self._ring_scale()
         )
         self.data.ctrl[:] = rest
+        self._power_rows: tuple[np.ndarray, np.ndarray] | None = None  # made when stepping
 
     # -- the cycle ---------------------------------------------------------------------------
     def _measure(self) -> _Snapshot:
@@ -178,6 +181,7 @@ class SoftBodyBackend(Backend):
             position_rad=self._layout.join(*snapshot.channels),
             velocity_rad_s=self._layout.join(*snapshot.rates),
             effort_nm=self._layout.join(*effort),
+            positive_work_j=self._work_j,  # never written in place: each period makes a new one
         )
 
     def _send_command(self, position_rad: np.ndarray) -> None:
@@ -213,19 +217,30 @@ class SoftBodyBackend(Backend):
         self._step_check.start()
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
+        if self._power_rows is None:
+            self._power_rows = self.muscles.power_rows(self._jacobian, self._layout)
+        effort_rows, rate_rows = self._power_rows
+        timestep = float(model.opt.timestep)
         if self._stepper is not None:
-            self._stepper.advance(steps)
+            work = self._stepper.advance(steps, effort_rows, rate_rows)
             self._previous = self.start_positions + self._stepper.previous
             self._previous_time = self._stepper.previous_time_s
+            self._work_j = self._work_j + work
             self._finish_advance(steps, dt_s)
             return
+        forces = np.empty((steps, model.nu))
+        rates = np.empty((steps, model.nu))
         for step in range(steps):
             if step == steps - 1:
                 self._previous = self.positions()
                 self._previous_time = float(data.time)
             mujoco.mj_step(model, data)
+            # The step's forces and spring rates, computed at its start (before the rule).
+            forces[step] = data.actuator_force
+            rates[step] = data.actuator_velocity
             if rule.enabled and data.ncon:
                 rule.apply(displacement, velocity, data.contact.geom)
+        self._work_j = self._work_j + muscle_work_j(forces, rates, effort_rows, rate_rows, timestep)
         self._finish_advance(steps, dt_s)
 
     def _finish_advance(self, steps: int, dt_s: float) -> None:
@@ -265,3 +280,18 @@ class SoftBodyBackend(Backend):
             "travel_angle_deg": math.remainder(heading - axis, 360.0),
             "contact_fraction": self._contact_sum / max(self._cycles, 1),
         }
+
+
+def muscle_work_j(
+    force_n: np.ndarray,
+    rate_m_s: np.ndarray,
+    effort_rows: np.ndarray,
+    rate_rows: np.ndarray,
+    timestep_s: float,
+) -> np.ndarray:
+    """Each joint's positive muscle work (N,) J over S physics steps: the springs' forces and
+    rates of length (S, M) at the start of each step, turned into joint efforts and channel
+    rates by ``MuscleMap.power_rows`` (N, M) each; a step counts max(effort · rate, 0) · h."""
+    power = (force_n @ effort_rows.T) * (rate_m_s @ rate_rows.T)
+    work: np.ndarray = np.where(power > 0.0, power, 0.0).sum(axis=0) * timestep_s
+    return work
