@@ -97,8 +97,12 @@ def step_work_j(
     the twin and the same period inside a batch's (B, C, S, N) arrays give the same bits.
     """
     damping = np.expand_dims(joint_damping_nms, -2)
-    torque = servo_torque_nm(actuator_force_nm, damping, velocity_rad_s)
-    work: FloatArray = positive_power_w(torque, velocity_rad_s).sum(axis=-2) * timestep_s
+    # positive_power_w(servo_torque_nm(...), velocity) in place: a few numpy calls per period.
+    power = servo_torque_nm(actuator_force_nm, damping, velocity_rad_s)
+    power *= velocity_rad_s
+    np.maximum(power, 0.0, out=power)
+    work: FloatArray = power.sum(axis=-2)
+    work *= timestep_s
     return work
 
 
