@@ -23,6 +23,11 @@ from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody import friction_c
 from snakebot.backends.softbody.friction import DirectionalFriction
+from snakebot.backends.softbody.health import (
+    DEFAULT_BODY_LIMITS,
+    BodyHealthLimits,
+    BodyHealthMonitor,
+)
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.readouts import StepCheck
@@ -51,7 +56,9 @@ class SoftBodyBackend(Backend):
     for the flat floor), ``realtime`` and ``implementation``: "c" steps the physics and the rule
     in compiled C (friction_c; numpy with a warning where nothing compiles), "numpy" keeps the
     Python loop with the numpy rule (the reference; both agree bit for bit). Control periods
-    must be whole numbers of timesteps.
+    must be whole numbers of timesteps. ``health`` sets the physics checks (point penetration,
+    airborne time, spring strain, energy: softbody.health; None: no checks), reported by
+    ``physics_health`` (ChecksPhysics); a hard limit raises PhysicsHealthError.
 
     A mass-spring muscle has no position loop: its stiffness and damping are the body file's
     springs, so ``set_gains`` records the gains and changes nothing. Torque off relaxes every
@@ -67,8 +74,11 @@ class SoftBodyBackend(Backend):
         terrain: Cliff | None = None,
         realtime: bool = False,
         implementation: Literal["c", "numpy"] = "c",
+        health: BodyHealthLimits | None = DEFAULT_BODY_LIMITS,
     ) -> None:
         super().__init__()
+        self._health_limits = health
+        self.physics_monitor: BodyHealthMonitor | None = None
         self.robot = body  # the config under the name the other backends use
         self.body = body
         self.joint_count = body.joint_count
@@ -100,6 +110,7 @@ class SoftBodyBackend(Backend):
         self.friction_rule = DirectionalFriction(
             built.point_geoms, self.model.ngeom, built.start_positions
         )
+        self._point_geoms = built.point_geoms
         self.friction_rule.enabled = self.directional
         self._stepper: friction_c.CompiledStepper | None = None
         if self.implementation == "c":
@@ -129,6 +140,31 @@ class SoftBodyBackend(Backend):
         self._cycles = 0
         self._steps: dict[float, int] = {}
         self._pacer = Pacer(self.stats) if self._realtime else None
+        self._point_bodies = np.array(
+            [self.model.geom_bodyid[g] for g in built.point_geoms], dtype=np.intp
+        )
+        self.reset_physics_health()
+
+    def reset_physics_health(self) -> None:
+        """Start the physics-health account afresh (ChecksPhysics): the checks and the muscles'
+        work count from here; they stay off where they are off."""
+        self._work_at_reset = float(self._work_j.sum())
+        if self._health_limits is None:
+            return
+        self.physics_monitor = BodyHealthMonitor(
+            self.model,
+            self._point_geoms,
+            self._point_bodies,
+            self.body.lattice.point_radius_m,
+            self._health_limits,
+        )
+
+    def physics_health(self) -> dict[str, object] | None:
+        """The run's physics health so far (docs/soft-bodies.md, "Physics health"); None with
+        the checks off."""
+        if self.physics_monitor is None:
+            return None
+        return self.physics_monitor.summary(float(self._work_j.sum()) - self._work_at_reset)
 
     def _close(self) -> None:
         self.stats.extra.update(self.travel())
@@ -245,6 +281,9 @@ class SoftBodyBackend(Backend):
 
     def _finish_advance(self, steps: int, dt_s: float) -> None:
         self._step_check.finish(steps)
+        if self.physics_monitor is not None:
+            work = float(self._work_j.sum()) - self._work_at_reset
+            self.physics_monitor.sample(self.data, work)
         self._track()
         if self._pacer is not None:
             self._pacer.wait(dt_s)
