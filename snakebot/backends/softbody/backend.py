@@ -22,7 +22,7 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody import friction_c
-from snakebot.backends.softbody.friction import DirectionalFriction
+from snakebot.backends.softbody.friction import DirectionalFriction, contact_normal_forces
 from snakebot.backends.softbody.health import (
     DEFAULT_BODY_LIMITS,
     BodyHealthLimits,
@@ -59,6 +59,8 @@ class SoftBodyBackend(Backend):
     must be whole numbers of timesteps. ``health`` sets the physics checks (point penetration,
     airborne time, spring strain, energy: softbody.health; None: no checks), reported by
     ``physics_health`` (ChecksPhysics); a hard limit raises PhysicsHealthError.
+    ``backward_ratio`` makes Miller's ideal scales finite: backward friction that many times the
+    floor's (>= 1; inf, the default, is Miller's no-backward rule; friction.py).
 
     A mass-spring muscle has no position loop: its stiffness and damping are the body file's
     springs, so ``set_gains`` records the gains and changes nothing. Torque off relaxes every
@@ -75,8 +77,14 @@ class SoftBodyBackend(Backend):
         realtime: bool = False,
         implementation: Literal["c", "numpy"] = "c",
         health: BodyHealthLimits | None = DEFAULT_BODY_LIMITS,
+        backward_ratio: float = math.inf,
     ) -> None:
         super().__init__()
+        if not backward_ratio >= 1.0:
+            raise ConfigError(
+                "backward_ratio", "", f"expected a number >= 1 (or inf), got {backward_ratio}"
+            )
+        self.backward_ratio = backward_ratio
         self._health_limits = health
         self.physics_monitor: BodyHealthMonitor | None = None
         self.robot = body  # the config under the name the other backends use
@@ -112,6 +120,12 @@ class SoftBodyBackend(Backend):
         )
         self._point_geoms = built.point_geoms
         self.friction_rule.enabled = self.directional
+        self.friction_rule.set_backward(
+            self.backward_ratio,
+            self.friction,
+            float(self.model.opt.timestep),
+            self.body.lattice.point_mass_kg,
+        )
         self._stepper: friction_c.CompiledStepper | None = None
         if self.implementation == "c":
             try:
@@ -275,7 +289,8 @@ class SoftBodyBackend(Backend):
             forces[step] = data.actuator_force
             rates[step] = data.actuator_velocity
             if rule.enabled and data.ncon:
-                rule.apply(displacement, velocity, data.contact.geom)
+                normal = None if rule.ideal else contact_normal_forces(data)
+                rule.apply(displacement, velocity, data.contact.geom, normal)
         self._work_j = self._work_j + muscle_work_j(forces, rates, effort_rows, rate_rows, timestep)
         self._finish_advance(steps, dt_s)
 

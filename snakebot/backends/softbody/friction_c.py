@@ -39,7 +39,8 @@ C_SOURCE = r"""
    projected. */
 static long rule(const mjModel* m, mjData* d, int points, const int64_t* geom_point,
                  const int64_t* point_ring, const int64_t* ahead, const int64_t* behind,
-                 const double* start_spine, unsigned char* touch, double* ring, double* spine) {
+                 const double* start_spine, unsigned char* touch, double* ring, double* spine,
+                 int finite, double impulse_per_n, double* load) {
   int rings = points / 4;
   const double* x = d->qpos;
   double* v = d->qvel;
@@ -64,13 +65,35 @@ static long rule(const mjModel* m, mjData* d, int points, const int64_t* geom_po
     double norm = sqrt((s[0] * s[0] + s[2] * s[2]) + s[1] * s[1]);
     s[0] /= norm; s[1] /= norm; s[2] /= norm;
   }
+  if (finite) {
+    /* Finite backward friction (friction.py _apply_finite): at most impulse_per_n * load of
+       the backward speed off, load the point's normal force summed over its contacts. */
+    memset(load, 0, sizeof(double) * (points + 1));
+    for (int i = 0; i < d->ncon; i++) {
+      int adr = d->contact[i].efc_address;
+      if (adr < 0) continue;
+      double normal = 0.0;
+      for (int k = 0; k < 2 * (d->contact[i].dim - 1); k++) normal += d->efc_force[adr + k];
+      for (int k = 0; k < 2; k++) {
+        int g = d->contact[i].geom[k];
+        if (g >= 0 && g < m->ngeom) load[geom_point[g]] += normal;
+      }
+    }
+  }
   for (int p = 0; p < points; p++) {
     if (!touch[p]) continue;
     const double* s = spine + 3 * point_ring[p];
     double* w = v + 3 * p;
     double along = (w[0] * s[0] + w[2] * s[2]) + w[1] * s[1];
     if (!(along < 0.0)) continue;
-    w[0] -= s[0] * along; w[1] -= s[1] * along; w[2] -= s[2] * along;
+    if (finite) {
+      double taken = impulse_per_n * load[p];
+      if (-along < taken) taken = -along;
+      if (!(taken > 0.0)) continue;
+      w[0] += s[0] * taken; w[1] += s[1] * taken; w[2] += s[2] * taken;
+    } else {
+      w[0] -= s[0] * along; w[1] -= s[1] * along; w[2] -= s[2] * along;
+    }
     projected++;
   }
   return projected;
@@ -103,7 +126,8 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
                            const int64_t* ahead, const int64_t* behind,
                            const double* start_spine, unsigned char* touch,
                            double* ring, double* spine, double* previous, int joints,
-                           const double* effort_rows, const double* rate_rows, double* work) {
+                           const double* effort_rows, const double* rate_rows, double* work,
+                           int finite, double impulse_per_n, double* load) {
   long projected = 0;
   for (int i = 0; i < steps; i++) {
     if (i == steps - 1) {
@@ -114,7 +138,7 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
     add_work(m, d, joints, effort_rows, rate_rows, work);
     if (enabled && d->ncon)
       projected += rule(m, d, points, geom_point, point_ring, ahead, behind, start_spine,
-                        touch, ring, spine);
+                        touch, ring, spine, finite, impulse_per_n, load);
   }
   return projected;
 }
@@ -139,6 +163,8 @@ def load() -> ctypes.CDLL:
         library.snakebot_soft_advance.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 3 + [ctypes.c_void_p] * 9
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] + [ctypes.c_void_p] * 3
+        library.snakebot_soft_advance.argtypes += [ctypes.c_int, ctypes.c_double]
+        library.snakebot_soft_advance.argtypes += [ctypes.c_void_p]
         _LIBRARY = library
     return _LIBRARY
 
@@ -175,6 +201,7 @@ class CompiledStepper:
         self._pointers = [model._address, data._address]
         self._arrays = [a.ctypes.data for a in self._keep] + [self._previous.ctypes.data]
         self._points = points
+        self._load = np.zeros(points + 1)
 
     @property
     def previous_time_s(self) -> float:
@@ -200,5 +227,8 @@ class CompiledStepper:
             effort.ctypes.data,
             rate.ctypes.data,
             work.ctypes.data,
+            int(not self.rule.ideal),
+            self.rule._impulse_per_n,
+            self._load.ctypes.data,
         )
         return work
