@@ -114,7 +114,12 @@ def tune_gait(
         problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
     else:
         check_joint_axes(space.gait, [joint.axis for joint in robot.joints], robot.name)
-        problem = GaitProblem(robot, space, objective, plan, listener=listener)
+        if plan.engine == "warp":
+            from snakebot.tuning.engine_warp import WarpGaitProblem
+
+            problem = WarpGaitProblem(robot, space, objective, plan, listener=listener)
+        else:
+            problem = GaitProblem(robot, space, objective, plan, listener=listener)
     try:
         grid: GridResult | None = None
         generations: tuple[Generation, ...] = ()
