@@ -110,6 +110,8 @@ def tune_gait(
     if isinstance(robot, BodyConfig):
         from snakebot.tuning.softbody import SoftGaitProblem
 
+        if plan.engine == "warp":
+            raise ConfigError("--engine", "warp", "a mass-spring body tunes through the runner")
         plan = replace(plan, engine="processes")
         problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
     else:
