@@ -53,14 +53,15 @@ assert FLIPPED_UP_Z == -0.5  # warp_kernels.accumulate has the same threshold in
 def require_warp() -> tuple[Any, Any]:
     """``(warp, mujoco_warp)``; MissingDependencyError with the install command when missing."""
     try:
-        import mujoco_warp
         import warp
+
+        # Before MuJoCo Warp initialises Warp: no banner, no line per kernel module loaded.
+        warp.config.log_level = warp.LOG_WARNING
+        import mujoco_warp
     except ImportError as exc:
         raise MissingDependencyError(
             f"--engine warp needs MuJoCo Warp (mujoco-warp, warp-lang): {INSTALL}"
         ) from exc
-    config: Any = warp.config
-    config.quiet = True
     return warp, mujoco_warp
 
 
