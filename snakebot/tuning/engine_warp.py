@@ -14,24 +14,22 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleSchedule
-from snakebot.control.metrics import GRAVITY_M_S2, head_yaw_rad
+from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, MissingDependencyError
+from snakebot.gaits import Gait
 from snakebot.gaits.spec import ParamValue
 from snakebot.tuning.commands import BatchCommands, GaitCommands
 from snakebot.tuning.engine import TwinBatch
 from snakebot.tuning.feasibility import (
     FLIPPED_UP_Z,
-    MAX_CHATTER,
-    MAX_PENETRATION_FRACTION,
-    MAX_UPSIDE_DOWN_FRACTION,
     MOVING_FRACTION,
     SATURATION_FRACTION,
     Envelope,
@@ -39,11 +37,13 @@ from snakebot.tuning.feasibility import (
 )
 from snakebot.tuning.problem import GaitProblem
 from snakebot.tuning.trace import FloatArray
+from snakebot.tuning.warp_scores import outcomes
 
 INSTALL = "pip install 'snakebot[gpu]'"
 DEVICES = ("cpu", "cuda")
 CONTACTS_PER_WORLD = 64
 CONSTRAINTS_PER_WORLD = 256
+TABLE_CYCLES = 100  # open-loop gaits: targets of this many cycles per Gait.targets call
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _STOPS = ("", "airborne", "flipped", "diverged")
 
@@ -88,12 +88,16 @@ class WarpBatch:
     """Runs batches of commands as the worlds of one MuJoCo Warp model of the twin on ``device``.
 
     ``twin`` gives the model, its start state and the readout layout; ``envelope`` the limits
-    the device checks as the CPU engine's ``assess`` does. Raises ConfigError for a device Warp
+    the device checks as the CPU engine's ``assess`` does; ``workers`` threads tabulate the
+    gaits' targets on the host. Raises ConfigError for a device Warp
     does not have or a model MuJoCo Warp cannot run, MissingDependencyError without the extra.
     """
 
-    def __init__(self, twin: TwinBatch, envelope: Envelope, *, device: str = "cpu") -> None:
+    def __init__(
+        self, twin: TwinBatch, envelope: Envelope, *, device: str = "cpu", workers: int = 1
+    ) -> None:
         wp, mjw = require_warp()
+        self.workers = max(1, workers)
         self._wp, self._mjw = wp, mjw
         self.twin, self.envelope = twin, envelope
         try:
@@ -149,7 +153,8 @@ class WarpBatch:
         total = len(times) - 1
         envelope = self.envelope
         window = max(1, round(envelope.stop_after_s * rate_hz))
-        chunk = window if commands.open_loop else 1
+        chunk = TABLE_CYCLES if commands.open_loop else 1
+        gaits = _tabled_gaits(commands)
         start = np.tile(
             twin.initial_state[1 : 1 + twin.model.nq][twin.layout.qpos_index], (count, 1)
         )
@@ -171,9 +176,9 @@ class WarpBatch:
             k = 0
             while k < total:
                 span = range(k, min(k + chunk, total))
-                rows = [commands(c, times[c] - times[0], measured) for c in span]
-                target_d.assign(_padded([r[0] for r in rows], chunk))
-                command_d.assign(_padded([r[1] for r in rows], chunk))
+                targets, sent = self._rows(commands, gaits, span, times, measured)
+                target_d.assign(_padded(targets, chunk))
+                command_d.assign(_padded(sent, chunk))
                 for slot, c in enumerate(span):
                     wp.launch(kernels.set_ctrl, (count, joints), [command_d, slot, data.ctrl])
                     physics.step()
@@ -235,6 +240,31 @@ class WarpBatch:
                 overflowed=overflowed,
             )
 
+    def _rows(
+        self,
+        commands: BatchCommands,
+        gaits: Sequence[Gait] | None,
+        span: range,
+        times: Sequence[float],
+        measured: FloatArray,
+    ) -> tuple[FloatArray, FloatArray]:
+        """Targets and commands (B, C, N) of the cycles in ``span``: from ``commands`` cycle by
+        cycle, or with ``gaits`` each gait's targets of all C cycles in one call."""
+        clock = [times[c] - times[0] for c in span]
+        if gaits is None or not isinstance(commands, GaitCommands):
+            rows = [commands(c, t, measured) for c, t in zip(span, clock, strict=True)]
+            return np.stack([r[0] for r in rows], axis=1), np.stack([r[1] for r in rows], axis=1)
+        at = np.array(clock)
+        if self.workers > 1:
+            with ThreadPoolExecutor(self.workers) as pool:
+                tables = list(pool.map(lambda gait: gait.targets(at), gaits))
+        else:
+            tables = [gait.targets(at) for gait in gaits]
+        targets = np.stack(tables)
+        pairs = enumerate(zip(span, clock, strict=True))
+        sent = [commands.send(c, t, targets[:, i]) for i, (c, t) in pairs]
+        return targets, np.stack(sent, axis=1)
+
     def _data(self, count: int) -> Any:
         """B copies of the twin's start state on the device."""
         model = self.twin.model
@@ -278,91 +308,21 @@ class _Physics:
         self._periods += 1
 
 
-def _padded(rows: Sequence[FloatArray], chunk: int) -> np.ndarray:
-    """Rows (B, N) of the cycles in a chunk as a (B, chunk, N) float32 array, zeros past the end."""
-    block = np.stack(rows, axis=1)
+def _tabled_gaits(commands: BatchCommands) -> list[Gait] | None:
+    """The gaits of ``commands`` when each is a function of time alone (its targets of many
+    cycles come from one Gait.targets call), else None."""
+    if not isinstance(commands, GaitCommands):
+        return None
+    gaits = commands.gaits
+    return gaits if all(type(g).command is Gait.command for g in gaits) else None
+
+
+def _padded(block: FloatArray, chunk: int) -> np.ndarray:
+    """A chunk's (B, C, N) values as a (B, chunk, N) float32 array, zeros past C."""
     if block.shape[1] < chunk:
         pad = np.zeros((block.shape[0], chunk - block.shape[1], block.shape[2]))
         block = np.concatenate([block, pad], axis=1)
     return block.astype(np.float32)
-
-
-def outcomes(
-    run: WarpRun,
-    robot: RobotConfig,
-    envelope: Envelope,
-    duration_s: float,
-    periods_s: Sequence[float | None],
-    start_com_m: FloatArray,
-) -> list[tuple[dict[str, object], Violations]]:
-    """Each world's run summary (the keys and formulas of RunMetrics.summary) and violations
-    (those of feasibility.assess), from the device's running values."""
-    from snakebot.tuning import warp_kernels as k
-
-    out = []
-    joints, dt = robot.joint_count, run.dt_s
-    for b, period in enumerate(periods_s):
-        a, cycles = run.acc[b], int(run.cycles[b])
-        duration = round(float(run.time_s[cycles - 1]), 6) if cycles else 0.0
-        gait_cycles = round(duration / period, 6) if period else None
-        work = float(a[k.POSITIVE_WORK_J])
-        dx = float(a[k.COM_X] - start_com_m[0])
-        dy = float(a[k.COM_Y] - start_com_m[1])
-        distance = math.hypot(dx, dy)
-        summary: dict[str, object] = {
-            "duration_s": duration,
-            "joints": joints,
-            "body_length_m": robot.body_length_m,
-            "control_cycles": cycles,
-            "cycles": gait_cycles,
-            "tracking_rms_rad": math.sqrt(float(a[k.SQUARED_ERROR]) / max(cycles * joints, 1)),
-            "max_abs_command_rad": float(a[k.MAX_ABS_COMMAND]),
-            "positive_work_j": work,
-            "distance_m": distance,
-            "displacement_m": [dx, dy],
-            "speed_mps": distance / duration if duration > 0 else 0.0,
-            "turn_deg": math.degrees(float(a[k.TURN_RAD])),
-            "heading_deg": math.degrees(math.atan2(dy, dx)) if distance > 0 else 0.0,
-            "body_lengths_per_cycle": (distance / robot.body_length_m / gait_cycles)
-            if gait_cycles
-            else None,
-            "cost_of_transport": (work / (robot.total_mass_kg * GRAVITY_M_S2 * distance))
-            if distance > 1e-9
-            else None,
-        }
-        out.append((summary, _violations(a, cycles, dt, envelope, duration_s, run.stop_reason[b])))
-    return out
-
-
-def _violations(
-    a: FloatArray, cycles: int, dt: float, envelope: Envelope, duration_s: float, stopped: str
-) -> Violations:
-    from snakebot.tuning import warp_kernels as k
-
-    speed = max(
-        float(a[k.MAX_TARGET_STEP_RAD]) / dt / envelope.max_speed_rad_s - 1.0,
-        float(a[k.MAX_SPEED_RAD_S]) / envelope.no_load_speed_rad_s - 1.0,
-        0.0,
-    )
-    planned = max(round(duration_s / dt), cycles, 1)
-    longest_s = float(a[k.LONGEST_SATURATION]) * dt
-    upside_down = float(a[k.UPSIDE_DOWN_CYCLES]) / cycles if cycles else 0.0
-    excess = 0.0 if envelope.allow_roll else upside_down - MAX_UPSIDE_DOWN_FRACTION
-    reversals = float(a[k.MAX_REVERSALS]) / cycles if cycles >= 2 else 0.0
-    penetration = 0.0
-    if envelope.radius_m > 0 and cycles:
-        penetration = -float(a[k.MIN_CLEARANCE_M]) / envelope.radius_m - MAX_PENETRATION_FRACTION
-    return Violations(
-        joint_limit_rad=max(float(a[k.BEYOND_LIMIT_RAD]), 0.0),
-        speed_excess=speed,
-        saturation_excess_s=max(longest_s - envelope.max_saturation_s, 0.0),
-        airborne_fraction=(float(a[k.AIRBORNE_CYCLES]) + planned - cycles) / planned,
-        stopped=stopped,
-        upside_down_fraction=upside_down,
-        upside_down_excess=max(excess, 0.0),
-        penetration_excess=max(penetration, 0.0),
-        chatter_excess=max(reversals - MAX_CHATTER, 0.0),
-    )
 
 
 class WarpGaitProblem(GaitProblem):
@@ -377,7 +337,8 @@ class WarpGaitProblem(GaitProblem):
                 str(self.plan.friction_model),
                 "runs as a MuJoCo callback on the CPU; --engine warp has plain MuJoCo contacts",
             )
-        self._warp = WarpBatch(self._twin, self.envelope, device=self.plan.device)
+        plan = self.plan
+        self._warp = WarpBatch(self._twin, self.envelope, device=plan.device, workers=plan.workers)
 
     def outcomes(
         self, params: Sequence[Mapping[str, ParamValue]]

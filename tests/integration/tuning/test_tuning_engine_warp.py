@@ -83,7 +83,8 @@ def test_the_candidates_rank_the_same_on_both_engines(
 def test_tune_gait_runs_on_the_warp_engine(capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("mujoco_warp")
     argv = [
-        "tune", "gait", "--robot", "snake12", "--method", "grid", "--budget", "4", "--duration",
+        "tune", "gait", "--robot", "snake12", "--gait", "sidewinding", "--method", "grid",
+        "--budget", "4", "--duration",
         "0.5", "--engine", "warp", "--device", "cpu", "--quiet", "--json", "--dry-run",
     ]  # fmt: skip
     assert main(argv) == 0
