@@ -154,7 +154,7 @@ class WarpBatch:
         envelope = self.envelope
         window = max(1, round(envelope.stop_after_s * rate_hz))
         chunk = TABLE_CYCLES if commands.open_loop else 1
-        gaits = _tabled_gaits(commands)
+        gaits = tabled_gaits(commands)
         start = np.tile(
             twin.initial_state[1 : 1 + twin.model.nq][twin.layout.qpos_index], (count, 1)
         )
@@ -176,7 +176,7 @@ class WarpBatch:
             k = 0
             while k < total:
                 span = range(k, min(k + chunk, total))
-                targets, sent = self._rows(commands, gaits, span, times, measured)
+                targets, sent = self.command_rows(commands, gaits, span, times, measured)
                 target_d.assign(_padded(targets, chunk))
                 command_d.assign(_padded(sent, chunk))
                 for slot, c in enumerate(span):
@@ -240,7 +240,7 @@ class WarpBatch:
                 overflowed=overflowed,
             )
 
-    def _rows(
+    def command_rows(
         self,
         commands: BatchCommands,
         gaits: Sequence[Gait] | None,
@@ -308,7 +308,7 @@ class _Physics:
         self._periods += 1
 
 
-def _tabled_gaits(commands: BatchCommands) -> list[Gait] | None:
+def tabled_gaits(commands: BatchCommands) -> list[Gait] | None:
     """The gaits of ``commands`` when each is a function of time alone (its targets of many
     cycles come from one Gait.targets call), else None."""
     if not isinstance(commands, GaitCommands):

@@ -83,9 +83,9 @@ def test_the_candidates_rank_the_same_on_both_engines(
 def test_tune_gait_runs_on_the_warp_engine(capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("mujoco_warp")
     argv = [
-        "tune", "gait", "--robot", "snake12", "--gait", "sidewinding", "--method", "grid",
-        "--budget", "4", "--duration",
-        "0.5", "--engine", "warp", "--device", "cpu", "--quiet", "--json", "--dry-run",
+        "tune", "gait", "--robot", "snake12", "--gait", "sidewinding", "--params",
+        "amplitude_even", "--method", "grid", "--budget", "4", "--duration", "0.2",
+        "--engine", "warp", "--device", "cpu", "--quiet", "--json", "--dry-run",
     ]  # fmt: skip
     assert main(argv) == 0
     summary = json.loads(capsys.readouterr().out)
