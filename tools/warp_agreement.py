@@ -25,7 +25,7 @@ from snakebot.config import load_robot
 from snakebot.tuning.engine_warp import WarpGaitProblem
 from snakebot.tuning.objectives import objective_for
 from snakebot.tuning.problem import EvalPlan, Evaluation, GaitProblem
-from snakebot.tuning.space import build_space, tuning_base
+from snakebot.tuning.space import build_space, parse_bounds, tuning_base
 
 METRICS = (
     "distance_m",
@@ -65,9 +65,22 @@ def compare(cpu: list[Evaluation], warp: list[Evaluation], top: int) -> dict[str
             "runs": len(absolute),
         }
     losses = np.array([[a.loss, b.loss] for a, b in zip(cpu, warp, strict=True)])
+    both = [a.feasible and b.feasible for a, b in zip(cpu, warp, strict=True)]
+    feasible = losses[np.array(both, dtype=bool)]
     best_cpu = set(np.argsort(losses[:, 0])[:top].tolist())
     best_warp = set(np.argsort(losses[:, 1])[:top].tolist())
+    runs = [
+        {
+            "x": list(a.x),
+            "distance_m": [a.summary.get("distance_m"), b.summary.get("distance_m")],
+            "loss": [a.loss, b.loss],
+            "feasible": [a.feasible, b.feasible],
+            "stopped": [a.violations.stopped, b.violations.stopped],
+        }
+        for a, b in zip(cpu, warp, strict=True)
+    ]
     return {
+        "runs": runs,
         "metrics": rows,
         "feasible_agree": sum(a.feasible == b.feasible for a, b in zip(cpu, warp, strict=True)),
         "feasible_cpu": sum(a.feasible for a in cpu),
@@ -75,6 +88,10 @@ def compare(cpu: list[Evaluation], warp: list[Evaluation], top: int) -> dict[str
             a.violations.stopped == b.violations.stopped for a, b in zip(cpu, warp, strict=True)
         ),
         "spearman_loss": float(spearmanr(losses[:, 0], losses[:, 1]).statistic),
+        "feasible_both": len(feasible),
+        "spearman_feasible": float(spearmanr(feasible[:, 0], feasible[:, 1]).statistic)
+        if len(feasible) > 2
+        else None,
         "top_k": top,
         "top_k_overlap": len(best_cpu & best_warp),
         "best_same": int(np.argmin(losses[:, 0])) == int(np.argmin(losses[:, 1])),
@@ -91,12 +108,13 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--top", type=int, default=8)
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
     robot = load_robot(args.robot)
     base = tuning_base(args.gait, robot.joint_count, {})
     limit = float(min(-robot.lower_rad.max(), robot.upper_rad.min()))
-    space = build_space(args.gait, base, None, {}, limit)
+    space = build_space(args.gait, base, None, parse_bounds(args.bounds), limit)
     objective = objective_for("speed", 0.0, robot.body_length_m)
     rng = np.random.default_rng(args.seed)
     low = np.array([d.lower for d in space.dims])
@@ -134,7 +152,8 @@ def main() -> None:
     print(
         f"feasible agree {result['feasible_agree']}/{args.count} "
         f"(cpu feasible {result['feasible_cpu']}), stop reasons agree "
-        f"{result['stop_agree']}/{args.count}, Spearman(loss) {result['spearman_loss']:.3f}, "
+        f"{result['stop_agree']}/{args.count}, Spearman(loss) {result['spearman_loss']:.3f} "
+        f"(feasible on both: {result['feasible_both']}, {result['spearman_feasible']}), "
         f"top-{args.top} overlap {result['top_k_overlap']}/{args.top}, "
         f"same best {result['best_same']}; wall cpu {cpu_s:.1f} s, warp {warp_s:.1f} s"
     )
