@@ -61,6 +61,7 @@ class TuneResult:
             "budget": self.budget,
             "wall_s": self.wall_s,
             "engine": self.plan.engine,
+            **({"device": self.plan.device} if self.plan.engine == "warp" else {}),
             "workers": self.plan.workers,
             "seed": self.seed,
             "duration_s": self.plan.duration_s,

@@ -89,7 +89,7 @@ def test_tune_gait_runs_on_the_warp_engine(capsys: pytest.CaptureFixture[str]) -
     ]  # fmt: skip
     assert main(argv) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["engine"] == "warp"
+    assert (summary["engine"], summary["device"]) == ("warp", "cpu")
     assert summary["evaluations"] == 4
     assert math.isfinite(summary["best"]["loss"]) and summary["best"]["feasible"]
 
