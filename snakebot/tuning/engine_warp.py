@@ -89,8 +89,8 @@ class WarpBatch:
 
     ``twin`` gives the model, its start state and the readout layout; ``envelope`` the limits
     the device checks as the CPU engine's ``assess`` does; ``workers`` threads tabulate the
-    gaits' targets on the host. Raises ConfigError for a device Warp
-    does not have or a model MuJoCo Warp cannot run, MissingDependencyError without the extra.
+    gaits' targets on the host. Raises ConfigError for a device Warp does not have or a model
+    MuJoCo Warp cannot run, MissingDependencyError without the gpu extra.
     """
 
     def __init__(
