@@ -157,9 +157,9 @@ class NodeProcess:
     def running(self) -> bool:
         return self.proc.poll() is None
 
-    def interrupt(self) -> None:
+    def interrupt(self, signum: int = signal.SIGINT) -> None:
         if self.running():
-            self.proc.send_signal(signal.SIGINT)
+            self.proc.send_signal(signum)
 
     def finish(self, timeout_s: float = 90.0) -> dict[str, Any]:
         """Wait for the exit; the JSON summary it printed ({} when none)."""

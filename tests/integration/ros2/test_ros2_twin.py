@@ -2,13 +2,15 @@
 
 cmd_vel for 5 s moves and turns the snake, joint_states arrive at the control rate (counted
 against the cycles the stamps say were run, not the wall clock: a loaded machine runs late),
-the gait parameter refuses a gait that cannot be driven, and when cmd_vel stops the command
+the gait parameter selects a gait and refuses what cannot be driven, SIGTERM ends the node
+in the stop policy, and when cmd_vel stops the command
 timeout ends the node at the rest pose in the stop policy.
 """
 
 from __future__ import annotations
 
 import math
+import signal
 import time
 
 import numpy as np
@@ -100,9 +102,9 @@ def test_the_gait_parameter_selects_by_name_and_refuses_what_cannot_be_driven() 
             ros.steer(0.5, 0.0)
             time.sleep(0.05)
         moved = ros.joint_states()[-1][1]
-        node.interrupt()
+        node.interrupt(signal.SIGTERM)  # as `ros2 launch` and systemd stop a node
         summary = node.finish()
     assert node.proc.returncode == 130, node.err
-    assert summary["stopped_by"] == "interrupted (SIGINT)"
+    assert summary["stopped_by"] == "interrupted (SIGTERM)"
     assert np.abs(moved - before).max() > 0.2  # the rolling gait played
     assert math.isfinite(summary["distance_m"])
