@@ -8,6 +8,7 @@ runs on the calling thread, and the publishers are observers of its cycle record
 
 from __future__ import annotations
 
+import array
 import contextlib
 import threading
 from collections.abc import Iterator, Sequence
@@ -170,6 +171,8 @@ class RosBridge:
         self._diagnostics = self._publisher(DiagnosticArray, topics.DIAGNOSTICS)
         self._run_metrics = self._publisher(DiagnosticStatus, topics.RUN_METRICS)
         self._body_pose = self._publisher(TransformStamped, topics.BODY_POSE)
+        self._pose_message = TransformStamped(child_frame_id=topics.BODY_FRAME)
+        self._pose_message.header.frame_id = topics.WORLD_FRAME
         self._subscribe(Twist, topics.CMD_VEL, self._on_cmd_vel)
         self._subscribe(JointStateMessage, topics.JOINT_COMMANDS, self._on_joint_commands)
         self._subscribe(JointTrajectory, topics.JOINT_TRAJECTORY, self._on_trajectory)
@@ -183,38 +186,35 @@ class RosBridge:
     def _publisher(self, kind: Any, topic: topics.Topic) -> Any:
         return self.node.create_publisher(kind, topic.name, qos_profile(topic.qos))
 
-    def _stamp(self, time_s: float) -> Time:
-        if self._offset_ns is None:  # robot time onto the node's clock, once
+    def _stamp(self, stamp: Time, time_s: float) -> None:
+        """Set ``stamp`` to robot time ``time_s`` on the node's clock (offset fixed at the
+        first cycle, so stamps differ exactly as the cycles' times do)."""
+        if self._offset_ns is None:
             self._offset_ns = self.node.get_clock().now().nanoseconds - round(time_s * _NS)
         total = self._offset_ns + round(time_s * _NS)
-        return Time(sec=total // _NS, nanosec=total % _NS)
+        stamp.sec, stamp.nanosec = divmod(total, _NS)
 
     def _publish_cycle(self, record: CycleRecord) -> None:
-        stamp = self._stamp(record.time_s)
         message = self._joint_message
-        message.header.stamp = stamp
+        self._stamp(message.header.stamp, record.time_s)
         state = record.state
-        message.position = state.position_rad
-        message.velocity = state.velocity_rad_s
-        message.effort = state.effort_nm
+        # array('d') is the messages' own sequence type: assigned as is, no per-element check.
+        message.position = array.array("d", state.position_rad.tobytes())
+        message.velocity = array.array("d", state.velocity_rad_s.tobytes())
+        message.effort = array.array("d", state.effort_nm.tobytes())
         self._joint_states.publish(message)
         body = record.body
         if body is not None:
-            pose = TransformStamped()
-            pose.header.stamp = stamp
-            pose.header.frame_id = topics.WORLD_FRAME
-            pose.child_frame_id = topics.BODY_FRAME
-            x, y, z = (float(v) for v in body.com_m)
-            pose.transform.translation.x, pose.transform.translation.y = x, y
-            pose.transform.translation.z = z
-            w, qx, qy, qz = (float(v) for v in body.head_quat)
-            rotation = pose.transform.rotation
-            rotation.w, rotation.x, rotation.y, rotation.z = w, qx, qy, qz
+            pose = self._pose_message
+            pose.header.stamp = message.header.stamp
+            translation, rotation = pose.transform.translation, pose.transform.rotation
+            translation.x, translation.y, translation.z = body.com_m.tolist()
+            rotation.w, rotation.x, rotation.y, rotation.z = body.head_quat.tolist()
             self._body_pose.publish(pose)
         due = self._next_diagnostics_s
         if due is None or record.time_s >= due:
             self._next_diagnostics_s = record.time_s + topics.DIAGNOSTICS_PERIOD_S
-            self._publish_diagnostics(stamp, record)
+            self._publish_diagnostics(message.header.stamp, record)
 
     def _publish_diagnostics(self, stamp: Time, record: CycleRecord) -> None:
         summary = run_summary(
