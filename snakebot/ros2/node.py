@@ -176,9 +176,15 @@ class RosBridge:
         self._subscribe(Twist, topics.CMD_VEL, self._on_cmd_vel)
         self._subscribe(JointStateMessage, topics.JOINT_COMMANDS, self._on_joint_commands)
         self._subscribe(JointTrajectory, topics.JOINT_TRAJECTORY, self._on_trajectory)
-        node.declare_parameter(topics.PARAM_GAIT, first.name)
         params = ",".join(f"{k}={v}" for k, v in first.params.items())
-        node.declare_parameter(topics.PARAM_GAIT_PARAMS, params)
+        declared: list[Parameter[Any]] = [
+            node.declare_parameter(topics.PARAM_GAIT, first.name),
+            node.declare_parameter(topics.PARAM_GAIT_PARAMS, params),
+        ]
+        if [p.value for p in declared] != [first.name, params]:  # given with --ros-args -p
+            result = self._on_parameters(declared)
+            if not result.successful:
+                raise ConfigError("--ros-args", "", result.reason)
         node.add_on_set_parameters_callback(self._on_parameters)
         self.observers = (self._publish_cycle,)
 

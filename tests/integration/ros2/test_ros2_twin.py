@@ -69,15 +69,18 @@ def test_cmd_vel_moves_and_turns_the_twin_and_a_stale_stream_ends_in_the_stop_po
 
 
 def test_the_gait_parameter_selects_by_name_and_refuses_what_cannot_be_driven() -> None:
-    from rcl_interfaces.srv import SetParameters
+    from rcl_interfaces.srv import GetParameters, SetParameters
     from rclpy.parameter import Parameter
 
-    with client() as ros, ros2_node("--robot", "snake12", "--command-timeout", "0") as node:
+    started = ("--command-timeout", "0", "--ros-args", "-p", "gait:=rolling")
+    with client() as ros, ros2_node("--robot", "snake12", *started) as node:
         ros.wait_for(
             lambda: len(ros.joint_states()) > 5 or not node.running(), STARTUP_S, "joint_states"
         )
         service = ros.node.create_client(SetParameters, "/snakebot/set_parameters")
+        getter = ros.node.create_client(GetParameters, "/snakebot/get_parameters")
         assert service.wait_for_service(timeout_sec=30.0)
+        assert getter.wait_for_service(timeout_sec=30.0)
 
         def set_gait(name: str, params: str) -> tuple[bool, str]:
             request = SetParameters.Request(
@@ -91,6 +94,12 @@ def test_the_gait_parameter_selects_by_name_and_refuses_what_cannot_be_driven() 
             results = future.result().results
             return all(r.successful for r in results), " ".join(r.reason for r in results)
 
+        asked = GetParameters.Request(names=["gait", "gait_params"])
+        future = getter.call_async(asked)
+        ros.wait_for(future.done, 30.0, "the parameter service")
+        assert [v.string_value for v in future.result().values] == ["rolling", ""]
+        ok, reason = set_gait("lateral_undulation", "")
+        assert ok, reason
         ok, reason = set_gait("rolling", "")
         assert ok, reason
         ok, reason = set_gait("moonwalk", "")
