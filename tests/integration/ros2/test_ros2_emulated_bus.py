@@ -3,7 +3,8 @@
 Joint commands in ros2_control's topic shape and a trajectory reach the servos through the
 safety layer: the ones inside the limits arrive, the one outside is clipped to the limit, no
 joint ever leaves its limits; Ctrl-C ends the node at the rest pose in the stop policy (hold:
-torque on, the goals straight).
+torque on, the goals straight), and a command stream that goes stale ends it in the stop
+policy too (limp: torque off).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ pytest.importorskip("rclpy", reason="needs the ros2 extra: pip install 'snakebot
 
 from snakebot.backends.chain.bus import ServoBus
 from snakebot.config import load_robot
+from tests.conftest import edit_robot
 from tests.integration.ros2.rosclient import STARTUP_S, client, ros2_node
 from tests.pty_emulator import emulator
 
@@ -85,3 +87,29 @@ def test_joint_commands_reach_the_bus_within_limits_and_ctrl_c_ends_holding_at_r
     assert measured[:, 0].max() > upper - TOLERANCE_RAD  # the clipped joint went to its limit
     assert torque == [1] * 12  # hold: torque on...
     assert max(abs(g - 2048) for g in goals) <= 2  # ...at the straight pose
+
+
+def test_a_stale_command_stream_ends_the_node_limp_when_the_robot_says_limp(
+    config_dir: Path,
+) -> None:
+    robot = edit_robot(config_dir, "snake12", 'stop_policy = "hold"', 'stop_policy = "limp"')
+    with emulator("--robot", str(robot)) as emu, client() as ros:
+        with ros2_node(
+            "--robot", str(robot), "--backend", "dynamixel", "--port", emu.port,
+            "--command-timeout", "0.5",
+        ) as node:  # fmt: skip
+            ros.wait_for(
+                lambda: len(ros.joint_states()) > 10 or not node.running(),
+                STARTUP_S,
+                "joint_states",
+            )
+            for _ in range(20):  # 1 s of targets, then silence
+                ros.command_joints(NAMES, np.full(12, 0.2))
+                time.sleep(0.05)
+            summary = node.finish()
+        torque = registers(emu.port, "torque_enable")
+    assert node.proc.returncode == 1, node.err
+    assert "no command for 0.5 s; the snake was stopped (limp at the rest pose)" in node.err
+    assert summary["stopped_by"] == "no command for 0.5 s"
+    assert summary["max_abs_command_rad"] > 0.15  # the targets were played first
+    assert torque == [0] * 12  # limp: torque off
