@@ -2,11 +2,12 @@
 
 Issue 24 (done when the node keeps >= 95 % of the plain rate). snake12, side by side in one
 process, the arms in shuffled order each round:
-  run     Snake.run("sidewinding") at 100 Hz: the runner, no ROS
+  run     run_gait("sidewinding") at 100 Hz, as Snake.run and `snakebot run` play it: no ROS
   ros2    snakebot.ros2.run_node at 100 Hz, driven (cmd_vel's Steer(0.5, 0) left in its inbox)
           and publishing joint_states, body_pose every cycle and diagnostics each second, with
           a subscriber process reading joint_states the whole time
-Two pacings: ``paced`` (the twin held to the wall clock, as `snakebot ros2` always runs it and
+Both arms stop after ``--seconds`` of wall time (a stop check asked every cycle). Two
+pacings: ``paced`` (the twin held to the wall clock, as `snakebot ros2` always runs it and
 as `snakebot run --realtime` does): control cycles per wall second over ``--seconds``;
 ``unpaced`` (as fast as the host goes): the same count, which shows what the node adds to a
 cycle; each arm's CPU time per cycle (the whole process: executor and DDS threads too) is
@@ -33,8 +34,12 @@ from snakebot.ros2 import CommandInbox, NodeOptions, Steer, loopback_environment
 
 os.environ.update(loopback_environment())  # before rclpy loads
 
+from snakebot.config import RobotConfig
+from snakebot.control.metrics import RunMetrics
+from snakebot.control.runner import RunPlan, run_gait
+from snakebot.control.safety import SafetyLayer
 from snakebot.ros2.node import run_node
-from snakebot.session import Snake
+from snakebot.session import Snake, resolve_gait
 
 ROBOT, GAIT, RATE_HZ = "snake12", "sidewinding", 100.0
 SUBSCRIBER = """
@@ -87,9 +92,21 @@ class Clock:
 
 
 def plain_run(seconds: float, realtime: bool) -> Clock:
+    """What ``Snake.run`` (``snakebot run``) does, open-ended: stopped after ``seconds`` of
+    wall time as the node arm is, so both count the same stretch of running."""
     clock = Clock(seconds)
     with Snake.prepare(ROBOT, "twin", realtime=realtime) as snake:
-        snake.run(GAIT, duration_s=seconds, rate_hz=RATE_HZ, on_cycle=clock.tick, ramp_out=False)
+        robot = snake.robot
+        assert isinstance(robot, RobotConfig)
+        _, gait = resolve_gait(robot, GAIT)
+        run_gait(
+            snake.backend,
+            gait,
+            SafetyLayer.for_robot(robot),
+            RunPlan(duration_s=None, rate_hz=RATE_HZ, ramp_out=False),
+            RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg),
+            stop=clock.stop,
+        )
     return clock
 
 
