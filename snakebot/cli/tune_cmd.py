@@ -123,7 +123,14 @@ def _add_gait_parser(commands: Any) -> None:
         "--engine",
         choices=ENGINES,
         default="batch",
-        help="batch: mujoco.batch threads (default); processes: a process pool",
+        help="batch: mujoco.batch threads (default); processes: a process pool; warp: every "
+        "candidate a world of one MuJoCo Warp model (the gpu extra; docs/tuning.md)",
+    )
+    parser.add_argument(
+        "--device",
+        default="cpu",
+        metavar="DEVICE",
+        help="Warp device for --engine warp: cpu (default), cuda or cuda:N",
     )
     parser.add_argument(
         "--allow-roll",
@@ -177,6 +184,7 @@ def run_gait(args: argparse.Namespace) -> int:
         rate_hz=args.rate,
         workers=max(1, args.workers),
         engine=args.engine,
+        device=_warp_device(args),
         allow_roll=args.allow_roll or get_spec(args.gait).rolls_over,
         friction=_friction(robot, args.friction),
         **_twin_ground(robot, args),
@@ -215,6 +223,13 @@ def run_gait(args: argparse.Namespace) -> int:
             "contact); narrow --bounds or raise --budget. Nothing was written to --out"
         )
     return 0
+
+
+def _warp_device(args: argparse.Namespace) -> str:
+    """--device, which only --engine warp reads."""
+    if args.device != "cpu" and args.engine != "warp":
+        raise UsageError(f"--device {args.device}: only --engine warp runs on a Warp device")
+    return str(args.device)
 
 
 def _twin_ground(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> dict[str, Any]:

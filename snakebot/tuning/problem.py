@@ -26,7 +26,7 @@ from snakebot.tuning.pool import PoolJob, ProcessPool
 from snakebot.tuning.space import SearchSpace
 from snakebot.tuning.trace import FloatArray, Trace, summarise
 
-ENGINES = ("batch", "processes")
+ENGINES = ("batch", "processes", "warp")
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,7 @@ class EvalPlan:
     rate_hz: float = 100.0
     workers: int = 2
     engine: str = "batch"
+    device: str = "cpu"  # the Warp device of engine "warp" ("cpu", "cuda", "cuda:1", ...)
     allow_roll: bool = False
     friction: GroundFriction | None = None
     terrain: Terrain | None = None
@@ -162,8 +163,8 @@ class GaitProblem:
         rows = [tuple(float(v) for v in point) for point in points]
         params = [self.space.params(x) for x in rows]
         out = []
-        for x, p, trace in zip(rows, params, self.run(params), strict=True):
-            out.append(self.score(x, p, trace, len(self.history)))
+        for x, p, (summary, violations) in zip(rows, params, self.outcomes(params), strict=True):
+            out.append(self.score(x, p, summary, violations, len(self.history)))
             self.history.append(out[-1])
         if self.listener is not None:
             self.listener(self)
@@ -172,8 +173,20 @@ class GaitProblem:
     def baseline(self) -> Evaluation:
         """The base parameters (defaults and --set), scored but not counted as an evaluation."""
         params = dict(self.space.base)
-        trace = self.run([params])[0]
-        return self.score(tuple(float(v) for v in self.space.start()), params, trace, -1)
+        summary, violations = self.outcomes([params])[0]
+        start = tuple(float(v) for v in self.space.start())
+        return self.score(start, params, summary, violations, -1)
+
+    def outcomes(
+        self, params: Sequence[Mapping[str, ParamValue]]
+    ) -> list[tuple[dict[str, object], Violations]]:
+        """Each parameter set's run summary and violations (the Warp engine's subclass,
+        snakebot.tuning.engine_warp.WarpGaitProblem, measures them on its device instead)."""
+        out = []
+        for p, trace in zip(params, self.run(params), strict=True):
+            summary = summarise(trace, self.robot, self.gait(p).period_s)
+            out.append((summary, assess(trace, self.envelope, self.plan.duration_s)))
+        return out
 
     def run(self, params: Sequence[Mapping[str, ParamValue]]) -> list[Trace]:
         """The raw runs of full gait parameter sets, on the chosen engine."""
@@ -210,12 +223,14 @@ class GaitProblem:
         )
 
     def score(
-        self, x: tuple[float, ...], params: dict[str, ParamValue], trace: Trace, index: int
+        self,
+        x: tuple[float, ...],
+        params: dict[str, ParamValue],
+        summary: dict[str, object],
+        violations: Violations,
+        index: int,
     ) -> Evaluation:
-        """Summarise and assess one run."""
-        period = self.gait(params).period_s
-        summary = summarise(trace, self.robot, period)
-        violations = assess(trace, self.envelope, self.plan.duration_s)
-        value = self.objective.value(summary) if not trace.stop_reason else math.nan
+        """The objective value and loss of one run's summary and violations."""
+        value = self.objective.value(summary) if not violations.stopped else math.nan
         loss = self.objective.loss(value, violations)
         return Evaluation(index, x, params, summary, violations, value, loss)
