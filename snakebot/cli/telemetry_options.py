@@ -177,7 +177,7 @@ def open_telemetry(
     port = getattr(args, "foxglove", None)
     ros2 = ros2_recording(args)
     if ros2:
-        telemetry.ros2_mcap = _open_ros2_mcap(stack, args, robot, backend, rate_hz, command, gait)
+        telemetry.ros2_mcap = open_ros2_mcap(stack, args, robot, backend, rate_hz, command, gait)
     if port is not None or (args.mcap is not None and not ros2):
         mcap = None if ros2 else args.mcap
         telemetry.foxglove = sink = _open_foxglove(
@@ -193,7 +193,7 @@ def open_telemetry(
     return telemetry
 
 
-def _open_ros2_mcap(
+def open_ros2_mcap(
     stack: contextlib.ExitStack,
     args: argparse.Namespace,
     robot: Any,
@@ -202,6 +202,9 @@ def _open_ros2_mcap(
     command: str,
     gait: Mapping[str, Any],
 ) -> CycleSink:
+    """The ROS 2 recording ``--mcap`` asks for (``run``, ``drive``, ``ros2``), closed by
+    ``stack``: every cycle of ``robot`` on ``backend`` (not yet connected) at ``rate_hz``;
+    ``command`` and ``gait`` go into its metadata."""
     from snakebot.backends.twin.model_builder import joint_name
     from snakebot.telemetry.robot_scene import robot_geometry
     from snakebot.telemetry.ros2_mcap import Ros2McapRecorder, backend_readings
