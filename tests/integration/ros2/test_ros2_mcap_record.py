@@ -4,6 +4,7 @@ subscribers hear among them, and Ctrl-C finishes the file."""
 from __future__ import annotations
 
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -50,10 +51,12 @@ def test_the_node_records_what_it_publishes(tmp_path: Path) -> None:
     assert all(list(m.name) == [f"joint{i}" for i in range(8)] for m in states)  # type: ignore[attr-defined]
     times = np.array([t for t, _ in recorded["/joint_states"]])
     assert np.all(np.diff(times) > 0)
-    # What the subscriber heard is in the file, cycle for cycle, on the same time line.
+    # What the subscriber heard is in the file, cycle for cycle, on the same time line (matched
+    # by the positions, where a pose occurs once: a snake standing still repeats its own).
+    seen = Counter(m.position.tobytes() for m in states)  # type: ignore[attr-defined]
     by_pose = {m.position.tobytes(): t for t, m in recorded["/joint_states"]}  # type: ignore[attr-defined]
-    matched = [(stamp, by_pose[q.tobytes()]) for stamp, q, _ in heard if q.tobytes() in by_pose]
-    assert len(matched) >= 0.9 * len(heard)
+    matched = [(stamp, by_pose[q.tobytes()]) for stamp, q, _ in heard if seen[q.tobytes()] == 1]
+    assert len(matched) >= 100  # most of the 2 s driven at 100 Hz
     node_s = np.array([s for s, _ in matched])
     file_s = np.array([t for _, t in matched]) / 1e9
     assert np.allclose(node_s - node_s[0], file_s - file_s[0], atol=1e-6)
