@@ -343,3 +343,12 @@ def test_the_ros2_encoding_goes_with_an_mcap_file(
         assert main([*argv, "--mcap-encoding", "ros2"]) == 2
         assert message in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs Linux's /dev/full")
+def test_a_file_that_cannot_be_written_is_an_output_error_naming_it() -> None:
+    from snakebot.errors import OutputError
+
+    with pytest.raises(OutputError, match="/dev/full: cannot write the MCAP file") as caught:
+        Ros2McapRecorder(Path("/dev/full"), joint_names=["joint0"], servo_ids=[1], rate_hz=100.0)
+    assert "No space left on device" in str(caught.value)
