@@ -153,3 +153,15 @@ class PhysicsHealthError(BackendError):
             "here: lower the gains or the timestep (twin.timestep_s), raise the armature, or "
             "see docs/physics.md"
         )
+
+
+class ClusterError(SnakebotError, ConnectionError):
+    """A Ray cluster could not be reached or started, or lost every worker while it ran.
+
+    ``address`` is the cluster's ``HOST:PORT`` (``None``: Ray started on this machine).
+    """
+
+    def __init__(self, address: str | None, message: str) -> None:
+        self.address = address
+        where = f"the Ray cluster at {address}" if address else "Ray on this machine"
+        super().__init__(f"{where}: {message}")
