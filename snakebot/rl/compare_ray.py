@@ -190,8 +190,13 @@ class RayExecutor:
                 (experiment / PLAN_FILE).write_text(json.dumps(configs, indent=1) + "\n")
                 tuner = self._tuner(tune, trainable, plan, configs, out, progress is not None)
             grid = tuner.fit()
-            if grid.num_terminated + grid.num_errors < len(grid):
-                raise KeyboardInterrupt  # Tune ended the run early on Ctrl-C; --resume goes on
+            if _unfinished(tune, experiment):  # Tune ended the run on Ctrl-C
+                if progress is not None:
+                    progress.write(
+                        f"interrupted: the same rl compare with --resume goes on with the "
+                        f"unfinished trials in {out}\n"
+                    )
+                raise KeyboardInterrupt
             return self._land(grid, trials, out)
 
     def _check_experiment(self, experiment: Path, configs: list[dict[str, Any]]) -> None:
@@ -279,6 +284,14 @@ class RayExecutor:
                 curve = _last_attempt(result.metrics_dataframe.to_dict("records"))
                 outcomes.append(TrialOutcome(trial, _stopped(folder, curve), stopped_early=True))
         return outcomes
+
+
+def _unfinished(tune: Any, experiment: Path) -> list[str]:
+    """The trials the saved experiment has yet to run or finish (what ``--resume`` would run):
+    Tune's saved state, not the ended run's trials, which it marks terminated on Ctrl-C."""
+    analysis = tune.ExperimentAnalysis(str(experiment))
+    done = ("TERMINATED", "ERROR")
+    return [trial_name(t) for t in analysis.trials if t.status not in done]
 
 
 def _check_cpus(ray: Any, cpus: float) -> None:
