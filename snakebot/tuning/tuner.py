@@ -61,6 +61,8 @@ class TuneResult:
             "budget": self.budget,
             "wall_s": self.wall_s,
             "engine": self.plan.engine,
+            "executor": self.plan.executor,
+            **({"address": self.plan.address} if self.plan.executor == "ray" else {}),
             "workers": self.plan.workers,
             "seed": self.seed,
             "duration_s": self.plan.duration_s,
@@ -110,6 +112,8 @@ def tune_gait(
     if isinstance(robot, BodyConfig):
         from snakebot.tuning.softbody import SoftGaitProblem
 
+        if plan.executor != "local":
+            raise ConfigError("executor", plan.executor, "a mass-spring body tunes locally only")
         plan = replace(plan, engine="processes")
         problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
     else:
