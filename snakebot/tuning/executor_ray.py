@@ -61,15 +61,18 @@ class ShardWorker:
             self._problem = GaitProblem(*self._args)
         return self._problem
 
-    def evaluate(self, rows: Sequence[Row]) -> list[Evaluation]:
-        """Run and score ``rows`` (points of the space); indices are left to the driver."""
+    def evaluate(self, rows: Sequence[Row]) -> tuple[list[Evaluation], float]:
+        """Run and score ``rows`` (points of the space); indices are left to the driver. Also
+        returns the seconds it took here, so the driver can tell Ray's overhead apart."""
+        start = time.perf_counter()
         problem = self.problem()
         params = [problem.space.params(x) for x in rows]
         outcomes = problem.outcomes(params)
-        return [
+        scored = [
             problem.score(x, p, summary, violations, -1)
             for x, p, (summary, violations) in zip(rows, params, outcomes, strict=True)
         ]
+        return scored, time.perf_counter() - start
 
     def baseline(self) -> Evaluation:
         """The base parameters, scored."""
@@ -83,6 +86,33 @@ class _Actor:
     handle: Any
     ready: Any  # the ObjectRef of handle.ready(), until it resolves
     live: bool = False
+
+
+@dataclass
+class Timing:
+    """Where the Ray executor's time went, summed over generations (seconds).
+
+    ``wall_s``: from handing a generation out to having all its scores; ``critical_s``: the
+    longest share's own run time on its actor, per generation (the least ``wall_s`` could be);
+    ``compute_s``: every share's run time on its actor. ``wall_s - critical_s`` is Ray's
+    overhead (scheduling, transfer, the driver's own work) plus re-runs after a lost worker.
+    """
+
+    candidates: int = 0
+    generations: int = 0
+    wall_s: float = 0.0
+    critical_s: float = 0.0
+    compute_s: float = 0.0
+
+    @property
+    def overhead_s_per_candidate(self) -> float:
+        """Seconds of overhead per candidate scored."""
+        return (self.wall_s - self.critical_s) / max(self.candidates, 1)
+
+    @property
+    def compute_s_per_candidate(self) -> float:
+        """Seconds a candidate takes on its actor (within a batch on the actor's threads)."""
+        return self.compute_s / max(self.candidates, 1)
 
 
 @dataclass(frozen=True)
@@ -108,6 +138,12 @@ class RayEvaluator:
         self.lost_shares = 0
         self._started = False
         self.rescored = 0
+        self.timing = Timing()
+
+    @property
+    def actor_cpus(self) -> list[float]:
+        """The CPUs (threads) of each live actor."""
+        return [actor.cpus for actor in self._ready_actors()]
 
     @property
     def live_workers(self) -> int:
@@ -121,6 +157,8 @@ class RayEvaluator:
             return []
         self._add_actors()
         self._await_ready()
+        start = time.perf_counter()
+        longest = 0.0
         results: list[Evaluation | None] = [None] * len(rows)
         queue = deque(self._split(_Share(0, tuple(rows)), self._ready_actors()))
         running: dict[Any, tuple[_Actor, _Share]] = {}
@@ -139,7 +177,7 @@ class RayEvaluator:
             done, _ = self._ray.wait(list(running), num_returns=1)
             actor, share = running.pop(done[0])
             try:
-                scored = self._ray.get(done[0])
+                scored, seconds = self._ray.get(done[0])
             except self._lost_errors():
                 self._drop(actor)
                 self.lost_shares += 1
@@ -147,6 +185,13 @@ class RayEvaluator:
                 queue.extend(self._split(share, self._ready_actors() or [actor]))
                 continue
             results[share.start : share.start + len(share.rows)] = scored
+            longest = max(longest, seconds)
+            self.timing.compute_s += seconds
+        timing = self.timing
+        timing.wall_s += time.perf_counter() - start
+        timing.critical_s += longest
+        timing.candidates += len(rows)
+        timing.generations += 1
         assert all(r is not None for r in results)
         return [r for r in results if r is not None]
 
