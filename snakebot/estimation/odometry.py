@@ -79,7 +79,7 @@ class OdometryConfig:
     contact_height_m: float = 0.001
     turn_height_m: float = 0.008
     level_by: LevelBy = "shape"
-    axial_weight: float = 0.02
+    axial_weight: float = 0.005
     use_imu: bool = True
     gyro_noise_rad_s: float = 0.005
     radius_m: float = 0.0

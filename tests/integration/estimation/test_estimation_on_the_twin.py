@@ -133,7 +133,7 @@ def test_undulation_odometry_follows_the_snake(undulation: Run) -> None:
     est_step = undulation.estimate[-1, :2] - undulation.estimate[0, :2]
     distance = float(np.linalg.norm(true_step))
     assert distance > 1.0
-    assert np.linalg.norm(est_step - true_step) <= 0.25 * distance
+    assert np.linalg.norm(est_step - true_step) <= 0.10 * distance
 
 
 def test_run_to_a_point_ends_near_it_by_the_ground_truth() -> None:
