@@ -35,7 +35,8 @@ from snakebot.session import resolve_gait
 
 @dataclass(frozen=True)
 class Case:
-    """One bench run: robot, gait, terrain, encoder noise (rad), whether the IMU is read."""
+    """One bench run: robot, gait (with ``params`` over its defaults), terrain, encoder noise
+    (rad), whether the IMU is read."""
 
     name: str
     robot: str
@@ -44,6 +45,7 @@ class Case:
     noise_rad: float = 0.003
     imu: bool = True
     duration_s: float = 20.0
+    params: tuple[tuple[str, float], ...] = ()
 
 
 CASES = (
@@ -51,6 +53,24 @@ CASES = (
     Case("sidewinding, flat, noise, no IMU", "snake12", "sidewinding", imu=False),
     Case("sidewinding, flat, no noise, no IMU", "snake12", "sidewinding", noise_rad=0, imu=False),
     Case("sidewinding, rough, noise, IMU", "snake12", "sidewinding", terrain="rough"),
+    Case(
+        "sidewinding A 0.5, flat, noise, IMU",
+        "snake12",
+        "sidewinding",
+        params=(("amplitude_even", 0.5), ("amplitude_odd", 0.5)),
+    ),
+    Case(
+        "sidewinding 0.64 Hz, flat, noise, IMU",
+        "snake12",
+        "sidewinding",
+        params=(("temporal_freq_even", 4.0), ("temporal_freq_odd", 4.0)),
+    ),
+    Case(
+        "sidewinding turning (offset_even 0.1), flat, noise, IMU",
+        "snake12",
+        "sidewinding",
+        params=(("offset_even", 0.1),),
+    ),
     Case("lateral undulation (wheels), flat, noise, IMU", "snake8", "serpenoid"),
     Case("lateral undulation (wheels), flat, noise, no IMU", "snake8", "serpenoid", imu=False),
     Case("lateral undulation (wheels), rough, noise, IMU", "snake8", "serpenoid", terrain="rough"),
@@ -101,7 +121,7 @@ def run_case(case: Case, seed: int = 0) -> dict[str, object]:
     started = time.perf_counter()
     with backend:
         truth = Truth(backend, robot, odometry)
-        _, gait = resolve_gait(robot, case.gait)
+        _, gait = resolve_gait(robot, case.gait, params=dict(case.params))
         metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
         run_gait(
             backend,
