@@ -173,58 +173,26 @@ class WarpBatch:
             target_d = wp.zeros((count, chunk, joints), dtype=float)
             command_d = wp.zeros((count, chunk, joints), dtype=float)
             physics = _Physics(wp, mjw, self._model, data, steps, self.device.is_cuda)
-            k = 0
-            while k < total:
-                span = range(k, min(k + chunk, total))
-                targets, sent = self.command_rows(commands, gaits, span, times, measured)
-                target_d.assign(_padded(targets, chunk))
-                command_d.assign(_padded(sent, chunk))
+            span = range(0, min(chunk, total))
+            rows = self.command_rows(commands, gaits, span, times, measured)
+            while span:
+                target_d.assign(_padded(rows[0], chunk))
+                command_d.assign(_padded(rows[1], chunk))
                 for slot, c in enumerate(span):
                     wp.launch(kernels.set_ctrl, (count, joints), [command_d, slot, data.ctrl])
                     physics.step()
                     check = int((c + 1) % window == 0)
-                    wp.launch(
-                        kernels.accumulate,
-                        count,
-                        [
-                            c,
-                            dt,
-                            check,
-                            window,
-                            data.qpos,
-                            data.qvel,
-                            data.actuator_force,
-                            data.subtree_com,
-                            data.xquat,
-                            data.geom_xpos,
-                            data.geom_xmat,
-                            data.qacc_warmstart,
-                            target_d,
-                            command_d,
-                            slot,
-                            self._qpos_index,
-                            self._dof_index,
-                            self._damping,
-                            self._lower,
-                            self._upper,
-                            self._geoms,
-                            self._radius,
-                            self._half,
-                            twin.layout.head_id,
-                            self._limits,
-                            int(envelope.allow_roll),
-                            self._initial_qpos,
-                            stop_d,
-                            cycles_d,
-                            acc_d,
-                            joint_d,
-                        ],
-                    )
-                k = span.stop
+                    state = [stop_d, cycles_d, acc_d, joint_d]
+                    self._accumulate(data, c, dt, check, window, target_d, command_d, slot, state)
                 if not commands.open_loop:
                     measured = data.qpos.numpy()[:, twin.layout.qpos_index].astype(float)
-                if k < total and stop_d.numpy().all():
-                    break
+                span = range(span.stop, min(span.stop + chunk, total))
+                if span:
+                    # Launches return at once on a CUDA device: the host makes the next chunk's
+                    # commands while the device runs this one.
+                    rows = self.command_rows(commands, gaits, span, times, measured)
+                    if stop_d.numpy().all():
+                        break
             stops = stop_d.numpy()
             overflowed = data.overflow.numpy() != 0
             reasons = tuple(
@@ -239,6 +207,52 @@ class WarpBatch:
                 dt_s=dt,
                 overflowed=overflowed,
             )
+
+    def _accumulate(
+        self,
+        data: Any,
+        cycle: int,
+        dt_s: float,
+        check: int,
+        window: int,
+        target: Any,
+        command: Any,
+        slot: int,
+        state: list[Any],
+    ) -> None:
+        """Launch warp_kernels.accumulate for control cycle ``cycle`` of every world."""
+        envelope = self.envelope
+        inputs = [
+            cycle,
+            dt_s,
+            check,
+            window,
+            data.qpos,
+            data.qvel,
+            data.actuator_force,
+            data.subtree_com,
+            data.xquat,
+            data.geom_xpos,
+            data.geom_xmat,
+            data.qacc_warmstart,
+            target,
+            command,
+            slot,
+            self._qpos_index,
+            self._dof_index,
+            self._damping,
+            self._lower,
+            self._upper,
+            self._geoms,
+            self._radius,
+            self._half,
+            self.twin.layout.head_id,
+            self._limits,
+            int(envelope.allow_roll),
+            self._initial_qpos,
+            *state,
+        ]
+        self._wp.launch(self._kernels.accumulate, data.nworld, inputs)
 
     def command_rows(
         self,
