@@ -45,7 +45,8 @@ CONTACTS_PER_WORLD = 64
 CONSTRAINTS_PER_WORLD = 256
 TABLE_CYCLES = 100  # open-loop gaits: targets of this many cycles per Gait.targets call
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
-_STOPS = ("", "airborne", "flipped", "diverged")
+STOP_REASONS = ("", "airborne", "flipped", "diverged")
+"""Why a world stopped, by warp_kernels' stop code."""
 
 assert FLIPPED_UP_Z == -0.5  # warp_kernels.accumulate has the same threshold inline
 
@@ -183,7 +184,7 @@ class WarpBatch:
                     physics.step()
                     check = int((c + 1) % window == 0)
                     state = [stop_d, cycles_d, acc_d, joint_d]
-                    self._accumulate(data, c, dt, check, window, target_d, command_d, slot, state)
+                    self.accumulate(data, c, dt, check, window, target_d, command_d, slot, state)
                 if not commands.open_loop:
                     measured = data.qpos.numpy()[:, twin.layout.qpos_index].astype(float)
                 span = range(span.stop, min(span.stop + chunk, total))
@@ -196,7 +197,7 @@ class WarpBatch:
             stops = stop_d.numpy()
             overflowed = data.overflow.numpy() != 0
             reasons = tuple(
-                "diverged" if bad else _STOPS[int(s)]
+                "diverged" if bad else STOP_REASONS[int(s)]
                 for s, bad in zip(stops, overflowed, strict=True)
             )
             return WarpRun(
@@ -208,7 +209,7 @@ class WarpBatch:
                 overflowed=overflowed,
             )
 
-    def _accumulate(
+    def accumulate(
         self,
         data: Any,
         cycle: int,
@@ -220,7 +221,10 @@ class WarpBatch:
         slot: int,
         state: list[Any],
     ) -> None:
-        """Launch warp_kernels.accumulate for control cycle ``cycle`` of every world."""
+        """Launch warp_kernels.accumulate for control cycle ``cycle`` (``slot`` of the chunk
+        arrays ``target`` and ``command``, (B, C, N)) of every world. ``data`` is MuJoCo Warp's
+        Data or anything with the same arrays; ``state`` the kernel's stop (B,), cycles (B,),
+        running values (B, ACC_SIZE) and per-joint values (B, N, JOINT_SIZE)."""
         envelope = self.envelope
         inputs = [
             cycle,
