@@ -41,8 +41,6 @@ from snakebot.tuning.warp_scores import outcomes
 
 INSTALL = "pip install 'snakebot[gpu]'"
 DEVICES = ("cpu", "cuda")
-CONTACTS_PER_WORLD = 64
-CONSTRAINTS_PER_WORLD = 256
 TABLE_CYCLES = 100  # open-loop gaits: targets of this many cycles per Gait.targets call
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 STOP_REASONS = ("", "airborne", "flipped", "diverged")
@@ -286,6 +284,7 @@ class WarpBatch:
     def _data(self, count: int) -> Any:
         """B copies of the twin's start state on the device."""
         model = self.twin.model
+        contacts, rows = capacity(model)
         start = mujoco.MjData(model)
         mujoco.mj_setState(model, start, self.twin.initial_state, _STATE)
         mujoco.mj_forward(model, start)
@@ -293,8 +292,8 @@ class WarpBatch:
             model,
             start,
             nworld=count,
-            nconmax=CONTACTS_PER_WORLD,
-            njmax=CONSTRAINTS_PER_WORLD,
+            nconmax=contacts,
+            njmax=rows,
         )
 
 
@@ -324,6 +323,19 @@ class _Physics:
         for _ in range(self._steps):
             mjw.step(self._model, self._data)
         self._periods += 1
+
+
+def capacity(model: mujoco.MjModel) -> tuple[int, int]:
+    """Contact slots and constraint rows per world for a twin model: three contacts per geom
+    (a capsule lying on the floor touches it at both ends, plus room for self-contacts), each
+    contact's rows for its condim and cone, two rows per joint (limits), rows rounded up to 32.
+    A world that needs more overflows and scores as diverged (WarpRun.overflowed)."""
+    contacts = 3 * int(model.ngeom)
+    condim = int(model.geom_condim.max(initial=3))
+    elliptic = model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    per_contact = condim if elliptic else max(2 * (condim - 1), 1)
+    rows = contacts * per_contact + 2 * int(model.njnt)
+    return contacts, -(-rows // 32) * 32
 
 
 def tabled_gaits(commands: BatchCommands) -> list[Gait] | None:
