@@ -13,6 +13,7 @@ Needs the ``gpu`` extra (``mujoco-warp``, ``warp-lang``); runs on Warp's CPU dev
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -87,16 +88,17 @@ class WarpBatch:
     """Runs batches of commands as the worlds of one MuJoCo Warp model of the twin on ``device``.
 
     ``twin`` gives the model, its start state and the readout layout; ``envelope`` the limits
-    the device checks as the CPU engine's ``assess`` does; ``workers`` threads tabulate the
-    gaits' targets on the host. Raises ConfigError for a device Warp does not have or a model
-    MuJoCo Warp cannot run, MissingDependencyError without the gpu extra.
+    the device checks as the CPU engine's ``assess`` does; ``workers`` threads (at most one per
+    CPU) tabulate the gaits' targets on the host. Raises ConfigError for a device Warp does not
+    have or a model MuJoCo Warp cannot run, MissingDependencyError without the gpu extra.
     """
 
     def __init__(
         self, twin: TwinBatch, envelope: Envelope, *, device: str = "cpu", workers: int = 1
     ) -> None:
         wp, mjw = require_warp()
-        self.workers = max(1, workers)
+        # --workers also sizes a CMA-ES population (a multiple of it): thousands, on a GPU.
+        self.workers = max(1, min(workers, os.cpu_count() or 1))
         self._wp, self._mjw = wp, mjw
         self.twin, self.envelope = twin, envelope
         try:
