@@ -29,7 +29,7 @@ from sensor_msgs.msg import JointState as JointStateMessage
 from trajectory_msgs.msg import JointTrajectory
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import OnBus, ReportsHealth
+from snakebot.backends.capabilities import OnBus, ReportsHealth, SensesCurrent
 from snakebot.config import RobotConfig
 from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
@@ -251,7 +251,9 @@ class RosBridge:
 
     def _servo_statuses(self) -> list[DiagnosticStatus]:
         backend = self.backend
-        health = backend.health() if isinstance(backend, ReportsHealth) else {}
+        health = dict(backend.health()) if isinstance(backend, ReportsHealth) else {}
+        if isinstance(backend, SensesCurrent):
+            health["current_a"] = backend.present_current_a()
         bus = backend.bus if isinstance(backend, OnBus) else None
         statuses = []
         for joint, (name, servo) in enumerate(zip(self.names, self.robot.servo_ids, strict=True)):

@@ -66,8 +66,8 @@ DIAGNOSTICS = Topic(
     "diagnostic_msgs/msg/DiagnosticArray",
     "publish",
     RELIABLE_10,
-    "1 Hz: one status per servo (temperature, voltage, current, hardware errors where the "
-    "backend reads them) and one for the node",
+    "1 Hz: one status per servo (temperature_c, input_voltage_v, current_a, hardware_errors "
+    "where the backend reads them) and the run's",
 )
 RUN_METRICS = Topic(
     "run_metrics",
