@@ -141,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         smoothing_s=args.smoothing,
         transition_s=args.transition,
         node_name=args.node_name,
-        ros_args=tuple(args.ros_args),
+        ros_args=("--ros-args", *args.ros_args) if args.ros_args else (),
     )
     if args.loopback:  # before rclpy loads: the middleware reads these once
         os.environ.update(loopback_environment())

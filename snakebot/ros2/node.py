@@ -124,7 +124,7 @@ def _ros_node(options: NodeOptions) -> Iterator[Node]:
     """A node in a context of its own, its executor spinning on a daemon thread; the stop
     signals stay the caller's (rclpy installs no handler)."""
     context = Context()
-    args = ["snakebot", "--ros-args", *options.ros_args] if options.ros_args else None
+    args = ["snakebot", *options.ros_args] if options.ros_args else None
     rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node(options.node_name, context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -184,7 +184,7 @@ class RosBridge:
         if [p.value for p in declared] != [first.name, params]:  # given with --ros-args -p
             result = self._on_parameters(declared)
             if not result.successful:
-                raise ConfigError("--ros-args", "", result.reason)
+                raise ConfigError("ros_args", "", result.reason)
         node.add_on_set_parameters_callback(self._on_parameters)
         self.observers = (self._publish_cycle,)
 
