@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+from pathlib import Path
 from typing import Any
 
 from snakebot.cli.backend_options import (
@@ -15,10 +16,14 @@ from snakebot.cli.backend_options import (
     given_options,
 )
 from snakebot.cli.common import (
+    add_dry_run,
+    add_force_option,
     add_robot_option,
+    check_writable,
     gait_list_arg,
     positive_float,
     print_json,
+    report_dry_run,
     robot_name,
 )
 from snakebot.cli.drive_cmd import gait_choices
@@ -121,8 +126,17 @@ def add_parser(subparsers: Any) -> None:
         default=[],
         help="the rest goes to rclpy as --ros-args (remaps, -p parameters, namespace)",
     )
+    parser.add_argument(
+        "--mcap",
+        type=Path,
+        metavar="FILE",
+        help="also record every cycle to FILE as ROS 2 messages, as run --mcap-encoding ros2 "
+        "does (extra: snakebot[ros2-mcap]; docs/ros2.md)",
+    )
+    add_force_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.set_defaults(handler=run, writes=False)
+    add_dry_run(parser, "no node starts, no servo moves, no recording")
+    parser.set_defaults(handler=run, writes=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -146,6 +160,11 @@ def run(args: argparse.Namespace) -> int:
     if args.loopback:  # before rclpy loads: the middleware reads these once
         os.environ.update(loopback_environment())
     require_rclpy()  # the extra, before anything connects
+    if args.mcap is not None:
+        from snakebot.telemetry.ros2_mcap import mcap_writer_module
+
+        mcap_writer_module()  # the recording's extra too
+        check_writable(args.mcap, "MCAP file", force=args.force)
     from snakebot.ros2.node import run_node
 
     # ROS clients live on the wall clock: the twin is paced to it.
@@ -153,12 +172,27 @@ def run(args: argparse.Namespace) -> int:
     with flag_errors():
         snake = Snake.prepare(robot, spec, **given)
     snake.backend.check_rate(args.rate)  # refused before the port opens (exit 2)
+    if args.dry_run:
+        plan = {"robot": robot.name, "backend": spec.name, "rate_hz": args.rate}
+        return report_dry_run(args, {**plan, "mcap": args.mcap})
     with contextlib.ExitStack() as stack:
         signals = stack.enter_context(StopSignals())
+        recording = []
+        if args.mcap is not None:
+            from snakebot.cli.telemetry_options import open_ros2_mcap
+
+            gaits = [{"gait": c.name, "params": c.params} for c in options.gait_choices(robot)]
+            recording.append(
+                open_ros2_mcap(
+                    stack, args, robot, snake.backend, args.rate, "ros2", {"gaits": gaits}
+                )
+            )
         with flag_errors():
             stack.enter_context(snake)
-        result = run_node(snake, options, stop_check=signals)
+        result = run_node(snake, options, stop_check=signals, observers=recording)
     summary = {"robot": robot.name, "backend": spec.name, **result.summary}
+    if args.mcap is not None:
+        summary["mcap"] = str(args.mcap)
     if args.json:
         print_json(summary)
     else:

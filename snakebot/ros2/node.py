@@ -31,7 +31,7 @@ from trajectory_msgs.msg import JointTrajectory
 from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import OnBus, ReportsHealth, SensesCurrent
 from snakebot.config import RobotConfig
-from snakebot.control.cycle import CycleRecord
+from snakebot.control.cycle import CycleObserver, CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.safety import SafetyLayer
 from snakebot.control.summary import run_summary
@@ -76,13 +76,15 @@ def run_node(
     *,
     inbox: CommandInbox | None = None,
     stop_check: Any = None,
+    observers: Sequence[CycleObserver] = (),
 ) -> ServeResult:
     """Serve a connected ``snake`` as a ROS 2 node until a stop (snakebot.ros2.topics lists
     the interface). ``inbox`` takes commands from Python as the subscriptions do (one with a
     command in it starts moving at once); ``stop_check()`` returning a reason stops the node
     (a signal). Ends at the rest pose; leaving the Snake's ``with`` block then applies the stop
-    policy. Raises GaitError/ConfigError for a gait list that cannot be driven (before
-    anything moves) and what the control cycle raises.
+    policy. ``observers`` see every cycle's record after the publishers (a recording: see
+    snakebot.telemetry.ros2_mcap). Raises GaitError/ConfigError for a gait list that cannot be
+    driven (before anything moves) and what the control cycle raises.
     """
     options = options or NodeOptions()
     robot = snake.robot
@@ -114,7 +116,7 @@ def run_node(
             SafetyLayer.for_robot(robot),
             rate_hz=rate,
             metrics=metrics,
-            observers=bridge.observers,
+            observers=(*bridge.observers, *observers),
             stop_check=stop_check,
         )
 

@@ -80,14 +80,19 @@ class GaitCommands:
         self, cycle: int, time_s: float, measured_rad: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
         """Gait targets at ``time_s`` and the safety layer's commands, each (B, N)."""
+        targets = self.cycle.targets(time_s, measured_rad)
+        return targets, self.send(cycle, time_s, targets)
+
+    def send(self, cycle: int, time_s: float, targets_rad: FloatArray) -> FloatArray:
+        """What the safety layer sends (B, N) for the gaits' ``targets_rad`` (B, N) of control
+        cycle ``cycle`` at gait time ``time_s``: the commands half of ``__call__``, for a caller
+        that computed the targets of many cycles at once (Gait.targets over an array of times)."""
         schedule = self.schedule
         if schedule is None:
             raise RuntimeError("GaitCommands used before reset()")
         last, self._last_time_s = self._last_time_s, time_s
         slew_s = schedule.slew_period_s(cycle, None if last is None else time_s - last)
-        targets = self.cycle.targets(time_s, measured_rad)
-        commands = self.cycle.commands(targets, slew_s, schedule.ramp_in(time_s))
-        return targets, commands
+        return self.cycle.commands(targets_rad, slew_s, schedule.ramp_in(time_s))
 
 
 class ArrayCommands:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from snakebot.backends.twin import GroundFriction
 from snakebot.backends.twin.friction.scale import FrictionModel
@@ -26,7 +26,13 @@ from snakebot.tuning.pool import PoolJob, ProcessPool
 from snakebot.tuning.space import SearchSpace
 from snakebot.tuning.trace import FloatArray, Trace, summarise
 
-ENGINES = ("batch", "processes")
+if TYPE_CHECKING:
+    from snakebot.tuning.executor_ray import RayEvaluator
+
+ENGINES = ("batch", "processes", "warp")
+EXECUTORS = ("local", "ray")
+"""Where candidates run: ``local`` on this machine's engine; ``ray`` on Ray actors, one per node
+(snakebot.tuning.executor_ray), at ``EvalPlan.address`` or on a Ray started here."""
 
 
 @dataclass(frozen=True)
@@ -49,16 +55,23 @@ class Evaluation:
 
 @dataclass(frozen=True)
 class EvalPlan:
-    """How each candidate runs: like ``snakebot run --duration D --rate R`` on the twin."""
+    """How each candidate runs: like ``snakebot run --duration D --rate R`` on the twin.
+
+    ``executor`` says where (EXECUTORS); ``address`` is the Ray cluster's ``HOST:PORT`` for the
+    ``ray`` executor (None: start Ray on this machine).
+    """
 
     duration_s: float = 10.0
     rate_hz: float = 100.0
     workers: int = 2
     engine: str = "batch"
+    device: str = "cpu"  # the Warp device of engine "warp" ("cpu", "cuda", "cuda:1", ...)
     allow_roll: bool = False
     friction: GroundFriction | None = None
     terrain: Terrain | None = None
     friction_model: FrictionModel | None = None
+    executor: str = "local"
+    address: str | None = None
 
 
 class SearchProblem(Protocol):
@@ -141,11 +154,28 @@ class GaitProblem:
                 self.envelope, contact_tolerance_m=math.inf, lift_limit_m=math.inf
             )
         self._pool = ProcessPool(plan.workers) if plan.engine == "processes" else None
+        self._remote: RayEvaluator | None = None
+        if plan.executor == "ray":
+            from snakebot.tuning.executor_ray import RayEvaluator
+
+            self._remote = RayEvaluator(robot, space, objective, plan)
 
     def close(self) -> None:
-        """Release the worker processes, if any."""
+        """Release the worker processes or Ray actors, if any."""
         if self._pool is not None:
             self._pool.close()
+        if self._remote is not None:
+            self._remote.close()
+
+    @property
+    def live_workers(self) -> int | None:
+        """Ray actors alive now (the ``ray`` executor), None on the local one."""
+        return None if self._remote is None else self._remote.live_workers
+
+    @property
+    def rescored(self) -> int:
+        """Candidates scored again because the Ray worker holding them was lost (0 locally)."""
+        return 0 if self._remote is None else self._remote.rescored
 
     @property
     def evaluations(self) -> int:
@@ -160,20 +190,40 @@ class GaitProblem:
     def evaluate(self, points: Sequence[FloatArray] | FloatArray) -> list[Evaluation]:
         """Run every point (D,) on the twin in parallel and score it; returns them in order."""
         rows = [tuple(float(v) for v in point) for point in points]
-        params = [self.space.params(x) for x in rows]
         out = []
-        for x, p, trace in zip(rows, params, self.run(params), strict=True):
-            out.append(self.score(x, p, trace, len(self.history)))
-            self.history.append(out[-1])
+        if self._remote is not None:
+            for scored in self._remote.evaluate(rows):
+                out.append(replace(scored, index=len(self.history)))
+                self.history.append(out[-1])
+        else:
+            params = [self.space.params(x) for x in rows]
+            outcomes = self.outcomes(params)
+            for x, p, (summary, violations) in zip(rows, params, outcomes, strict=True):
+                out.append(self.score(x, p, summary, violations, len(self.history)))
+                self.history.append(out[-1])
         if self.listener is not None:
             self.listener(self)
         return out
 
     def baseline(self) -> Evaluation:
         """The base parameters (defaults and --set), scored but not counted as an evaluation."""
+        if self._remote is not None:
+            return self._remote.baseline()
         params = dict(self.space.base)
-        trace = self.run([params])[0]
-        return self.score(tuple(float(v) for v in self.space.start()), params, trace, -1)
+        summary, violations = self.outcomes([params])[0]
+        start = tuple(float(v) for v in self.space.start())
+        return self.score(start, params, summary, violations, -1)
+
+    def outcomes(
+        self, params: Sequence[Mapping[str, ParamValue]]
+    ) -> list[tuple[dict[str, object], Violations]]:
+        """Each parameter set's run summary and violations (the Warp engine's subclass,
+        snakebot.tuning.engine_warp.WarpGaitProblem, measures them on its device instead)."""
+        out = []
+        for p, trace in zip(params, self.run(params), strict=True):
+            summary = summarise(trace, self.robot, self.gait(p).period_s)
+            out.append((summary, assess(trace, self.envelope, self.plan.duration_s)))
+        return out
 
     def run(self, params: Sequence[Mapping[str, ParamValue]]) -> list[Trace]:
         """The raw runs of full gait parameter sets, on the chosen engine."""
@@ -210,12 +260,14 @@ class GaitProblem:
         )
 
     def score(
-        self, x: tuple[float, ...], params: dict[str, ParamValue], trace: Trace, index: int
+        self,
+        x: tuple[float, ...],
+        params: dict[str, ParamValue],
+        summary: dict[str, object],
+        violations: Violations,
+        index: int,
     ) -> Evaluation:
-        """Summarise and assess one run."""
-        period = self.gait(params).period_s
-        summary = summarise(trace, self.robot, period)
-        violations = assess(trace, self.envelope, self.plan.duration_s)
-        value = self.objective.value(summary) if not trace.stop_reason else math.nan
+        """The objective value and loss of one run's summary and violations."""
+        value = self.objective.value(summary) if not violations.stopped else math.nan
         loss = self.objective.loss(value, violations)
         return Evaluation(index, x, params, summary, violations, value, loss)

@@ -61,6 +61,9 @@ class TuneResult:
             "budget": self.budget,
             "wall_s": self.wall_s,
             "engine": self.plan.engine,
+            **({"device": self.plan.device} if self.plan.engine == "warp" else {}),
+            "executor": self.plan.executor,
+            **({"address": self.plan.address} if self.plan.executor == "ray" else {}),
             "workers": self.plan.workers,
             "seed": self.seed,
             "duration_s": self.plan.duration_s,
@@ -110,11 +113,20 @@ def tune_gait(
     if isinstance(robot, BodyConfig):
         from snakebot.tuning.softbody import SoftGaitProblem
 
+        if plan.engine == "warp":
+            raise ConfigError("--engine", "warp", "a mass-spring body tunes through the runner")
+        if plan.executor != "local":
+            raise ConfigError("executor", plan.executor, "a mass-spring body tunes locally only")
         plan = replace(plan, engine="processes")
         problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
     else:
         check_joint_axes(space.gait, [joint.axis for joint in robot.joints], robot.name)
-        problem = GaitProblem(robot, space, objective, plan, listener=listener)
+        if plan.engine == "warp":
+            from snakebot.tuning.engine_warp import WarpGaitProblem
+
+            problem = WarpGaitProblem(robot, space, objective, plan, listener=listener)
+        else:
+            problem = GaitProblem(robot, space, objective, plan, listener=listener)
     try:
         grid: GridResult | None = None
         generations: tuple[Generation, ...] = ()
