@@ -4,10 +4,28 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 
 class SnakebotError(Exception):
-    """Root of every error snakebot raises on purpose; its message says what to do."""
+    """Root of every error snakebot raises on purpose; its message says what to do.
+
+    Every subclass survives pickling with its message and fields, whatever its ``__init__``
+    takes, so an error raised in a worker process or on a Ray node reaches the caller as itself.
+    """
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_rebuild_error, (type(self), self.args, dict(self.__dict__)))
+
+
+def _rebuild_error(
+    kind: type[SnakebotError], args: tuple[object, ...], fields: dict[str, object]
+) -> SnakebotError:
+    """A pickled SnakebotError made again without calling its ``__init__``."""
+    error = kind.__new__(kind)
+    error.args = args
+    error.__dict__.update(fields)
+    return error
 
 
 class ConfigError(SnakebotError, ValueError):
@@ -153,3 +171,15 @@ class PhysicsHealthError(BackendError):
             "here: lower the gains or the timestep (twin.timestep_s), raise the armature, or "
             "see docs/physics.md"
         )
+
+
+class ClusterError(SnakebotError, ConnectionError):
+    """A Ray cluster could not be reached or started, or lost every worker while it ran.
+
+    ``address`` is the cluster's ``HOST:PORT`` (``None``: Ray started on this machine).
+    """
+
+    def __init__(self, address: str | None, message: str) -> None:
+        self.address = address
+        where = f"the Ray cluster at {address}" if address else "Ray on this machine"
+        super().__init__(f"{where}: {message}")

@@ -38,7 +38,7 @@ from snakebot.types import BodyState, JointCommand, JointState, PDGains
 
 if TYPE_CHECKING:
     from snakebot.backends.base import Backend
-    from snakebot.control.cycle import CycleSink
+    from snakebot.control.cycle import CycleObserver, CycleSink, StopCheck
     from snakebot.drive.controller import DriveController
     from snakebot.drive.run import DriveObserver, DriveResult
     from snakebot.drive.sources import InputSource
@@ -238,6 +238,8 @@ class Snake:
         log: str | Path | CycleSink | None = None,
         on_cycle: CycleHook | None = None,
         ramp_out: bool = True,
+        observers: Sequence[CycleObserver] = (),
+        stop: StopCheck | None = None,
     ) -> RunSummary:
         """Play ``gait`` for ``duration_s`` seconds at ``rate_hz``, then ramp out to rest.
 
@@ -246,7 +248,10 @@ class Snake:
         snakebot.control.cycle.CycleSink, which sees each cycle's record) for per-cycle
         telemetry; rows
         written stay on disk whatever ends the run. ``on_cycle(cycle, gait_time_s)`` runs after
-        every cycle. Ctrl-C ends the gait early and ramps out (``summary.interrupted``).
+        every cycle. Each of ``observers`` sees every cycle's record after ``log`` (an
+        estimator: snakebot.estimation); ``stop()``, asked before every gait cycle, ends the gait
+        with a reason (``summary.extra["stopped_by"]``). Ctrl-C ends the gait early and ramps
+        out (``summary.interrupted``).
         Raises GaitError/ConfigError for a bad gait (before anything moves), ValueError for a
         non-positive duration or rate, OutputError for a log that cannot be written,
         BackendError for what the backend reports.
@@ -259,11 +264,23 @@ class Snake:
         safety = SafetyLayer.for_robot(robot)
         with self._open_log(log) as writer:
             result = run_gait(
-                self.backend, built, safety, plan, metrics, log=writer, on_cycle=on_cycle
+                self.backend,
+                built,
+                safety,
+                plan,
+                metrics,
+                log=writer,
+                on_cycle=on_cycle,
+                observers=observers,
+                stop=stop,
             )
         # A backend that measures more than the runner (the soft body's travel angle) says so.
         backend = self.backend
-        extra = dict(backend.travel()) if isinstance(backend, ReportsTravel) else {}
+        extra: dict[str, object] = (
+            dict(backend.travel()) if isinstance(backend, ReportsTravel) else {}
+        )
+        if result.stopped_by:
+            extra["stopped_by"] = result.stopped_by
         return RunSummary.from_run(
             robot=robot.name,
             gait=name,

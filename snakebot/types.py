@@ -20,20 +20,25 @@ class JointState:
     """One snapshot of every joint, head to tail.
 
     ``position_rad``, ``velocity_rad_s`` and ``effort_nm`` have shape (N,); ``time_s`` is robot
-    time (simulated on the twin, monotonic wall clock on hardware).
+    time (simulated on the twin, monotonic wall clock on hardware). ``positive_work_j`` (N,) is
+    the positive work each joint has put in since the backend connected or reset, J, integrated
+    over every physics step by a simulated backend (so it does not depend on the control rate);
+    None where the backend only samples (a servo bus: the run's metrics then integrate effort
+    times velocity at the control rate).
     """
 
     time_s: float
     position_rad: np.ndarray
     velocity_rad_s: np.ndarray
     effort_nm: np.ndarray
+    positive_work_j: np.ndarray | None = None
 
 
 def positive_power_w(effort_nm: np.ndarray, velocity_rad_s: np.ndarray) -> np.ndarray:
     """The mechanical power each joint puts in, W: effort times velocity where positive, 0 where
     the joint is being driven (negative power) or a value is missing (NaN). Any shape (..., N);
-    positive work is its sum times the period (run summaries, the twin's health check, the
-    learning environments' reward info)."""
+    positive work is its integral: over every physics step on a simulated backend
+    (``JointState.positive_work_j``), else its sum times the control period."""
     power = effort_nm * velocity_rad_s
     return np.where(power > 0.0, power, 0.0)
 

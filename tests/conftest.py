@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import shutil
 import signal
+from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 # MUJOCO_GL is not preset here: importing snakebot's backends picks the offscreen platform the way
 # any program using snakebot gets it, before a test module's own `import mujoco` could fix GLFW.
 import snakebot.backends  # noqa: F401
+
+if TYPE_CHECKING:
+    from snakebot.testing.cluster import LoopbackCluster
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "firmware_configs"
@@ -39,3 +44,14 @@ def edit_robot(config_dir: Path, name: str, old: str, new: str) -> Path:
     assert old in text, f"{old!r} not in {path}"
     path.write_text(text.replace(old, new, 1))
     return path
+
+
+@pytest.fixture(scope="session")
+def loopback_cluster() -> Iterator[LoopbackCluster]:
+    """Two real Ray nodes on 127.0.0.1, one CPU each, shared by the session's cluster tests
+    (skipped without the cluster extra). A test that kills a node starts a new one after."""
+    pytest.importorskip("ray", reason="the cluster tests need Ray: pip install 'snakebot[cluster]'")
+    from snakebot.testing.cluster import LoopbackCluster
+
+    with LoopbackCluster(nodes=2) as cluster:
+        yield cluster

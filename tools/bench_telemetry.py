@@ -3,7 +3,8 @@
 Records 1000 cycles of snake12 sidewinding on the twin at 100 Hz, then replays them into each
 sink set, timing every call (what the control thread pays): the CSV log alone, the Foxglove
 server with no client, with a subscribed client (a thread here, so it competes for the CPU as a
-local Foxglove app would), the MCAP file, and CSV + server + client + MCAP. The scene is the
+local Foxglove app would), the MCAP file, the MCAP file in the ROS 2 encoding (``--mcap-encoding
+ros2``), and CSV + server + client + MCAP. The scene is the
 forward kinematics of the measured joints (the hardware path; the twin's own poses are cheaper).
 Writes come at the control period (the loop waits on the bus or the pacer in between, when the
 SDK's threads send); ``--period-ms 0`` writes back to back, the worst case. Rounds alternate the
@@ -36,6 +37,7 @@ from snakebot.control.safety import SafetyLayer
 from snakebot.gaits import make_gait
 from snakebot.telemetry import CsvTelemetryWriter
 from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, Geometry, TelemetryOptions
+from snakebot.telemetry.ros2_mcap import Ros2McapRecorder
 from snakebot.telemetry.scene import KinematicLinkPoses
 from snakebot.telemetry.sink import TelemetryTee
 
@@ -131,6 +133,20 @@ def foxglove(folder: Path, *, port: bool, mcap: bool) -> FoxgloveTelemetry:
     )
 
 
+def ros2_mcap(folder: Path) -> Ros2McapRecorder:
+    robot = load_robot("snake12")
+    poses = KinematicLinkPoses(robot)
+    return Ros2McapRecorder(
+        folder / "b.ros2.mcap",
+        joint_names=[f"joint{i}" for i in range(robot.joint_count)],
+        servo_ids=robot.servo_ids,
+        rate_hz=100.0,
+        geometry=Geometry(
+            robot.link_count, robot.link.length_m, robot.link.radius_m, lambda: poses
+        ),
+    )
+
+
 def replay(rows: list[CycleRecord], sink: CycleSink, period_s: float) -> list[float]:
     """Write every row at its cycle's deadline, as a loop waiting on the bus or the pacer does
     (the SDK's threads send while the loop waits); period 0 writes back to back."""
@@ -154,6 +170,9 @@ def measure(name: str, folder: Path, rows: list[CycleRecord], period_s: float) -
             return replay(rows, sink, period_s)
     if name == "MCAP file":
         with foxglove(folder, port=False, mcap=True) as sink:
+            return replay(rows, sink, period_s)
+    if name == "MCAP file, ROS 2":
+        with ros2_mcap(folder) as sink:
             return replay(rows, sink, period_s)
     with contextlib.ExitStack() as stack:
         fox = stack.enter_context(foxglove(folder, port=True, mcap=name.endswith("MCAP")))
@@ -187,6 +206,7 @@ def main() -> None:
         "Foxglove server, no client",
         "Foxglove server + client",
         "MCAP file",
+        "MCAP file, ROS 2",
         "CSV + server + client + MCAP",
     ]
     results: dict[str, list[float]] = {name: [] for name in names}

@@ -17,7 +17,7 @@ from snakebot.cli.common import (
     print_json,
     report_dry_run,
 )
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, UsageError
 from snakebot.telemetry import TelemetryLog, read_log
 
 
@@ -53,6 +53,13 @@ def add_parser(subparsers: Any) -> None:
     export = actions.add_parser("export", help="write the log as MCAP (Foxglove) or Parquet")
     export.add_argument("log", type=Path, help="telemetry CSV")
     export.add_argument("--format", choices=("mcap", "parquet"), required=True)
+    export.add_argument(
+        "--mcap-encoding",
+        choices=("json", "ros2"),
+        default="json",
+        help="--format mcap: json (default: the Foxglove channels) or ros2 (standard ROS 2 "
+        "messages in CDR, as run --mcap-encoding ros2 writes; extra: snakebot[ros2-mcap])",
+    )
     export.add_argument(
         "--out",
         type=Path,
@@ -147,9 +154,16 @@ def export_path(log: Path, fmt: str) -> Path:
 
 def run_export(args: argparse.Namespace) -> int:
     """Write the MCAP or Parquet file."""
-    from snakebot.telemetry.export import export_mcap, export_parquet
+    from snakebot.telemetry.export import export_mcap, export_parquet, export_ros2_mcap
 
-    if args.format == "mcap":
+    ros2 = args.mcap_encoding == "ros2"
+    if ros2 and args.format != "mcap":
+        raise UsageError("--mcap-encoding ros2 goes with --format mcap")
+    if ros2:
+        from snakebot.telemetry.ros2_mcap import mcap_writer_module
+
+        mcap_writer_module()  # a missing extra is said before the log is read
+    elif args.format == "mcap":
         from snakebot.telemetry.foxglove_live import foxglove_module
 
         foxglove_module()  # a missing SDK is said before the log is read
@@ -163,7 +177,7 @@ def run_export(args: argparse.Namespace) -> int:
             args, {"log": args.log, "rows": len(log.values), "out": out, "format": args.format}
         )
     export = export_mcap if args.format == "mcap" else export_parquet
-    rows = export(log, sidecar, out)
+    rows = (export_ros2_mcap if ros2 else export)(log, sidecar, out)
     if args.json:
         print_json({"log": str(args.log), "out": str(out), "format": args.format, "rows": rows})
     else:

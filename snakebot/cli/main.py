@@ -43,6 +43,7 @@ COMMANDS: tuple[str, ...] = (
     "rl",
 )
 COMMANDS += ("robots", "ports")  # issue 9: where robots come from, which serial ports exist
+COMMANDS += ("ros2",)  # issue 24: serve a snake as a ROS 2 node (the ros2 extra)
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 

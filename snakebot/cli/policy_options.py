@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import TYPE_CHECKING
 
 from snakebot.backends.base import Backend
 from snakebot.cli.backend_options import flag_errors
@@ -14,6 +15,9 @@ from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, UsageError
 from snakebot.gaits import Gait
+
+if TYPE_CHECKING:
+    from snakebot.rl.policy_gait import PoseSource
 
 
 def parse_command(text: str | None) -> tuple[float, float] | None:
@@ -31,10 +35,15 @@ def parse_command(text: str | None) -> tuple[float, float] | None:
 
 
 def policy_gait(
-    robot: RobotConfig | BodyConfig, backend: Backend, args: argparse.Namespace
+    robot: RobotConfig | BodyConfig,
+    backend: Backend,
+    args: argparse.Namespace,
+    *,
+    pose: PoseSource | None = None,
 ) -> tuple[str, Gait]:
-    """The --policy gait for ``backend`` (made, not yet connected); UsageError when --gait,
-    --gait-file or --set come too, or the robot is a mass-spring body (no servos to drive)."""
+    """The --policy gait for ``backend`` (made, not yet connected), a goal policy's pose from
+    ``pose`` where given (--odometry); UsageError when --gait, --gait-file or --set come too, or
+    the robot is a mass-spring body (no servos to drive)."""
     if args.gait or args.gait_file or args.set:
         raise UsageError("--policy is the gait: drop --gait, --gait-file and --set")
     if isinstance(robot, BodyConfig):
@@ -45,5 +54,5 @@ def policy_gait(
 
     with flag_errors({"command": "--command"}):  # --command's destination is policy_command
         return policy_gait_for_backend(
-            args.policy, robot, backend, parse_command(args.policy_command), args.rate
+            args.policy, robot, backend, parse_command(args.policy_command), args.rate, pose=pose
         )

@@ -123,8 +123,37 @@ def add_parser(subparsers: Any) -> None:
         default=100_000,
         help="env steps per encoding (default 100000)",
     )
-    compare.add_argument("--seed", type=int, default=0)
+    compare.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
+    compare.add_argument(
+        "--seeds",
+        type=positive_int,
+        default=1,
+        help="train each encoding on seeds SEED..SEED+N-1 (default 1: OUT/ENCODING; more: "
+        "OUT/ENCODING/seed-S)",
+    )
+    compare.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="KEY=V1,V2,...",
+        help="also sweep a PPO or scalar env setting over these values (repeatable: every "
+        "combination; each trial in OUT/ENCODING/KEY=V,.../)",
+    )
+    compare.add_argument(
+        "--ppo",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="PPO setting for every run (repeatable), as rl train's",
+    )
+    compare.add_argument(
+        "--rollout",
+        type=positive_int,
+        default=DEFAULT_ROLLOUT,
+        help=f"env steps per PPO update, over all envs (default {DEFAULT_ROLLOUT})",
+    )
     _vec_options(compare)
+    _executor_options(compare)
     compare.add_argument(
         "--out",
         type=Path,
@@ -156,6 +185,119 @@ def _env_options(parser: argparse.ArgumentParser) -> None:
         "--set goal_distance_bl=2,3; see docs/learning.md",
     )
     parser.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
+
+
+def _executor_options(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("Ray (the 'cluster' extra; docs/learning.md)")
+    group.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="local: one trial after the other here; ray: Ray Tune trials (default local)",
+    )
+    group.add_argument(
+        "--address", help="Ray cluster HOST:PORT (default: a local one on 127.0.0.1)"
+    )
+    group.add_argument(
+        "--scheduler",
+        choices=("none", "asha"),
+        default="none",
+        help="asha: stop trials whose return falls into the worse half at a rung",
+    )
+    group.add_argument(
+        "--asha-grace",
+        type=positive_int,
+        metavar="STEPS",
+        help="first ASHA rung, env steps (default a quarter of --steps, one rollout at least)",
+    )
+    group.add_argument(
+        "--cpus-per-trial",
+        type=float,
+        help="CPUs Ray reserves per trial (default --n-envs for subproc envs, 1 for dummy)",
+    )
+    group.add_argument(
+        "--max-concurrent-trials", type=positive_int, help="at most this many trials at once"
+    )
+    group.add_argument(
+        "--ray-cpus",
+        type=positive_int,
+        help="CPUs of the local Ray cluster started without --address (default all)",
+    )
+    group.add_argument(
+        "--retries",
+        type=int,
+        default=2,
+        help="runs again a trial that failed (a lost node) this often (default 2)",
+    )
+    group.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on with the interrupted Ray sweep in --out (finished trials are kept)",
+    )
+
+
+RAY_ONLY = (
+    "address",
+    "scheduler",
+    "asha_grace",
+    "cpus_per_trial",
+    "max_concurrent_trials",
+    "ray_cpus",
+    "resume",
+)
+
+
+def _ray_executor(args: argparse.Namespace) -> Any:
+    """The Ray executor of ``rl compare --executor ray``; None for a local run, where each
+    Ray option is a usage error."""
+    defaults = {"scheduler": "none", "resume": False}
+    given = [
+        f"--{key.replace('_', '-')}"
+        for key in RAY_ONLY
+        if getattr(args, key) not in (None, defaults.get(key))
+    ]
+    if args.executor == "local":
+        if given or args.retries != 2:
+            raise UsageError(f"{', '.join(given) or '--retries'}: needs --executor ray")
+        return None
+    from snakebot.rl.compare_ray import RayExecutor, RayOptions, require_ray
+
+    require_ray()
+    return RayExecutor(
+        RayOptions(
+            address=args.address,
+            num_cpus=args.ray_cpus,
+            scheduler=args.scheduler,
+            asha_grace_steps=args.asha_grace,
+            cpus_per_trial=args.cpus_per_trial,
+            max_concurrent_trials=args.max_concurrent_trials,
+            retries=args.retries,
+            resume=args.resume,
+        )
+    )
+
+
+def parse_grid(items: list[str]) -> dict[str, tuple[Any, ...]]:
+    """--grid KEY=V1,V2,...: each key's values (numbers or words); ConfigError naming the item
+    for one without values or a key given twice."""
+    grid: dict[str, tuple[Any, ...]] = {}
+    for item in items:
+        key, sep, raw = item.partition("=")
+        key = key.strip()
+        if not sep or not key or not raw.strip():
+            raise ConfigError(
+                "--grid", item, "expected KEY=V1,V2,..., e.g. learning_rate=3e-4,1e-4"
+            )
+        if key in grid:
+            raise ConfigError("--grid", item, f"{key} is given twice")
+        values: list[Any] = []
+        for part in (p.strip() for p in raw.split(",")):
+            try:
+                values.append(_number(part))
+            except ValueError:
+                values.append(part)
+        grid[key] = tuple(values)
+    return grid
 
 
 def _vec_options(parser: argparse.ArgumentParser) -> None:
@@ -393,14 +535,26 @@ def run_compare(args: argparse.Namespace) -> int:
             "--encodings", args.encodings, f"expected a comma list of {', '.join(ENCODING_CHOICES)}"
         )
     from snakebot.rl.compare import compare
+    from snakebot.rl.sweep import SweepPlan, comparison_table
 
     runs = {e: env_kwargs(args, e) for e in encodings}
+    ppo, grid = parse_ppo(args.ppo), parse_grid(args.grid)
+    executor = _ray_executor(args)
+    seeds = tuple(range(args.seed, args.seed + args.seeds))
+    plan = SweepPlan(
+        args.env, runs, args.steps, seeds, grid, args.n_envs, args.vec, args.rollout, ppo
+    )
     _check_out(args.out)
     from snakebot.rl.policy_file import TRAIN_FILES
 
-    refuse_replacing_in(args.out, ("compare.png", "compare.json"), "comparison", force=args.force)
-    for encoding in encodings:
-        refuse_replacing_in(args.out / encoding, TRAIN_FILES, "trained policy", force=args.force)
+    if not args.resume:  # a resumed sweep goes on in its own folder
+        from snakebot.rl.compare_ray import EXPERIMENT
+
+        names = ("compare.png", "compare.json", EXPERIMENT)
+        refuse_replacing_in(args.out, names, "comparison", force=args.force)
+        for trial in plan.trials():
+            folder = args.out / trial.name
+            refuse_replacing_in(folder, TRAIN_FILES, "trained policy", force=args.force)
     if args.dry_run:
         return report_dry_run(
             args,
@@ -410,13 +564,27 @@ def run_compare(args: argparse.Namespace) -> int:
                 "robot": args.robot,
                 "steps": args.steps,
                 "out": str(args.out),
+                "executor": args.executor,
+                "trials": [t.name for t in plan.trials()],
             },
         )
     summary = compare(
-        args.env, runs, args.steps, args.out, seed=args.seed, n_envs=args.n_envs, vec=args.vec
+        args.env,
+        runs,
+        args.steps,
+        args.out,
+        seed=args.seed,
+        n_envs=args.n_envs,
+        vec=args.vec,
+        seeds=args.seeds,
+        grid=grid,
+        rollout_steps=args.rollout,
+        ppo=ppo,
+        executor=executor,
     )
     if args.json:
         print_json(summary)
     else:
-        print(f"compare.png and one policy folder per encoding in {args.out}")
+        print(comparison_table(summary["table"]), end="")
+        print(f"compare.png and one policy folder per trial in {args.out}")
     return 0

@@ -31,9 +31,12 @@ from snakebot.cli.common import (
     report_dry_run,
     robot_name,
 )
+from snakebot.cli.goto_options import odometry_for, steered_gait, steering_summary
 from snakebot.cli.telemetry_options import add_telemetry_options, check_outputs, open_telemetry
 from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, terrain_help
 from snakebot.errors import ConfigError, OutputError, UsageError
+from snakebot.estimation import ChassisOdometry
+from snakebot.estimation.goto import STEERABLE_GAITS, GoToPoint
 from snakebot.gaits import Gait, load_gait_file, parse_set_options
 from snakebot.run_summary import RunSummary
 from snakebot.session import (
@@ -47,6 +50,9 @@ from snakebot.session import (
     watched,
 )
 from snakebot.telemetry.sidecar import gait_facts
+
+TO_DURATION_S = 60.0
+"""How long ``run --to`` may take to reach its point when --duration does not say."""
 
 BACKEND_OPTIONS = (
     "friction",
@@ -91,12 +97,26 @@ def add_parser(subparsers: Any) -> None:
         "speed,turn_rate (m/s, rad/s) for a velocity policy; goal X,Y (m, X "
         "ahead) for a goal policy",
     )
+    parser.add_argument(
+        "--to",
+        metavar="X,Y",
+        help="go to a point X,Y m from the snake (X ahead, Y left) and stop there, steering "
+        "the gait by the odometry of the measured joints (docs/estimation.md); "
+        f"gaits {', '.join(STEERABLE_GAITS)}",
+    )
+    parser.add_argument(
+        "--odometry",
+        action="store_true",
+        help="with a goal --policy: its pose from the odometry of the measured joints and the "
+        "head IMU (docs/estimation.md), so it runs on the servos with no motion capture",
+    )
     add_backend_argument(parser)
     parser.add_argument(
         "--duration",
         type=positive_float,
-        default=DEFAULT_DURATION_S,
-        help=f"gait time in seconds, before the ramp-out (default {DEFAULT_DURATION_S:g})",
+        default=None,
+        help=f"gait time in seconds, before the ramp-out (default {DEFAULT_DURATION_S:g}; "
+        f"with --to the longest it may take, default {TO_DURATION_S:g})",
     )
     parser.add_argument(
         "--rate",
@@ -169,13 +189,26 @@ def run(args: argparse.Namespace) -> int:
     """Load, build, run, summarise; telemetry stays on disk whatever happens."""
     if args.policy is None and args.policy_command is not None:
         raise UsageError("--command goes with --policy (a trained policy's command)")
+    if args.to is not None and args.policy is not None:
+        raise UsageError("--to steers a gait; a --policy steers itself (drop one)")
+    if args.odometry and args.policy is None:
+        raise UsageError("--odometry is a goal --policy's pose source (--to has its own)")
+    if args.duration is None:
+        args.duration = TO_DURATION_S if args.to is not None else DEFAULT_DURATION_S
     snake, spec = prepare(args, BACKEND_OPTIONS)
+    observers: list[ChassisOdometry] = []
+    steering: GoToPoint | None = None
     if args.policy is None:
         gait_name, gait = build_gait(snake.robot, args)
+        if args.to is not None:
+            gait_name, gait, steering = steered_gait(snake.robot, gait_name, gait, args.to)
+            observers.append(steering.odometry)
     else:  # a closed-loop gait: it reads the backend it drives
         from snakebot.cli.policy_options import policy_gait
 
-        gait_name, gait = policy_gait(snake.robot, snake.backend, args)
+        odometry = odometry_for(snake.robot) if args.odometry else None
+        gait_name, gait = policy_gait(snake.robot, snake.backend, args, pose=odometry)
+        observers.extend([] if odometry is None else [odometry])
     if (args.video or args.viewer) and spec.hardware:
         raise ConfigError(
             "--video" if args.video else "--viewer",
@@ -228,6 +261,8 @@ def run(args: argparse.Namespace) -> int:
         log = telemetry.log
         with flag_errors():
             stack.enter_context(snake)
+        for estimator in observers:  # a pose before the first cycle's gait asks for one
+            estimator.start(snake.read_state())
         hooks = _cycle_hooks(stack, snake.backend, args)
         summary = snake.run(
             gait,
@@ -235,13 +270,16 @@ def run(args: argparse.Namespace) -> int:
             rate_hz=args.rate,
             log=log,
             on_cycle=_chain(hooks) if hooks else None,
+            observers=observers,
+            stop=None if steering is None else steering.reached,
         )
+    goal = {} if steering is None else steering_summary(steering)
     summary = replace(
         summary,
         gait=gait_name,
         video=str(args.video) if args.video else None,
         log=str(args.log) if args.log else None,
-        extra={**summary.extra, **telemetry.summary},
+        extra={**summary.extra, **telemetry.summary, **goal},
     )
     if args.json:
         print_json(summary.to_dict())

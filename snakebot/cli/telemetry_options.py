@@ -1,11 +1,13 @@
 """``--log``, ``--foxglove[=PORT]`` and ``--mcap FILE`` for ``run`` and ``drive``: the options and
-the sinks they open (CSV with its JSON sidecar, the Foxglove server, the MCAP file)."""
+the sinks they open (CSV with its JSON sidecar, the Foxglove server, the MCAP file: the Foxglove
+channels in JSON, or with ``--mcap-encoding ros2`` standard ROS 2 messages in CDR)."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
 import ipaddress
+import json
 import socket
 import sys
 from collections.abc import Mapping
@@ -16,12 +18,13 @@ from typing import Any
 from snakebot.backends.base import Backend
 from snakebot.cli.backend_options import backend_spec
 from snakebot.cli.common import add_force_option, check_writable
-from snakebot.errors import OutputError
+from snakebot.errors import OutputError, UsageError
 from snakebot.telemetry import CsvTelemetryWriter, column_names
 from snakebot.telemetry.sink import CycleSink, combine
 from snakebot.telemetry.ws_gate import FOXGLOVE_ORIGINS, MAX_CLIENTS
 
 DEFAULT_PORT = 8765
+MCAP_ENCODINGS = ("json", "ros2")
 
 
 def _port(text: str) -> int:
@@ -93,6 +96,14 @@ def add_telemetry_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--mcap", type=Path, metavar="FILE", help="record the Foxglove channels to an MCAP file"
     )
+    parser.add_argument(
+        "--mcap-encoding",
+        choices=MCAP_ENCODINGS,
+        default="json",
+        help="what --mcap writes: json (default: the Foxglove channels) or ros2 (standard ROS 2 "
+        "messages in CDR that rosbag2 and Foxglove read; extra: snakebot[ros2-mcap]; "
+        "docs/ros2.md)",
+    )
     add_force_option(parser)
 
 
@@ -102,6 +113,12 @@ def check_outputs(args: argparse.Namespace, *others: tuple[Path | None, str]) ->
     ``--mcap``, and ``others`` (path or None, what it is)."""
     from snakebot.telemetry.sidecar import sidecar_path
 
+    if ros2_recording(args):
+        from snakebot.telemetry.ros2_mcap import mcap_writer_module
+
+        mcap_writer_module()  # a missing extra stops the run before a file is touched
+    elif getattr(args, "mcap_encoding", "json") != "json" and args.mcap is None:
+        raise UsageError(f"--mcap-encoding {args.mcap_encoding} goes with --mcap FILE")
     outputs: list[tuple[Path | None, str]] = [(args.log, "log")]
     if args.log:
         outputs.append((sidecar_path(args.log), "log's JSON sidecar"))
@@ -118,7 +135,13 @@ class Telemetry:
     log: CycleSink | None = None
     csv: CsvTelemetryWriter | None = None
     foxglove: Any = None
+    ros2_mcap: CycleSink | None = None
     summary: dict[str, object] = field(default_factory=dict)
+
+
+def ros2_recording(args: argparse.Namespace) -> bool:
+    """True when ``--mcap`` records in the ROS 2 encoding (``--mcap-encoding ros2``)."""
+    return args.mcap is not None and getattr(args, "mcap_encoding", "json") == "ros2"
 
 
 def open_telemetry(
@@ -152,16 +175,60 @@ def open_telemetry(
         )
         telemetry.summary["log_sidecar"] = str(sidecar)
     port = getattr(args, "foxglove", None)
-    if port is not None or args.mcap is not None:
-        telemetry.foxglove = sink = _open_foxglove(stack, args, robot, backend, rate_hz, command)
+    ros2 = ros2_recording(args)
+    if ros2:
+        telemetry.ros2_mcap = open_ros2_mcap(stack, args, robot, backend, rate_hz, command, gait)
+    if port is not None or (args.mcap is not None and not ros2):
+        mcap = None if ros2 else args.mcap
+        telemetry.foxglove = sink = _open_foxglove(
+            stack, args, robot, backend, rate_hz, command, mcap
+        )
         if sink.port is not None:
             telemetry.summary["foxglove"] = client_url(args.foxglove_host, sink.port)
             # at the end of the run, just before the server closes
             stack.callback(lambda: telemetry.summary.update(foxglove_clients=sink.client_counts()))
-        if args.mcap is not None:
-            telemetry.summary["mcap"] = str(args.mcap)
-    telemetry.log = combine([telemetry.csv, telemetry.foxglove])
+    if args.mcap is not None:
+        telemetry.summary["mcap"] = str(args.mcap)
+    telemetry.log = combine([telemetry.csv, telemetry.foxglove, telemetry.ros2_mcap])
     return telemetry
+
+
+def open_ros2_mcap(
+    stack: contextlib.ExitStack,
+    args: argparse.Namespace,
+    robot: Any,
+    backend: Backend,
+    rate_hz: float,
+    command: str,
+    gait: Mapping[str, Any],
+) -> CycleSink:
+    """The ROS 2 recording ``--mcap`` asks for (``run``, ``drive``, ``ros2``), closed by
+    ``stack``: every cycle of ``robot`` on ``backend`` (not yet connected) at ``rate_hz``;
+    ``command`` and ``gait`` go into its metadata."""
+    from snakebot.backends.twin.model_builder import joint_name
+    from snakebot.telemetry.robot_scene import robot_geometry
+    from snakebot.telemetry.ros2_mcap import Ros2McapRecorder, backend_readings
+
+    names = [joint_name(i) for i in range(robot.joint_count)]
+    metadata = {
+        "command": command,
+        "robot": str(getattr(robot, "name", "")),
+        "backend": backend_spec(args).name,
+        "rate_hz": f"{rate_hz:g}",
+        "joint_names": ",".join(names),
+        "gait": json.dumps(gait, default=str),
+    }
+    recorder = Ros2McapRecorder(
+        args.mcap,
+        joint_names=names,
+        servo_ids=getattr(robot, "servo_ids", range(robot.joint_count)),
+        rate_hz=rate_hz,
+        geometry=robot_geometry(robot, backend),
+        readings=backend_readings(backend),
+        robot_name=metadata["robot"],
+        metadata=metadata,
+    )
+    return stack.enter_context(recorder)
 
 
 def _open_foxglove(
@@ -171,6 +238,7 @@ def _open_foxglove(
     backend: Backend,
     rate_hz: float,
     command: str,
+    mcap: Path | None,
 ) -> Any:
     from snakebot.drive.observers import backend_readings
     from snakebot.telemetry.foxglove_live import FoxgloveTelemetry, SlowReadings, TelemetryOptions
@@ -179,7 +247,7 @@ def _open_foxglove(
     options = TelemetryOptions(
         port=args.foxglove,
         host=args.foxglove_host,
-        mcap_path=args.mcap,
+        mcap_path=mcap,
         origins=tuple(getattr(args, "foxglove_origin", ())),
         max_clients=getattr(args, "foxglove_max_clients", MAX_CLIENTS),
     )

@@ -132,6 +132,7 @@ def _add_gait_parser(commands: Any) -> None:
         metavar="DEVICE",
         help="Warp device for --engine warp: cpu (default), cuda or cuda:N",
     )
+    _add_executor_options(parser)
     parser.add_argument(
         "--allow-roll",
         action="store_true",
@@ -188,6 +189,7 @@ def run_gait(args: argparse.Namespace) -> int:
         allow_roll=args.allow_roll or get_spec(args.gait).rolls_over,
         friction=_friction(robot, args.friction),
         **_twin_ground(robot, args),
+        **_executor(robot, args),
     )
     objective = objective_for(args.objective, args.heading, robot.body_length_m)
     bar = None if args.quiet else ProgressBar(budget)
@@ -230,6 +232,36 @@ def _warp_device(args: argparse.Namespace) -> str:
     if args.device != "cpu" and args.engine != "warp":
         raise UsageError(f"--device {args.device}: only --engine warp runs on a Warp device")
     return str(args.device)
+
+
+def _add_executor_options(parser: argparse.ArgumentParser) -> None:
+    from snakebot.tuning.problem import EXECUTORS
+
+    parser.add_argument(
+        "--executor",
+        choices=EXECUTORS,
+        default="local",
+        help="local: this machine (default); ray: Ray actors, one per node (docs/cluster.md)",
+    )
+    parser.add_argument(
+        "--address",
+        metavar="HOST:PORT",
+        help="the Ray cluster's head for --executor ray (default: start Ray on this machine)",
+    )
+
+
+def _executor(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> dict[str, Any]:
+    """--executor and --address as EvalPlan fields; Ray is checked for before any simulation."""
+    if args.executor == "local":
+        if args.address is not None:
+            raise UsageError("--address names a Ray cluster: add --executor ray")
+        return {}
+    if isinstance(robot, BodyConfig):
+        raise UsageError("--executor ray: tuning a mass-spring body runs on this machine only")
+    from snakebot.cluster import require_ray
+
+    require_ray()
+    return {"executor": args.executor, "address": args.address}
 
 
 def _twin_ground(robot: RobotConfig | BodyConfig, args: argparse.Namespace) -> dict[str, Any]:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -160,7 +160,9 @@ class CycleRecord:
     ``state.time_s``. ``target_rad`` is the gait's output, ``command_rad`` what the safety layer
     sent (both (N,) rad). ``period_s`` is the robot time the cycle took, ``overrun`` whether the
     backend missed its deadline in it, ``achieved_rate_hz`` cycles per second of robot time
-    since the start. ``scored`` is False during the ramp-out.
+    since the start. ``scored`` is False during the ramp-out. ``work_j`` (N,) J is each joint's
+    positive work in the cycle, integrated over its physics steps by a backend that does
+    (``JointState.positive_work_j``), else None.
     """
 
     cycle: int
@@ -174,6 +176,7 @@ class CycleRecord:
     period_s: float
     overrun: bool
     achieved_rate_hz: float
+    work_j: FloatArray | None = field(default=None, kw_only=True)
 
     @property
     def time_s(self) -> float:

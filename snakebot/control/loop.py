@@ -19,7 +19,7 @@ from snakebot.control.cycle import (
     CycleSchedule,
     GaitCycle,
 )
-from snakebot.control.metrics import RunMetrics
+from snakebot.control.metrics import RunMetrics, cycle_work_j
 from snakebot.types import JointCommand, JointState
 
 
@@ -117,6 +117,7 @@ class CycleLoop:
             period_s=period,
             overrun=backend.stats.overruns != overruns,
             achieved_rate_hz=self.cycle / elapsed if elapsed > 0 else schedule.rate_hz,
+            work_j=cycle_work_j(before, state),
         )
         self.stage = "metrics"
         if self.metrics is not None:

@@ -1,4 +1,10 @@
-"""Summary metrics of a run, accumulated per cycle in O(1) memory: an observer of the records."""
+"""Summary metrics of a run, accumulated per cycle in O(1) memory: an observer of the records.
+
+Positive work is what the backend integrated over every physics step where it did (the twin,
+the batched engine, a soft body: ``CycleRecord.work_j``), so work and cost of transport do not
+depend on the control rate; on a backend that only samples it is effort times velocity at the
+end of each cycle times the period.
+"""
 
 from __future__ import annotations
 
@@ -52,17 +58,26 @@ class RunMetrics:
         if record.scored:
             period = self.control_period_s
             dt_s = record.period_s if period is None else period
-            self.add(record.command_rad, record.state, record.body, dt_s)
+            self.add(record.command_rad, record.state, record.body, dt_s, record.work_j)
 
     def add(
-        self, command: np.ndarray, state: JointState, body: BodyState | None, dt_s: float
+        self,
+        command: np.ndarray,
+        state: JointState,
+        body: BodyState | None,
+        dt_s: float,
+        work_j: np.ndarray | None = None,
     ) -> None:
-        """Account one control cycle."""
+        """Account one control cycle of ``dt_s`` s; ``work_j`` (N,) J is each joint's positive
+        work in it integrated by the backend (None: sampled from ``state``)."""
         error = command - state.position_rad
         self._squared_error_sum += float(error @ error)
         self._max_abs_command = max(self._max_abs_command, *map(abs, command.tolist()))
-        power = positive_power_w(state.effort_nm, state.velocity_rad_s)
-        self._positive_work_j += float(power.sum()) * dt_s
+        if work_j is None:
+            power = positive_power_w(state.effort_nm, state.velocity_rad_s)
+            self._positive_work_j += float(power.sum()) * dt_s
+        else:
+            self._positive_work_j += float(work_j.sum())
         self.cycles += 1
         self.end_time_s = state.time_s
         if body is not None:
@@ -120,6 +135,15 @@ class RunMetrics:
             else None,
         )
         return out
+
+
+def cycle_work_j(before: JointState, after: JointState) -> np.ndarray | None:
+    """Each joint's positive work (N,) J between two states of a backend that integrates it
+    (``JointState.positive_work_j``); None where either state has none."""
+    if before.positive_work_j is None or after.positive_work_j is None:
+        return None
+    work: np.ndarray = after.positive_work_j - before.positive_work_j
+    return work
 
 
 def head_yaw_rad(quat: np.ndarray) -> float:

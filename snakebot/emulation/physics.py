@@ -17,7 +17,7 @@ import numpy as np
 from snakebot.backends.twin.backend import TwinBackend
 from snakebot.backends.twin.health import HealthLimits
 from snakebot.config.schema import RobotConfig
-from snakebot.control.metrics import RunMetrics
+from snakebot.control.metrics import RunMetrics, cycle_work_j
 from snakebot.emulation.alarms import Fault
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
 from snakebot.emulation.motion import MotorState, ServoCommand
@@ -61,7 +61,8 @@ class TwinMotion:
         self._commands.clear()
         self._gains.clear()
         self._read_tables()
-        self.metrics.start(self.twin.read_state().time_s, self.twin.body_state())
+        self._last_state = self.twin.read_state()
+        self.metrics.start(self._last_state.time_s, self.twin.body_state())
         self._publish()
 
     def step(self, servo: VirtualServo, dt_s: float) -> None:
@@ -80,7 +81,9 @@ class TwinMotion:
         self.steps += 1
         self._latch_overloads()
         state = self.twin.read_state()
-        self.metrics.add(self._goal, state, self.twin.body_state(), steps * timestep)
+        work = cycle_work_j(self._last_state, state)
+        self._last_state = state
+        self.metrics.add(self._goal, state, self.twin.body_state(), steps * timestep, work)
         self._publish()
 
     def _latch_overloads(self) -> None:

@@ -1,19 +1,27 @@
 """``snakebot rl compare``: the seed's figure, learning curves of several encodings side by side.
 
 Each encoding trains with the same steps, seed and vectorisation into its own policy folder;
-``compare.png`` draws the curves together and ``compare.json`` keeps the final numbers.
+``compare.png`` draws the curves together and ``compare.json`` keeps the final numbers. With
+several seeds or a grid of settings every trial has its own folder (``snakebot.rl.sweep``);
+an ``executor`` (``compare_ray.RayExecutor``) runs the trials elsewhere, this module runs them
+one after the other here.
 """
 
 from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
 
 from snakebot.errors import OutputError
 from snakebot.rl.plots import curve_plot
-from snakebot.rl.train import TrainResult, TrainSettings, dump_json, train
+from snakebot.rl.sweep import SweepPlan, TrialOutcome, comparison_rows, run_summary
+from snakebot.rl.train import train
+
+# Runs every trial of a plan into its folder under ``out``; the outcomes in plan order.
+Executor = Callable[[SweepPlan, Path, TextIO | None], list[TrialOutcome]]
 
 
 def compare(
@@ -26,17 +34,39 @@ def compare(
     n_envs: int,
     vec: str,
     progress: TextIO | None = sys.stderr,
+    seeds: int = 1,
+    grid: dict[str, tuple[Any, ...]] | None = None,
+    rollout_steps: int = 2048,
+    ppo: dict[str, Any] | None = None,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
-    """Train every ``runs[encoding]`` (env kwargs) for ``steps``; returns the summary written to
-    ``out/compare.json`` beside ``out/compare.png``."""
-    results: dict[str, TrainResult] = {}
-    for encoding, kwargs in runs.items():
-        if progress is not None:
-            progress.write(f"{encoding}:\n")
-        settings = TrainSettings(env_id, kwargs, steps, n_envs, vec, seed=seed)
-        results[encoding] = train(settings, out / encoding, progress=progress)
+    """Train every ``runs[encoding]`` (env kwargs) for ``steps`` on seeds ``seed..seed+seeds-1``
+    at every point of ``grid`` (``SweepPlan``); returns the summary written to
+    ``out/compare.json`` beside ``out/compare.png``: ``runs`` (each trial's, by folder name)
+    and ``table`` (``comparison_rows``). Raises ConfigError for a bad plan, OutputError when
+    ``out`` cannot be written."""
+    plan = SweepPlan(
+        env_id,
+        runs,
+        steps,
+        tuple(range(seed, seed + seeds)),
+        grid or {},
+        n_envs,
+        vec,
+        rollout_steps,
+        ppo or {},
+    )
+    if executor is not None:
+        outcomes = executor(plan, out, progress)
+    else:
+        outcomes = []
+        for trial in plan.trials():
+            if progress is not None:
+                progress.write(f"{trial.name}:\n")
+            result = train(plan.settings(trial), out / trial.name, progress=progress)
+            outcomes.append(TrialOutcome(trial, result))
     curve_plot(
-        {name: r.curve for name, r in results.items()},
+        {o.trial.name: o.result.curve for o in outcomes},
         out / "compare.png",
         title=f"{env_id}: encodings",
     )
@@ -44,7 +74,10 @@ def compare(
         "env_id": env_id,
         "steps": steps,
         "seed": seed,
-        "runs": {name: dump_json(r) for name, r in results.items()},
+        "seeds": list(plan.seeds),
+        "grid": {key: list(values) for key, values in plan.grid.items()},
+        "runs": {o.trial.name: run_summary(o) for o in outcomes},
+        "table": comparison_rows(outcomes),
     }
     path = out / "compare.json"
     try:

@@ -157,7 +157,9 @@ class _Tracker:
         progress: TextIO | None,
         total: int,
         previous: list[list[str]] | None = None,
+        on_rollout: Callable[[CurvePoint], None] | None = None,
     ) -> None:
+        self.on_rollout_point = on_rollout
         self.returns = np.zeros(n_envs)
         self.lengths = np.zeros(n_envs, dtype=int)
         self.done_returns: list[float] = []
@@ -203,6 +205,8 @@ class _Tracker:
         self.curve.append(point)
         self.writer.writerow([getattr(point, name) for name in CURVE_FIELDS])
         self.csv_file.flush()
+        if self.on_rollout_point is not None:
+            self.on_rollout_point(point)
         if self.progress is not None:
             ended = f"({point.episodes} episodes)" if point.episodes else "(no episode ended yet)"
             self.progress.write(
@@ -233,13 +237,15 @@ def train(
     *,
     progress: TextIO | None = sys.stderr,
     plot: bool = True,
+    on_rollout: Callable[[CurvePoint], None] | None = None,
 ) -> TrainResult:
     """Train, then save policy.json, actor.npz, policy.zip, learning_curve.csv (+ .png).
 
     With ``settings.resume`` it goes on from that saved model's weights (and optimiser state)
     for ``settings.steps`` more steps, counting on from the steps it had; the curve keeps the
     saved rows. policy.json records every PPO setting used (stable-baselines3's defaults filled
-    in). Ctrl-C ends training early and still saves the policy learned so far
+    in). ``on_rollout`` is called with each curve point as it is written (a sweep reports it to
+    its scheduler). Ctrl-C ends training early and still saves the policy learned so far
     (``interrupted``). The curve CSV is written row by row, so an interrupted run keeps what it
     measured. Raises MissingDependencyError naming the ``rl-train`` extra, ConfigError for bad
     settings or a saved model that cannot be trained on, OutputError when the folder cannot be
@@ -264,7 +270,9 @@ def train(
         raise OutputError(folder, f"cannot write the training output: {reason}") from exc
     cpu_start = _cpu_s()
     start_steps = resume.steps if resume is not None else 0
-    tracker = _Tracker(settings.n_envs, csv_file, progress, start_steps + settings.steps, previous)
+    tracker = _Tracker(
+        settings.n_envs, csv_file, progress, start_steps + settings.steps, previous, on_rollout
+    )
 
     class Callback(callbacks.BaseCallback):  # type: ignore[misc,name-defined]
         def _on_step(self) -> bool:

@@ -1,7 +1,9 @@
 """``snakebot log export``: a telemetry CSV as MCAP (the live channels, for Foxglove) or Parquet.
 
 MCAP goes through the same :class:`~snakebot.telemetry.foxglove_live.FoxgloveTelemetry` as a
-live ``--mcap`` recording, timed at the sidecar's start time plus robot time; the 3-D scene is
+live ``--mcap`` recording (with ``ros2``, the same
+:class:`~snakebot.telemetry.ros2_mcap.Ros2McapRecorder` as ``--mcap-encoding ros2``), timed at
+the sidecar's start time plus robot time; the 3-D scene is
 the forward kinematics of the logged joint angles through the twin's model of the sidecar's
 robot (when that robot file is still there). Parquet needs pyarrow (``snakebot[parquet]``):
 the columns as float64, the sidecar in the file's key-value metadata under ``snakebot``.
@@ -46,6 +48,32 @@ def export_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -
         for record in log_records(log):
             sink(record)
     return sink.rows
+
+
+def export_ros2_mcap(log: TelemetryLog, sidecar: dict[str, Any] | None, path: Path) -> int:
+    """Write ``log`` to MCAP at ``path`` as standard ROS 2 messages in CDR; returns the cycles
+    written (MissingDependencyError without the mcap package)."""
+    from snakebot.telemetry.ros2_mcap import Ros2McapRecorder
+
+    meta = sidecar or {}
+    period = nominal_period_s(log, sidecar)
+    robot = meta.get("robot", {})
+    joints = log.joints("command_rad").shape[1]
+    names = [f"joint{i}" for i in range(joints)]  # the twin's and snakebot ros2's names
+    recorder = Ros2McapRecorder(
+        path,
+        joint_names=names,
+        servo_ids=robot.get("servo_ids") or list(range(joints)),
+        rate_hz=1.0 / period if period else 0.0,
+        geometry=_geometry(meta),
+        robot_name=str(robot.get("name", "")),
+        metadata={"exported_from": json.dumps(meta, default=str)},
+        start_epoch_ns=_start_ns(meta),
+    )
+    with recorder:
+        for record in log_records(log):
+            recorder(record)
+    return recorder.rows
 
 
 def log_records(log: TelemetryLog) -> Iterator[CycleRecord]:

@@ -32,6 +32,7 @@ import numpy as np
 
 from snakebot.errors import MissingDependencyError, OutputError
 from snakebot.telemetry import schemas
+from snakebot.telemetry.run_window import RunWindow, next_due
 from snakebot.telemetry.scene import LinkPoses, frame_transforms, scene_update
 from snakebot.telemetry.sdk_logs import SendErrors, quiet_sink_errors
 from snakebot.telemetry.ws_gate import MAX_CLIENTS, STALL_S, WebSocketGate
@@ -161,7 +162,7 @@ class FoxgloveTelemetry:
         self._t0: float | None = None
         self._next_scene = self._next_status = self._next_refresh = -math.inf
         self._next_flush = 0.0
-        self._window = _Window()
+        self._window = RunWindow()
         self._start_com: np.ndarray | None = None
         self._last_errors: tuple[str, ...] | None = None
 
@@ -253,10 +254,10 @@ class FoxgloveTelemetry:
         self.rows += 1
         self._window.add(time_s, error, com)
         if self._geometry is not None and time_s >= self._next_scene:
-            self._next_scene = _next_due(self._next_scene, time_s, self.options.scene_rate_hz)
+            self._next_scene = next_due(self._next_scene, time_s, self.options.scene_rate_hz)
             self._send_scene(now_ns, time_s, position)
         if time_s >= self._next_status:
-            self._next_status = _next_due(self._next_status, time_s, self.options.status_rate_hz)
+            self._next_status = next_due(self._next_status, time_s, self.options.status_rate_hz)
             self._send_status(now_ns, time_s, com)
         if self._writer is not None and time_s - (self._t0 or 0.0) >= self._next_flush:
             self._next_flush += MCAP_FLUSH_S
@@ -348,55 +349,8 @@ class FoxgloveTelemetry:
         self.close()
 
 
-def _next_due(due: float, time_s: float, rate_hz: float) -> float:
-    """When a channel sent at ``time_s`` (it was due at ``due``) is next due: one period after
-    ``due``, so a 30 Hz channel averages 30 Hz on a 100 Hz loop (one period after ``time_s``
-    would round every wait up to whole cycles: 25 Hz), unless that is already past."""
-    period = 1.0 / rate_hz
-    following = due + period
-    return following if following > time_s else time_s + period
-
-
 def _short(values: np.ndarray) -> list[float]:
     """Six decimals (1 urad, 1 um, 1 uN m: finer than any servo measures): a third of the JSON
     of full float precision, and it compresses twice as well."""
     rounded: list[float] = np.round(values, 6).tolist()
     return rounded
-
-
-class _Window:
-    """Rate, tracking and speed over the interval since the last status message."""
-
-    def __init__(self) -> None:
-        self.restart()
-
-    def restart(self) -> None:
-        self._cycles = 0
-        self._squares = 0.0
-        self._count = 0
-        self._start: tuple[float, np.ndarray | None] | None = None
-        self._end: tuple[float, np.ndarray | None] | None = None
-
-    def add(self, time_s: float, error: np.ndarray, com: np.ndarray | None) -> None:
-        if self._start is None:
-            self._start = (time_s, com)
-        self._end = (time_s, com)
-        self._cycles += 1
-        self._squares += float(error @ error)
-        self._count += error.size
-
-    def rate_hz(self) -> float | None:
-        if self._start is None or self._end is None or self._end[0] <= self._start[0]:
-            return None
-        return (self._cycles - 1) / (self._end[0] - self._start[0])
-
-    def tracking_rms(self) -> float:
-        return math.sqrt(self._squares / self._count) if self._count else 0.0
-
-    def speed_mps(self) -> float | None:
-        if self._start is None or self._end is None or self._end[0] <= self._start[0]:
-            return None
-        (t0, c0), (t1, c1) = self._start, self._end
-        if c0 is None or c1 is None:
-            return None
-        return float(np.hypot(*(c1[:2] - c0[:2]))) / (t1 - t0)

@@ -3,7 +3,8 @@
 The cycle is the runner's own (snakebot.control.cycle): the same ``CycleSchedule`` gives the
 cycle times and the scored cycles, the same ``GaitCycle`` makes the commands. Each control cycle
 sets every run's command, steps all live runs by one control period on a thread pool, and
-samples what ``run_gait`` would read. The states are bit-identical to
+samples what ``run_gait`` would read, with the positive work integrated over every physics step
+as the twin integrates it (``readouts.step_work_j``). The states are bit-identical to
 ``TwinBackend`` stepping one run at a time (mujoco.batch guarantees it at any thread count), so
 a tuned gait replays in ``snakebot run`` to the same metrics. Runs that fly, flip or diverge are
 stopped early and stop costing time.
@@ -26,6 +27,7 @@ from snakebot.backends.twin.readouts import (
     WARNING_NUMBER,
     Capsules,
     servo_torque_nm,
+    step_work_j,
     unstable_count,
 )
 from snakebot.backends.twin.terrain import Terrain
@@ -160,6 +162,8 @@ class TwinBatch:
         check_every = max(1, round((envelope.stop_after_s if envelope else 1.0) * rate_hz))
         chunk = check_every if commands.open_loop else 1
         measured = batch.bind("qpos")[:, lay.qpos_index].copy()
+        timestep = float(self.model.opt.timestep)
+        work_total = np.zeros((count, self.robot.joint_count))  # as TwinBackend sums it
         commands.reset(measured, schedule)
         k = 0
         while k < len(times) - 1 and live.any():
@@ -180,6 +184,20 @@ class TwinBatch:
             position = end["qpos"][..., lay.qpos_index]
             velocity = end["qvel"][..., lay.dof_index]
             force = end["actuator_force"]
+            per_step = (len(ids), len(span), steps, self.robot.joint_count)
+            period_work = step_work_j(
+                out["actuator_force"].reshape(per_step),
+                damping[ids, None, :],
+                out["qvel"][..., lay.dof_index].reshape(per_step),
+                timestep,
+            )
+            cycle_work = np.empty_like(period_work)
+            total = work_total[ids]
+            for c in range(len(span)):  # the twin's running sum, then its per-cycle difference
+                after = total + period_work[:, c]
+                cycle_work[:, c] = after - total
+                total = after
+            work_total[ids] = total
             rec.store(
                 ids,
                 span,
@@ -190,6 +208,7 @@ class TwinBatch:
                 velocity=velocity,
                 effort=servo_torque_nm(force, damping[ids, None, :], velocity),
                 force=force,
+                work=cycle_work,
                 com=end["subtree_com"][:, :, lay.head_id],
                 quat=end["xquat"][:, :, lay.head_id],
                 clearance=lay.clearance_m(end["geom_xpos"], end["geom_xmat"]),

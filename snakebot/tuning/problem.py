@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from snakebot.backends.twin import GroundFriction
 from snakebot.backends.twin.friction.scale import FrictionModel
@@ -26,7 +26,13 @@ from snakebot.tuning.pool import PoolJob, ProcessPool
 from snakebot.tuning.space import SearchSpace
 from snakebot.tuning.trace import FloatArray, Trace, summarise
 
+if TYPE_CHECKING:
+    from snakebot.tuning.executor_ray import RayEvaluator
+
 ENGINES = ("batch", "processes", "warp")
+EXECUTORS = ("local", "ray")
+"""Where candidates run: ``local`` on this machine's engine; ``ray`` on Ray actors, one per node
+(snakebot.tuning.executor_ray), at ``EvalPlan.address`` or on a Ray started here."""
 
 
 @dataclass(frozen=True)
@@ -49,7 +55,11 @@ class Evaluation:
 
 @dataclass(frozen=True)
 class EvalPlan:
-    """How each candidate runs: like ``snakebot run --duration D --rate R`` on the twin."""
+    """How each candidate runs: like ``snakebot run --duration D --rate R`` on the twin.
+
+    ``executor`` says where (EXECUTORS); ``address`` is the Ray cluster's ``HOST:PORT`` for the
+    ``ray`` executor (None: start Ray on this machine).
+    """
 
     duration_s: float = 10.0
     rate_hz: float = 100.0
@@ -60,6 +70,8 @@ class EvalPlan:
     friction: GroundFriction | None = None
     terrain: Terrain | None = None
     friction_model: FrictionModel | None = None
+    executor: str = "local"
+    address: str | None = None
 
 
 class SearchProblem(Protocol):
@@ -142,11 +154,28 @@ class GaitProblem:
                 self.envelope, contact_tolerance_m=math.inf, lift_limit_m=math.inf
             )
         self._pool = ProcessPool(plan.workers) if plan.engine == "processes" else None
+        self._remote: RayEvaluator | None = None
+        if plan.executor == "ray":
+            from snakebot.tuning.executor_ray import RayEvaluator
+
+            self._remote = RayEvaluator(robot, space, objective, plan)
 
     def close(self) -> None:
-        """Release the worker processes, if any."""
+        """Release the worker processes or Ray actors, if any."""
         if self._pool is not None:
             self._pool.close()
+        if self._remote is not None:
+            self._remote.close()
+
+    @property
+    def live_workers(self) -> int | None:
+        """Ray actors alive now (the ``ray`` executor), None on the local one."""
+        return None if self._remote is None else self._remote.live_workers
+
+    @property
+    def rescored(self) -> int:
+        """Candidates scored again because the Ray worker holding them was lost (0 locally)."""
+        return 0 if self._remote is None else self._remote.rescored
 
     @property
     def evaluations(self) -> int:
@@ -161,17 +190,25 @@ class GaitProblem:
     def evaluate(self, points: Sequence[FloatArray] | FloatArray) -> list[Evaluation]:
         """Run every point (D,) on the twin in parallel and score it; returns them in order."""
         rows = [tuple(float(v) for v in point) for point in points]
-        params = [self.space.params(x) for x in rows]
         out = []
-        for x, p, (summary, violations) in zip(rows, params, self.outcomes(params), strict=True):
-            out.append(self.score(x, p, summary, violations, len(self.history)))
-            self.history.append(out[-1])
+        if self._remote is not None:
+            for scored in self._remote.evaluate(rows):
+                out.append(replace(scored, index=len(self.history)))
+                self.history.append(out[-1])
+        else:
+            params = [self.space.params(x) for x in rows]
+            outcomes = self.outcomes(params)
+            for x, p, (summary, violations) in zip(rows, params, outcomes, strict=True):
+                out.append(self.score(x, p, summary, violations, len(self.history)))
+                self.history.append(out[-1])
         if self.listener is not None:
             self.listener(self)
         return out
 
     def baseline(self) -> Evaluation:
         """The base parameters (defaults and --set), scored but not counted as an evaluation."""
+        if self._remote is not None:
+            return self._remote.baseline()
         params = dict(self.space.base)
         summary, violations = self.outcomes([params])[0]
         start = tuple(float(v) for v in self.space.start())

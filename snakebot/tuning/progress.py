@@ -11,7 +11,8 @@ from snakebot.tuning.problem import SearchProblem
 
 
 class ProgressBar:
-    """Redrawn after each batch of evaluations; call ``finish`` at the end.
+    """Redrawn after each batch of evaluations; call ``finish`` at the end. Shows candidates per
+    second and, on the Ray executor, how many workers are alive.
 
     On a terminal it redraws one line; elsewhere (CI logs, pipes) it prints a line at most every
     ``every_s`` seconds so logs stay short.
@@ -35,7 +36,14 @@ class ProgressBar:
         fraction = min(done / self.budget, 1.0)
         bar = "#" * int(fraction * 24)
         text = f"[{bar:<24}] {done}/{self.budget} evals  best {best_text(problem)}"
-        text += f"  {now - self.start:5.1f} s"
+        elapsed = now - self.start
+        text += f"  {elapsed:5.1f} s  {done / elapsed if elapsed > 0 else 0.0:.1f} cand/s"
+        live = getattr(problem, "live_workers", None)
+        if isinstance(live, int):
+            text += f"  {live} workers live"
+        rescored = getattr(problem, "rescored", 0)
+        if isinstance(rescored, int) and rescored:
+            text += f" ({rescored} re-run after a lost worker)"
         if self._tty:
             self.stream.write(f"\r{text:<100}")
         else:
@@ -76,7 +84,7 @@ def gait_summary_text(summary: dict[str, Any]) -> str:
         f"  best       {value(best)}  (baseline {value(base)})",
         "  params     " + ", ".join(f"{k}={_fmt(v)}" for k, v in shown.items()),
         f"  searched   {summary['evaluations']} evaluations ({summary['feasible_evaluations']} "
-        f"playable) in {summary['wall_s']:.1f} s on {summary['workers']} workers",
+        f"playable) in {summary['wall_s']:.1f} s on {_where(summary)}",
     ]
     if "gait_file" in summary:
         lines.append(f"  gait file  {summary['gait_file']}")
@@ -112,6 +120,12 @@ def gains_summary_text(summary: dict[str, Any]) -> str:
         + (f": {summary['not_written']}" if "not_written" in summary else ""),
     ]
     return "\n".join(lines)
+
+
+def _where(summary: dict[str, Any]) -> str:
+    if summary.get("executor") == "ray":
+        return f"the Ray cluster at {summary['address']}" if summary.get("address") else "Ray"
+    return f"{summary['workers']} workers"
 
 
 def _fmt(value: object) -> str:

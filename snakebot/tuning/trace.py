@@ -22,6 +22,7 @@ SAMPLES: dict[str, str] = {
     "velocity": "n",
     "effort": "n",
     "force": "n",
+    "work": "n",
     "com": "3",
     "quat": "4",
     "clearance": "",
@@ -37,7 +38,9 @@ class Trace:
     Joint arrays are (K, N) in rad, rad/s or N·m for K control cycles; ``target_rad`` is what the
     gait asked for before the safety layer, ``command_rad`` what was sent. ``com_m`` is (K, 3),
     ``head_quat`` (K, 4) (w, x, y, z), ``clearance_m`` (K,) the lowest body point above the floor.
-    ``stop_reason`` is "" for a run that went the full duration, else why it was cut short.
+    ``positive_work_j`` (K, N) is each joint's positive work in each cycle, J, integrated over
+    its physics steps. ``stop_reason`` is "" for a run that went the full duration, else why it
+    was cut short.
     """
 
     dt_s: float
@@ -48,6 +51,7 @@ class Trace:
     velocity_rad_s: FloatArray
     effort_nm: FloatArray
     actuator_force_nm: FloatArray
+    positive_work_j: FloatArray
     com_m: FloatArray
     head_quat: FloatArray
     clearance_m: FloatArray
@@ -86,6 +90,7 @@ def make_trace(
         velocity_rad_s=a["velocity"],
         effort_nm=a["effort"],
         actuator_force_nm=a["force"],
+        positive_work_j=a["work"],
         com_m=a["com"],
         head_quat=a["quat"],
         clearance_m=a["clearance"],
@@ -123,6 +128,9 @@ class TraceRows:
         rows["velocity"].append(state.velocity_rad_s)
         rows["effort"].append(state.effort_nm)
         rows["force"].append(force_nm)
+        if record.work_j is None:
+            raise ValueError("a trace needs the work integrated per physics step (the twin)")
+        rows["work"].append(record.work_j)
         rows["com"].append(record.body.com_m)
         rows["quat"].append(record.body.head_quat)
         rows["clearance"].append(clearance_m)
@@ -153,6 +161,10 @@ def summarise(trace: Trace, robot: RobotConfig, period_s: float | None) -> dict[
             trace.effort_nm[k],
         )
         metrics.add(
-            trace.command_rad[k], state, BodyState(trace.com_m[k], trace.head_quat[k]), trace.dt_s
+            trace.command_rad[k],
+            state,
+            BodyState(trace.com_m[k], trace.head_quat[k]),
+            trace.dt_s,
+            trace.positive_work_j[k],
         )
     return metrics.summary(period_s)

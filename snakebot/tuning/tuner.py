@@ -62,6 +62,8 @@ class TuneResult:
             "wall_s": self.wall_s,
             "engine": self.plan.engine,
             **({"device": self.plan.device} if self.plan.engine == "warp" else {}),
+            "executor": self.plan.executor,
+            **({"address": self.plan.address} if self.plan.executor == "ray" else {}),
             "workers": self.plan.workers,
             "seed": self.seed,
             "duration_s": self.plan.duration_s,
@@ -113,6 +115,8 @@ def tune_gait(
 
         if plan.engine == "warp":
             raise ConfigError("--engine", "warp", "a mass-spring body tunes through the runner")
+        if plan.executor != "local":
+            raise ConfigError("executor", plan.executor, "a mass-spring body tunes locally only")
         plan = replace(plan, engine="processes")
         problem = SoftGaitProblem(robot, space, objective, plan, listener=listener)
     else:

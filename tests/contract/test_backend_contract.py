@@ -120,7 +120,7 @@ class TestDynamixelXM430(BackendContract):
                 "Simulated",
             ),
         ),
-        (TestSoftBody, ("SensesBody", "ReportsTravel", "Simulated")),
+        (TestSoftBody, ("SensesBody", "ChecksPhysics", "ReportsTravel", "Simulated")),
         (TestDynamixel, ("ReportsHealth", "OnBus")),
         (TestDynamixelXM430, ("ReportsHealth", "SensesCurrent", "OnBus")),
     ],

@@ -5,7 +5,8 @@ axial in strain. ``send_command`` sets the muscles' rest lengths (snakebot.backe
 muscles); ``advance`` steps MuJoCo and applies Miller's directional friction after every step;
 ``read_state`` measures the channels from the lattice's shape, so tracking errors compare like
 with like. Efforts are generalised muscle forces (N·m for bends, N·m per unit strain), so effort
-times velocity is the muscles' power.
+times velocity is the muscles' power; its positive part is integrated over every physics step
+(``MuscleMap.power_rows``) into ``JointState.positive_work_j``.
 """
 
 from __future__ import annotations
@@ -21,7 +22,12 @@ import numpy as np
 from snakebot.backends.base import Backend
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.softbody import friction_c
-from snakebot.backends.softbody.friction import DirectionalFriction
+from snakebot.backends.softbody.friction import DirectionalFriction, contact_normal_forces
+from snakebot.backends.softbody.health import (
+    DEFAULT_BODY_LIMITS,
+    BodyHealthLimits,
+    BodyHealthMonitor,
+)
 from snakebot.backends.softbody.model import build_body_model
 from snakebot.backends.softbody.muscles import ChannelLayout, MuscleMap
 from snakebot.backends.twin.readouts import StepCheck
@@ -50,7 +56,11 @@ class SoftBodyBackend(Backend):
     for the flat floor), ``realtime`` and ``implementation``: "c" steps the physics and the rule
     in compiled C (friction_c; numpy with a warning where nothing compiles), "numpy" keeps the
     Python loop with the numpy rule (the reference; both agree bit for bit). Control periods
-    must be whole numbers of timesteps.
+    must be whole numbers of timesteps. ``health`` sets the physics checks (point penetration,
+    airborne time, spring strain, energy: softbody.health; None: no checks), reported by
+    ``physics_health`` (ChecksPhysics); a hard limit raises PhysicsHealthError.
+    ``backward_ratio`` makes Miller's ideal scales finite: backward friction that many times the
+    floor's (>= 1; inf, the default, is Miller's no-backward rule; friction.py).
 
     A mass-spring muscle has no position loop: its stiffness and damping are the body file's
     springs, so ``set_gains`` records the gains and changes nothing. Torque off relaxes every
@@ -66,8 +76,17 @@ class SoftBodyBackend(Backend):
         terrain: Cliff | None = None,
         realtime: bool = False,
         implementation: Literal["c", "numpy"] = "c",
+        health: BodyHealthLimits | None = DEFAULT_BODY_LIMITS,
+        backward_ratio: float = math.inf,
     ) -> None:
         super().__init__()
+        if not backward_ratio >= 1.0:
+            raise ConfigError(
+                "backward_ratio", "", f"expected a number >= 1 (or inf), got {backward_ratio}"
+            )
+        self.backward_ratio = backward_ratio
+        self._health_limits = health
+        self.physics_monitor: BodyHealthMonitor | None = None
         self.robot = body  # the config under the name the other backends use
         self.body = body
         self.joint_count = body.joint_count
@@ -81,6 +100,7 @@ class SoftBodyBackend(Backend):
         self._pacer: Pacer | None = None
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
         self._command = np.zeros(self.joint_count)
+        self._work_j = np.zeros(self.joint_count)  # positive muscle work per joint since connect
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
 
@@ -98,7 +118,14 @@ class SoftBodyBackend(Backend):
         self.friction_rule = DirectionalFriction(
             built.point_geoms, self.model.ngeom, built.start_positions
         )
+        self._point_geoms = built.point_geoms
         self.friction_rule.enabled = self.directional
+        self.friction_rule.set_backward(
+            self.backward_ratio,
+            self.friction,
+            float(self.model.opt.timestep),
+            self.body.lattice.point_mass_kg,
+        )
         self._stepper: friction_c.CompiledStepper | None = None
         if self.implementation == "c":
             try:
@@ -127,6 +154,31 @@ class SoftBodyBackend(Backend):
         self._cycles = 0
         self._steps: dict[float, int] = {}
         self._pacer = Pacer(self.stats) if self._realtime else None
+        self._point_bodies = np.array(
+            [self.model.geom_bodyid[g] for g in built.point_geoms], dtype=np.intp
+        )
+        self.reset_physics_health()
+
+    def reset_physics_health(self) -> None:
+        """Start the physics-health account afresh (ChecksPhysics): the checks and the muscles'
+        work count from here; they stay off where they are off."""
+        self._work_at_reset = float(self._work_j.sum())
+        if self._health_limits is None:
+            return
+        self.physics_monitor = BodyHealthMonitor(
+            self.model,
+            self._point_geoms,
+            self._point_bodies,
+            self.body.lattice.point_radius_m,
+            self._health_limits,
+        )
+
+    def physics_health(self) -> dict[str, object] | None:
+        """The run's physics health so far (docs/soft-bodies.md, "Physics health"); None with
+        the checks off."""
+        if self.physics_monitor is None:
+            return None
+        return self.physics_monitor.summary(float(self._work_j.sum()) - self._work_at_reset)
 
     def _close(self) -> None:
         self.stats.extra.update(self.travel())
@@ -156,6 +208,7 @@ class SoftBodyBackend(Backend):
             yaw, pitch, axial, self._ring_scale()
         )
         self.data.ctrl[:] = rest
+        self._power_rows: tuple[np.ndarray, np.ndarray] | None = None  # made when stepping
 
     # -- the cycle ---------------------------------------------------------------------------
     def _measure(self) -> _Snapshot:
@@ -178,6 +231,7 @@ class SoftBodyBackend(Backend):
             position_rad=self._layout.join(*snapshot.channels),
             velocity_rad_s=self._layout.join(*snapshot.rates),
             effort_nm=self._layout.join(*effort),
+            positive_work_j=self._work_j,  # never written in place: each period makes a new one
         )
 
     def _send_command(self, position_rad: np.ndarray) -> None:
@@ -213,23 +267,38 @@ class SoftBodyBackend(Backend):
         self._step_check.start()
         rule, displacement, velocity = self.friction_rule, self._displacement, self._velocity
         self._snapshot = None
+        if self._power_rows is None:
+            self._power_rows = self.muscles.power_rows(self._jacobian, self._layout)
+        effort_rows, rate_rows = self._power_rows
+        timestep = float(model.opt.timestep)
         if self._stepper is not None:
-            self._stepper.advance(steps)
+            work = self._stepper.advance(steps, effort_rows, rate_rows)
             self._previous = self.start_positions + self._stepper.previous
             self._previous_time = self._stepper.previous_time_s
+            self._work_j = self._work_j + work
             self._finish_advance(steps, dt_s)
             return
+        forces = np.empty((steps, model.nu))
+        rates = np.empty((steps, model.nu))
         for step in range(steps):
             if step == steps - 1:
                 self._previous = self.positions()
                 self._previous_time = float(data.time)
             mujoco.mj_step(model, data)
+            # The step's forces and spring rates, computed at its start (before the rule).
+            forces[step] = data.actuator_force
+            rates[step] = data.actuator_velocity
             if rule.enabled and data.ncon:
-                rule.apply(displacement, velocity, data.contact.geom)
+                normal = None if rule.ideal else contact_normal_forces(data)
+                rule.apply(displacement, velocity, data.contact.geom, normal)
+        self._work_j = self._work_j + muscle_work_j(forces, rates, effort_rows, rate_rows, timestep)
         self._finish_advance(steps, dt_s)
 
     def _finish_advance(self, steps: int, dt_s: float) -> None:
         self._step_check.finish(steps)
+        if self.physics_monitor is not None:
+            work = float(self._work_j.sum()) - self._work_at_reset
+            self.physics_monitor.sample(self.data, work)
         self._track()
         if self._pacer is not None:
             self._pacer.wait(dt_s)
@@ -265,3 +334,18 @@ class SoftBodyBackend(Backend):
             "travel_angle_deg": math.remainder(heading - axis, 360.0),
             "contact_fraction": self._contact_sum / max(self._cycles, 1),
         }
+
+
+def muscle_work_j(
+    force_n: np.ndarray,
+    rate_m_s: np.ndarray,
+    effort_rows: np.ndarray,
+    rate_rows: np.ndarray,
+    timestep_s: float,
+) -> np.ndarray:
+    """Each joint's positive muscle work (N,) J over S physics steps: the springs' forces and
+    rates of length (S, M) at the start of each step, turned into joint efforts and channel
+    rates by ``MuscleMap.power_rows`` (N, M) each; a step counts max(effort · rate, 0) · h."""
+    power = (force_n @ effort_rows.T) * (rate_m_s @ rate_rows.T)
+    work: np.ndarray = np.where(power > 0.0, power, 0.0).sum(axis=0) * timestep_s
+    return work

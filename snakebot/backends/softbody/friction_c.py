@@ -39,7 +39,8 @@ C_SOURCE = r"""
    projected. */
 static long rule(const mjModel* m, mjData* d, int points, const int64_t* geom_point,
                  const int64_t* point_ring, const int64_t* ahead, const int64_t* behind,
-                 const double* start_spine, unsigned char* touch, double* ring, double* spine) {
+                 const double* start_spine, unsigned char* touch, double* ring, double* spine,
+                 int finite, double impulse_per_n, double* load) {
   int rings = points / 4;
   const double* x = d->qpos;
   double* v = d->qvel;
@@ -64,25 +65,69 @@ static long rule(const mjModel* m, mjData* d, int points, const int64_t* geom_po
     double norm = sqrt((s[0] * s[0] + s[2] * s[2]) + s[1] * s[1]);
     s[0] /= norm; s[1] /= norm; s[2] /= norm;
   }
+  if (finite) {
+    /* Finite backward friction (friction.py _apply_finite): at most impulse_per_n * load of
+       the backward speed off, load the point's normal force summed over its contacts. */
+    memset(load, 0, sizeof(double) * (points + 1));
+    for (int i = 0; i < d->ncon; i++) {
+      int adr = d->contact[i].efc_address;
+      if (adr < 0) continue;
+      double normal = 0.0;
+      for (int k = 0; k < 2 * (d->contact[i].dim - 1); k++) normal += d->efc_force[adr + k];
+      for (int k = 0; k < 2; k++) {
+        int g = d->contact[i].geom[k];
+        if (g >= 0 && g < m->ngeom) load[geom_point[g]] += normal;
+      }
+    }
+  }
   for (int p = 0; p < points; p++) {
     if (!touch[p]) continue;
     const double* s = spine + 3 * point_ring[p];
     double* w = v + 3 * p;
     double along = (w[0] * s[0] + w[2] * s[2]) + w[1] * s[1];
     if (!(along < 0.0)) continue;
-    w[0] -= s[0] * along; w[1] -= s[1] * along; w[2] -= s[2] * along;
+    if (finite) {
+      double taken = impulse_per_n * load[p];
+      if (-along < taken) taken = -along;
+      if (!(taken > 0.0)) continue;
+      w[0] += s[0] * taken; w[1] += s[1] * taken; w[2] += s[2] * taken;
+    } else {
+      w[0] -= s[0] * along; w[1] -= s[1] * along; w[2] -= s[2] * along;
+    }
     projected++;
   }
   return projected;
 }
 
+/* Each joint's positive muscle power over the step just taken, times the timestep, added to
+   `work` (joints): effort row . actuator forces times rate row . actuator velocities (rows of
+   nu values each, MuscleMap.power_rows), both computed at the start of the step. */
+static void add_work(const mjModel* m, const mjData* d, int joints, const double* effort_rows,
+                     const double* rate_rows, double* work) {
+  int nu = m->nu;
+  for (int j = 0; j < joints; j++) {
+    const double* e = effort_rows + (long)j * nu;
+    const double* r = rate_rows + (long)j * nu;
+    double effort = 0.0, rate = 0.0;
+    for (int a = 0; a < nu; a++) {
+      effort += e[a] * d->actuator_force[a];
+      rate += r[a] * d->actuator_velocity[a];
+    }
+    double power = effort * rate;
+    if (power > 0.0) work[j] += power * m->opt.timestep;
+  }
+}
+
 /* Step `steps` times, the rule after each step that has contacts (when `enabled`); the
-   positions (qpos) and the time before the last step are copied to `previous` (3 P + 1). */
+   positions (qpos) and the time before the last step are copied to `previous` (3 P + 1);
+   each step's positive muscle work is added to `work` (add_work). */
 long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, int points,
                            const int64_t* geom_point, const int64_t* point_ring,
                            const int64_t* ahead, const int64_t* behind,
                            const double* start_spine, unsigned char* touch,
-                           double* ring, double* spine, double* previous) {
+                           double* ring, double* spine, double* previous, int joints,
+                           const double* effort_rows, const double* rate_rows, double* work,
+                           int finite, double impulse_per_n, double* load) {
   long projected = 0;
   for (int i = 0; i < steps; i++) {
     if (i == steps - 1) {
@@ -90,9 +135,10 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
       previous[3 * points] = d->time;
     }
     mj_step(m, d);
+    add_work(m, d, joints, effort_rows, rate_rows, work);
     if (enabled && d->ncon)
       projected += rule(m, d, points, geom_point, point_ring, ahead, behind, start_spine,
-                        touch, ring, spine);
+                        touch, ring, spine, finite, impulse_per_n, load);
   }
   return projected;
 }
@@ -116,6 +162,9 @@ def load() -> ctypes.CDLL:
         library.snakebot_soft_advance.restype = ctypes.c_long
         library.snakebot_soft_advance.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 3 + [ctypes.c_void_p] * 9
+        library.snakebot_soft_advance.argtypes += [ctypes.c_int] + [ctypes.c_void_p] * 3
+        library.snakebot_soft_advance.argtypes += [ctypes.c_int, ctypes.c_double]
+        library.snakebot_soft_advance.argtypes += [ctypes.c_void_p]
         _LIBRARY = library
     return _LIBRARY
 
@@ -152,15 +201,34 @@ class CompiledStepper:
         self._pointers = [model._address, data._address]
         self._arrays = [a.ctypes.data for a in self._keep] + [self._previous.ctypes.data]
         self._points = points
+        self._load = np.zeros(points + 1)
 
     @property
     def previous_time_s(self) -> float:
         """Simulated time before the last step of the latest ``advance``."""
         return float(self._previous[-1])
 
-    def advance(self, steps: int) -> None:
-        """``steps`` physics steps, the rule after each (if the rule is enabled)."""
+    def advance(self, steps: int, effort_rows: np.ndarray, rate_rows: np.ndarray) -> np.ndarray:
+        """``steps`` physics steps, the rule after each (if the rule is enabled); returns each
+        joint's positive muscle work over them (N,) J, from ``MuscleMap.power_rows`` (N, nu)
+        each (the numpy path's ``muscle_work_j``, summed in another order)."""
         model, data = self._pointers
+        effort = np.ascontiguousarray(effort_rows, dtype=np.float64)
+        rate = np.ascontiguousarray(rate_rows, dtype=np.float64)
+        work = np.zeros(effort.shape[0])
         self.rule.projected += self._function(
-            model, data, steps, int(self.rule.enabled), self._points, *self._arrays
+            model,
+            data,
+            steps,
+            int(self.rule.enabled),
+            self._points,
+            *self._arrays,
+            effort.shape[0],
+            effort.ctypes.data,
+            rate.ctypes.data,
+            work.ctypes.data,
+            int(not self.rule.ideal),
+            self.rule._impulse_per_n,
+            self._load.ctypes.data,
         )
+        return work

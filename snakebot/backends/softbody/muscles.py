@@ -204,6 +204,33 @@ class MuscleMap:
         out: FloatArray = weighted.reshape(3, self.lattice.segments, -1).sum(axis=2)
         return out
 
+    def power_rows(
+        self, jacobian: FloatArray, layout: ChannelLayout
+    ) -> tuple[FloatArray, FloatArray]:
+        """Per joint of ``layout``, rows (N, M) that turn the springs' forces (M,) N into the
+        joint's effort (``segment_efforts``, as ``read_state`` reports it) and the springs' rates
+        of length (M,) m/s into the joint's channel rate: the least-squares channel rates whose
+        rest-length changes ``jacobian``ᵀ·rate best match the springs' (a segment has more
+        springs than channels). Effort row · force times rate row · rates is the muscle's power
+        at any instant, which the backend integrates every physics step."""
+        segments = self.lattice.segments
+        springs = self._seg_springs.reshape(segments, -1)  # (S, K)
+        blocks = np.moveaxis(jacobian[:, springs], 0, -1)  # (S, K, 3)
+        across = np.swapaxes(blocks, -1, -2)  # (S, 3, K)
+        try:
+            rates = np.linalg.solve(across @ blocks, across)
+        except np.linalg.LinAlgError:  # a channel that moves no spring in some pose
+            rates = np.linalg.pinv(blocks)
+        joints = np.arange(layout.joint_count)
+        segment = joints // len(layout.channels)
+        axis = np.array([AXES.index(c) for c in layout.channels])[joints % len(layout.channels)]
+        effort_rows = np.zeros((layout.joint_count, self.lattice.spring_count))
+        rate_rows = np.zeros_like(effort_rows)
+        columns = springs[segment]  # (N, K)
+        effort_rows[joints[:, None], columns] = jacobian[axis[:, None], columns]
+        rate_rows[joints[:, None], columns] = rates[segment, axis]
+        return effort_rows, rate_rows
+
     def ring_scale(self, segment_length_m: FloatArray) -> FloatArray:
         """Miller's volume preservation: ring size factor (R,) from segment lengths (S,) in m.
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 
 import mujoco
@@ -21,8 +22,15 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
-from snakebot.backends.twin.readouts import Capsules, StepCheck, as_slice, servo_torque_nm
+from snakebot.backends.twin.readouts import (
+    Capsules,
+    StepCheck,
+    as_slice,
+    servo_torque_nm,
+    step_work_j,
+)
 from snakebot.backends.twin.terrain import Terrain, as_terrain
+from snakebot.backends.twin.work_c import CompileError, WorkStepper
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, ServoFaultError
 from snakebot.servo.dynamics import servo_dynamics
@@ -88,6 +96,7 @@ class TwinBackend(Backend):
         self._torque_now: np.ndarray | None = None  # servo torque (N,) at _torque_time_s
         self._torque_time_s = math.nan
         self._steps_per_period: dict[float, int] = {}
+        self._work_j = np.zeros(self.joint_count)  # positive work per joint since connect/reset
         if robot.servo.physics.extras.stall_current_a is not None:
             self.present_current_a = self._present_current_a  # SensesCurrent: this servo file
 
@@ -119,6 +128,19 @@ class TwinBackend(Backend):
             self._damping_view = self.model.dof_damping[self._dof_at]
         self._force_view = self.data.actuator_force
         self._ctrl_view = self.data.ctrl
+        # Each physics step's actuator forces and joint speeds of one control period, (S, N).
+        self._step_force = np.zeros((0, self.joint_count))
+        self._step_velocity = np.zeros((0, self.joint_count))
+        self._work_j = np.zeros(self.joint_count)
+        self._work_stepper: WorkStepper | None = None
+        try:
+            self._work_stepper = WorkStepper(self.model, self.data, self._dof_index)
+        except CompileError as exc:
+            warnings.warn(
+                f"the twin integrates its work in Python, 10-17 % slower than in C: {exc}",
+                RuntimeWarning,
+                stacklevel=2,
+            )
         # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
         self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
         self._torque_mask = np.ones(self.joint_count, dtype=bool)
@@ -164,6 +186,7 @@ class TwinBackend(Backend):
             data.ctrl[:] = 0.0
         hold_ctrl_history(model, data, data.ctrl)
         mujoco.mj_forward(model, data)
+        self._work_j = np.zeros(self.joint_count)
         if self.electrics is not None:
             physics = self.robot.servo.physics
             servo = servo_dynamics(physics, self.robot.gains)
@@ -231,6 +254,7 @@ class TwinBackend(Backend):
             position_rad=position,
             velocity_rad_s=velocity,
             effort_nm=effort,
+            positive_work_j=self._work_j,  # never written in place: each period makes a new one
         )
 
     def _send_command(self, position_rad: np.ndarray) -> None:
@@ -295,17 +319,42 @@ class TwinBackend(Backend):
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
         self._step_check.start()
-        mujoco.mj_step(self.model, self.data, steps)
+        work = self._step_integrating(steps)
         self._step_check.finish(steps)
+        self._work_j = self._work_j + work
         if self.physics_monitor is not None or self.electrics is not None:
             torque = self._servo_torque()  # read_state's effort too, unless changed since
             self._torque_now, self._torque_time_s = torque, float(self.data.time)
             if self.physics_monitor is not None:
-                self.physics_monitor.sample(self.data, dt_s, torque)
+                self.physics_monitor.sample(self.data, dt_s, torque, work)
             if self.electrics is not None:
                 self._update_electrics(dt_s, torque)
         if self._pacer is not None:
             self._pacer.wait(dt_s)
+
+    def _step_integrating(self, steps: int) -> np.ndarray:
+        """``steps`` physics steps; returns each joint's positive work over them (N,) J
+        (``step_work_j``): in C (work_c), else one ``mj_step`` call per step keeping each
+        step's actuator forces and joint speeds. The same physics as one
+        ``mj_step(m, d, steps)`` call, bit for bit (MuJoCo loops over ``mj_step`` there too);
+        the cost is in docs/benchmarks.md."""
+        if self._work_stepper is not None:
+            return self._work_stepper.advance(steps)
+        model, data = self.model, self.data
+        if self._step_force.shape[0] < steps:
+            self._step_force = np.zeros((steps, self.joint_count))
+            self._step_velocity = np.zeros((steps, self.joint_count))
+        forces, velocities = self._step_force[:steps], self._step_velocity[:steps]
+        force = self._force_view
+        views = self._views
+        qvel = self._qvel_view if views else None
+        step = mujoco.mj_step
+        for k in range(steps):
+            step(model, data)
+            forces[k] = force
+            velocities[k] = qvel if qvel is not None else data.qvel[self._dof_at]
+        damping = self._damping_view if views else model.dof_damping[self._dof_at]
+        return step_work_j(forces, damping, velocities, float(model.opt.timestep))
 
     def steps_for(self, dt_s: float) -> int:
         """Physics steps in a control period; it must be a whole number of timesteps."""

@@ -2,9 +2,10 @@
 
 Sampled once per control period (never inside MuJoCo's step, so the physics is untouched):
 floor and self penetration, time with no ground contact, time upside down, joint chatter,
-mechanical power the servos put in, stall time and joint speed against the servo's no-load
-speed. Past a warning threshold the run's summary lists a warning; past a hard one the run stops
-with ``PhysicsHealthError`` at the time it happened. Thresholds and why: docs/physics.md.
+stall time and joint speed against the servo's no-load speed; the mechanical work the servos
+put in comes integrated over every physics step of the period (``readouts.step_work_j``).
+Past a warning threshold the run's summary lists a warning; past a hard one the run stops with
+``PhysicsHealthError`` at the time it happened. Thresholds and why: docs/physics.md.
 """
 
 from __future__ import annotations
@@ -104,15 +105,24 @@ class HealthMonitor:
         # pass per power window: the per-cycle cost stays a few numpy calls.
         self._velocity = np.zeros((_ROWS, joints))
         self._torque = np.zeros((_ROWS, joints))
+        self._work_rows = np.zeros((_ROWS, joints))
         self._dt = np.zeros(_ROWS)
         self._rows = 0
         # The data sampled last and views into it (joint speeds, head orientation), made once.
         self._views: tuple[mujoco.MjData, np.ndarray, np.ndarray] | None = None
 
-    def sample(self, data: mujoco.MjData, dt_s: float, force_nm: np.ndarray) -> None:
+    def sample(
+        self,
+        data: mujoco.MjData,
+        dt_s: float,
+        force_nm: np.ndarray,
+        work_j: np.ndarray | None = None,
+    ) -> None:
         """Account one control period ending now; raise PhysicsHealthError past a hard limit.
 
-        ``force_nm`` (N,) is each servo's output torque.
+        ``force_nm`` (N,) is each servo's output torque now, ``work_j`` (N,) each joint's
+        positive work over the period's physics steps (None: torque times speed now times
+        ``dt_s``, the sampled estimate).
         """
         limits = self.limits
         views = self._views
@@ -157,6 +167,10 @@ class HealthMonitor:
         row = self._rows
         self._velocity[row] = velocity
         self._torque[row] = force_nm
+        if work_j is None:
+            self._work_rows[row] = positive_power_w(force_nm, velocity) * dt_s
+        else:
+            self._work_rows[row] = work_j
         self._dt[row] = dt_s
         self._rows = row + 1
         speed = max(map(abs, velocity.tolist()))
@@ -206,7 +220,7 @@ class HealthMonitor:
         self._rows = 0
         limits = self.limits
         velocity, torque, dt = self._velocity[:rows], self._torque[:rows], self._dt[:rows]
-        work = (positive_power_w(torque, velocity) * dt[:, None]).sum(axis=0)
+        work = self._work_rows[:rows].sum(axis=0)
         self._work_j += work
         self._window_work_j += work
         moving = np.abs(velocity) > limits.moving_fraction * self._no_load

@@ -7,9 +7,12 @@ so a tuned or learned result measured on one path is what another path measures:
 - ``servo_torque_nm``: each servo's output torque, the actuator's drive less the joint damping
   (back-EMF and gear friction) at the joint's speed.
 - ``positive_power_w``: the mechanical power each joint puts in (negative power, a joint being
-  driven, counts nothing); positive work is its sum over joints and cycles times the period. It
-  is every backend's formula (the servo bus reports effort and velocity too), so it is defined
-  beside ``JointState`` in ``snakebot.types`` and the twin's users take it from here.
+  driven, counts nothing). It is every backend's formula (the servo bus reports effort and
+  velocity too), so it is defined beside ``JointState`` in ``snakebot.types`` and the twin's
+  users take it from here.
+- ``step_work_j``: positive work integrated over every physics step of a control period, the
+  twin's and the batched engine's one formula (docs/physics.md, "Energy"): sampling the power
+  once per period misses what happens between samples (78x too little for a stiff servo).
 - ``Capsules.clearance_m``: how high the lowest point of the module capsules is above z = 0.
 - ``unstable_count`` / ``StepCheck``: whether MuJoCo met an instability inside a physics step
   (it answers one by resetting the state and counting a warning, not with NaN), and when.
@@ -36,6 +39,7 @@ __all__ = [
     "divergence_time_s",
     "positive_power_w",
     "servo_torque_nm",
+    "step_work_j",
     "unstable_count",
 ]
 
@@ -75,6 +79,31 @@ def servo_torque_nm(
     """
     torque: FloatArray = actuator_force_nm - joint_damping_nms * velocity_rad_s
     return torque
+
+
+def step_work_j(
+    actuator_force_nm: FloatArray,
+    joint_damping_nms: FloatArray,
+    velocity_rad_s: FloatArray,
+    timestep_s: float,
+) -> FloatArray:
+    """Positive work of each joint over S physics steps, J: (..., S, N) in, (..., N) out.
+
+    ``actuator_force_nm`` and ``velocity_rad_s`` are MjData's ``actuator_force`` and the joints'
+    ``qvel`` after each step; ``joint_damping_nms`` (..., N) broadcasts over the steps. Each
+    step counts ``positive_power_w(servo torque, velocity) * timestep_s``: with the velocity
+    after the step, which is the one MuJoCo's semi-implicit integration moves the joint by, the
+    product is the work the torque did in that step. The steps add in order, so one period on
+    the twin and the same period inside a batch's (B, C, S, N) arrays give the same bits.
+    """
+    damping = np.expand_dims(joint_damping_nms, -2)
+    # positive_power_w(servo_torque_nm(...), velocity) in place: a few numpy calls per period.
+    power = servo_torque_nm(actuator_force_nm, damping, velocity_rad_s)
+    power *= velocity_rad_s
+    np.maximum(power, 0.0, out=power)
+    work: FloatArray = power.sum(axis=-2)
+    work *= timestep_s
+    return work
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ def _missing(*modules: str) -> bool:
 
 
 # Files that train a policy (stable-baselines3, torch); every other one needs gymnasium only.
-TRAINING = ["test_rl_cli.py", "test_rl_train.py"]
+TRAINING = ["test_rl_cli.py", "test_rl_train.py", "test_rl_compare_ray.py"]
 if _missing("gymnasium"):
     collect_ignore_glob = ["test_*.py"]
 elif _missing("stable_baselines3", "torch"):

@@ -45,6 +45,12 @@ CASES = [
     bad("drive", "--script", "{script}", "--log", "/dev/full", names=("/dev/full",)),
     bad("drive", "--backend", "dynamixel", "--script", "{script}", code=2, names=("--robot",)),
     bad("drive", "--script", "{script}", "--rate", "nan", code=2, names=("--rate",)),
+    # ros2 (refused before rclpy is imported: these hold without the ros2 extra)
+    bad("ros2", "--robot", "{binary}", names=("{binary}", "not UTF-8")),
+    bad("ros2", "--backend", "dynamixel", code=2, names=("--robot",)),
+    bad("ros2", "--rate", "nan", code=2, names=("--rate",)),
+    bad("ros2", "--command-timeout", "-1", code=2, names=("--command-timeout",)),
+    bad("ros2", "--gaits", "moonwalk", code=2, names=("moonwalk",)),
     # run
     bad("run", "--robot", "{binary}", names=("{binary}", "not UTF-8")),
     bad("run", "--robot", "{heavy}", names=("{heavy}", "link.mass_kg")),

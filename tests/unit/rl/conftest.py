@@ -4,7 +4,7 @@ import tests (which check the message naming the extra) run here."""
 import importlib.util
 
 collect_ignore_glob = (
-    ["test_rl_encodings.py", "test_rl_eval_table.py"]
+    ["test_rl_encodings.py", "test_rl_eval_table.py", "test_rl_sweep.py"]
     if importlib.util.find_spec("gymnasium") is None
     else []
 )

@@ -35,6 +35,7 @@ def trace(**changes: np.ndarray) -> Trace:
         "velocity_rad_s": np.zeros((K, N)),
         "effort_nm": np.zeros((K, N)),
         "actuator_force_nm": np.zeros((K, N)),
+        "positive_work_j": np.zeros((K, N)),
         "com_m": np.tile([0.0, 0.0, 0.02], (K, 1)),
         "head_quat": np.tile([1.0, 0.0, 0.0, 0.0], (K, 1)),
         "clearance_m": np.zeros(K),

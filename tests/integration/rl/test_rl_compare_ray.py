@@ -1,0 +1,165 @@
+"""`rl compare --executor ray` as a user runs it: Ray Tune trials on a local Ray, the same table
+and policy folders as a local run, ASHA stopping a hopeless trial, and --resume after Ctrl-C.
+
+Tiny trainings (256 steps a trial, 128-step rollouts, 4 s episodes at 25 Hz); PPO on one CPU is
+deterministic for a seed on a machine, so the Ray run must match the local one bit for bit.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import queue
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("ray.tune", reason="the 'cluster' extra (ray[tune]) is not installed")
+
+pytestmark = pytest.mark.slow
+FAST = ["--set", "action_hz=25", "--set", "control_hz=25", "--set", "episode_s=4"]
+TINY = ["--steps", "256", "--rollout", "128", "--n-envs", "1", "--vec", "dummy", *FAST]
+SWEEP = ["rl", "compare", "--encodings", "sinusoid,dft", "--seeds", "2", *TINY]
+TRIALS = ("sinusoid/seed-0", "sinusoid/seed-1", "dft/seed-0", "dft/seed-1")
+RAY = ["--executor", "ray", "--ray-cpus", "1"]  # one trial at a time on a busy two-core box
+
+
+def cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "snakebot", *args], capture_output=True, text=True, timeout=timeout
+    )
+
+
+def curve(folder: Path) -> list[dict[str, str]]:
+    """The learning curve without its clock columns (wall time, throughput)."""
+    with (folder / "learning_curve.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    return [{k: v for k, v in r.items() if k not in ("wall_s", "steps_per_s")} for r in rows]
+
+
+@pytest.fixture(scope="module")
+def local(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
+    out = tmp_path_factory.mktemp("local") / "compare"
+    done = cli(*SWEEP, "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    return out, done.stdout
+
+
+def assert_same_as_local(local: tuple[Path, str], out: Path, stdout: str) -> None:
+    local_out, local_stdout = local
+    table = local_stdout.splitlines()[:3]
+    assert stdout.splitlines()[:3] == table  # the printed table, header and both encodings
+    mine, theirs = (json.loads((o / "compare.json").read_text()) for o in (out, local_out))
+    assert mine["table"] == theirs["table"]
+    assert list(mine["runs"]) == list(TRIALS)
+    for name in TRIALS:
+        assert curve(out / name) == curve(local_out / name), name
+        actor = (out / name / "actor.npz").read_bytes()
+        assert actor == (local_out / name / "actor.npz").read_bytes(), name
+        assert mine["runs"][name]["folder"] == str(out / name)
+        assert json.loads((out / name / "policy.json").read_text())["steps"] == 256
+
+
+def test_a_ray_sweep_gives_the_local_table_and_policy_folders(
+    local: tuple[Path, str], tmp_path: Path
+) -> None:
+    out = tmp_path / "compare"
+    done = cli(*SWEEP, *RAY, "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    assert_same_as_local(local, out, done.stdout)
+    assert "sinusoid/seed-1:       128/256 steps" in done.stderr  # its progress, per rollout
+    assert (out / "compare.png").stat().st_size > 10_000
+    # The experiment stays for --resume, and a second run refuses to replace it
+    again = cli(*SWEEP, *RAY, "--out", str(out), "--dry-run")
+    assert again.returncode == 1 and "ray-tune" in again.stderr
+
+
+def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -> None:
+    # A step cost of 5 per step makes every episode's return about -500 against the about -5
+    # of the ordinary task's: at the first rung (128 steps) it is in the worse half, stopped.
+    out = tmp_path / "asha"
+    done = cli(
+        "rl",
+        "compare",
+        "--encodings",
+        "sinusoid",
+        "--grid",
+        "step_cost=0.01,5",
+        *TINY[:1],
+        "512",
+        *TINY[2:],
+        *RAY,
+        "--scheduler",
+        "asha",
+        "--max-concurrent-trials",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    )
+    assert done.returncode == 0, done.stderr
+    runs = json.loads(done.stdout)["runs"]
+    good, hopeless = runs["sinusoid/step_cost=0.01"], runs["sinusoid/step_cost=5"]
+    assert not good["stopped_early"] and good["steps"] == 512
+    assert hopeless["stopped_early"] and hopeless["steps"] == 128
+    assert hopeless["final_mean_return"] < 10 * good["final_mean_return"] < 0
+    assert [r["steps"] for r in curve(out / "sinusoid/step_cost=5")] == ["128"]
+    assert not (out / "sinusoid/step_cost=5/policy.zip").exists()  # it never got to the end
+    assert (out / "sinusoid/step_cost=0.01/policy.zip").exists()
+    assert "sinusoid/step_cost=5: stopped early" in done.stderr
+
+
+def test_an_interrupted_sweep_resumes_keeping_its_finished_trials(
+    local: tuple[Path, str], tmp_path: Path
+) -> None:
+    out = tmp_path / "compare"
+    sweep = subprocess.Popen(
+        [sys.executable, "-m", "snakebot", *SWEEP, *RAY, "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lines: queue.Queue[str] = queue.Queue()
+    stderr = sweep.stderr
+    assert stderr is not None
+
+    def read() -> None:
+        for line in stderr:
+            lines.put(line)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    seen = []
+    try:
+        deadline = time.monotonic() + 400
+        while "  sinusoid/seed-0: done\n" not in seen:
+            assert time.monotonic() < deadline and sweep.poll() is None, "".join(seen)
+            try:
+                seen.append(lines.get(timeout=1))
+            except queue.Empty:
+                continue
+        sweep.send_signal(signal.SIGINT)  # Ctrl-C: Tune saves the experiment and ends
+        sweep.wait(timeout=300)
+    finally:
+        if sweep.poll() is None:
+            sweep.kill()
+            sweep.wait()
+    reader.join(timeout=10)
+    while not lines.empty():
+        seen.append(lines.get())
+    assert sweep.returncode == 130, "".join(seen)
+    assert "--resume" in "".join(seen)
+    assert not (out / "compare.json").exists()
+
+    resumed = cli(*SWEEP, *RAY, "--out", str(out), "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    assert "sinusoid/seed-0" not in resumed.stderr  # finished before Ctrl-C: not trained again
+    assert "dft/seed-1: done" in resumed.stderr
+    assert_same_as_local(local, out, resumed.stdout)
+    other = cli(*SWEEP, "--steps", "512", *RAY, "--out", str(out), "--resume")
+    assert other.returncode == 2 and "other" in other.stderr
