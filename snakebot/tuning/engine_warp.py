@@ -173,7 +173,11 @@ class WarpBatch:
             cycles_d = wp.zeros(count, dtype=wp.int32)
             target_d = wp.zeros((count, chunk, joints), dtype=float)
             command_d = wp.zeros((count, chunk, joints), dtype=float)
+            timestep = float(twin.model.opt.timestep)
+            work = [data.qvel, data.actuator_force, self._dof_index, self._damping, timestep]
+            work += [stop_d, acc_d]
             physics = _Physics(wp, mjw, self._model, data, steps, self.device.is_cuda)
+            physics.after_step = (kernels.step_work, count, work)
             span = range(0, min(chunk, total))
             rows = self.command_rows(commands, gaits, span, times, measured)
             while span:
@@ -184,7 +188,7 @@ class WarpBatch:
                     physics.step()
                     check = int((c + 1) % window == 0)
                     state = [stop_d, cycles_d, acc_d, joint_d]
-                    self.accumulate(data, c, dt, check, window, target_d, command_d, slot, state)
+                    self.accumulate(data, c, check, window, target_d, command_d, slot, state)
                 if not commands.open_loop:
                     measured = data.qpos.numpy()[:, twin.layout.qpos_index].astype(float)
                 span = range(span.stop, min(span.stop + chunk, total))
@@ -213,7 +217,6 @@ class WarpBatch:
         self,
         data: Any,
         cycle: int,
-        dt_s: float,
         check: int,
         window: int,
         target: Any,
@@ -228,7 +231,6 @@ class WarpBatch:
         envelope = self.envelope
         inputs = [
             cycle,
-            dt_s,
             check,
             window,
             data.qpos,
@@ -300,31 +302,39 @@ class WarpBatch:
 
 
 class _Physics:
-    """One control period of physics steps; on a CUDA device a captured graph after the first
-    period (the first runs plainly so every kernel is loaded before the capture)."""
+    """One control period of physics steps, each followed by ``after_step``; on a CUDA device a
+    captured graph after the first period (the first runs plainly so every kernel is loaded
+    before the capture)."""
 
     def __init__(self, wp: Any, mjw: Any, model: Any, data: Any, steps: int, cuda: bool) -> None:
         self._wp, self._mjw, self._model, self._data = wp, mjw, model, data
         self._steps, self._cuda = steps, cuda
         self._graph: Any = None
         self._periods = 0
+        self.after_step: tuple[Any, int, list[Any]] | None = None
+        """(kernel, dim, inputs) launched after every physics step (the work integral)."""
 
     def step(self) -> None:
         """Advance every world by one control period."""
-        wp, mjw = self._wp, self._mjw
+        wp = self._wp
         if self._graph is not None:
             wp.capture_launch(self._graph)
             return
         if self._cuda and self._periods > 0:
             with wp.ScopedCapture() as capture:
-                for _ in range(self._steps):
-                    mjw.step(self._model, self._data)
+                self._period()
             self._graph = capture.graph
             wp.capture_launch(self._graph)
             return
-        for _ in range(self._steps):
-            mjw.step(self._model, self._data)
+        self._period()
         self._periods += 1
+
+    def _period(self) -> None:
+        for _ in range(self._steps):
+            self._mjw.step(self._model, self._data)
+            if self.after_step is not None:
+                kernel, dim, inputs = self.after_step
+                self._wp.launch(kernel, dim, inputs)
 
 
 def capacity(model: mujoco.MjModel) -> tuple[int, int]:

@@ -1,5 +1,6 @@
-"""The Warp engine's metrics kernel, fed the CPU engine's own samples, scores them as the CPU
-engine does: the same summary (RunMetrics), the same violations (assess), the same early stops.
+"""The Warp engine's kernels, fed the CPU engine's own samples, score them as the CPU engine
+does: the same summary (RunMetrics), the same violations (assess), the same early stops, and
+the same positive work per physics step (readouts.step_work_j).
 
 The physics is left out on purpose (the two engines' physics differ; that tolerance is
 test_tuning_engine_warp's): each cycle of a CPU trace is written into arrays laid out as MuJoCo
@@ -92,8 +93,14 @@ def replay(problem: GaitProblem, traces: list[Trace]) -> Any:
                 for name in ("target_rad", "command_rad")
             ]
             target, command = (wp.array(r, dtype=float) for r in rows)
+            # The physics steps' work, as step_work adds it for the worlds still running.
+            live = state[0].numpy() == 0
+            values = state[2].numpy()
+            work = np.stack([t.positive_work_j[i].sum() for t, i in zip(traces, at, strict=True)])
+            values[live, k.POSITIVE_WORK_J] += work[live]
+            state[2].assign(values)
             check = int((c + 1) % window == 0)
-            batch.accumulate(data, c, traces[0].dt_s, check, window, target, command, 0, state)
+            batch.accumulate(data, c, check, window, target, command, 0, state)
         return WarpRun(
             acc=state[2].numpy(),
             cycles=state[1].numpy().astype(int),
@@ -146,3 +153,38 @@ def test_the_kernel_scores_the_cpu_engine_samples_as_the_cpu_engine_does() -> No
         for key, value in cpu.as_dict().items():
             if isinstance(value, float):
                 assert getattr(violations, key) == pytest.approx(value, rel=1e-4, abs=1e-6), key
+
+
+def test_the_step_work_kernel_is_the_twins_step_work() -> None:
+    pytest.importorskip("mujoco_warp")
+    import warp as wp
+
+    from snakebot.backends.twin.readouts import step_work_j
+    from snakebot.tuning import warp_kernels as k
+
+    rng = np.random.default_rng(3)
+    worlds, steps, joints, nv = 3, 5, 4, 10
+    dof_index = np.array([6, 7, 8, 9])
+    damping = rng.uniform(0.0, 0.5, joints)
+    force = rng.normal(0.0, 1.0, (worlds, steps, joints))
+    qvel = rng.normal(0.0, 2.0, (worlds, steps, nv))
+    expected = step_work_j(force, damping, qvel[..., dof_index], 0.002).sum(axis=-1)
+    with wp.ScopedDevice("cpu"):
+        stop = wp.array([0, 0, k.FLIPPED], dtype=wp.int32)
+        acc = wp.zeros((worlds, k.ACC_SIZE), dtype=wp.float64)
+        index = wp.array(dof_index.astype(np.int32), dtype=wp.int32)
+        damp = wp.array(damping, dtype=wp.float64)
+        for s in range(steps):
+            inputs = [
+                wp.array(qvel[:, s], dtype=float),
+                wp.array(force[:, s], dtype=float),
+                index,
+                damp,
+                0.002,
+                stop,
+                acc,
+            ]
+            wp.launch(k.step_work, worlds, inputs)
+        work = acc.numpy()[:, k.POSITIVE_WORK_J]
+    assert work[:2] == pytest.approx(expected[:2], rel=1e-5)
+    assert work[2] == 0.0  # a stopped world adds nothing
