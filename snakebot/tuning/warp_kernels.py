@@ -1,7 +1,8 @@
 """The Warp kernels of the MuJoCo Warp engine: commands in, the run's metrics accumulated per world.
 
 One thread per world. ``accumulate`` reads what the CPU engine samples every control cycle
-(snakebot.tuning.engine.TwinBatch) and folds it into running sums and extremes, so a run's
+(snakebot.tuning.engine.TwinBatch) and ``step_work`` the positive work of every physics step
+(readouts.step_work_j), and both fold it into running sums and extremes, so a run's
 summary (snakebot.control.metrics.RunMetrics) and its violations
 (snakebot.tuning.feasibility.assess) come out of a few numbers per world, never a trace.
 Sums are float64: a run of 10^3 cycles adds 10^4 small terms.
