@@ -260,9 +260,9 @@ def _ray_executor(args: argparse.Namespace) -> Any:
         if given or args.retries != 2:
             raise UsageError(f"{', '.join(given) or '--retries'}: needs --executor ray")
         return None
-    from snakebot.rl.compare_ray import RayExecutor, RayOptions, require_ray
+    from snakebot.rl.compare_ray import RayExecutor, RayOptions, require_tune
 
-    require_ray()
+    require_tune()
     return RayExecutor(
         RayOptions(
             address=args.address,
