@@ -68,6 +68,8 @@ class RayOptions:
             raise UsageError("--asha-grace needs --scheduler asha")
         if self.cpus_per_trial is not None and not self.cpus_per_trial > 0:
             raise ConfigError("--cpus-per-trial", str(self.cpus_per_trial), "expected > 0")
+        if self.num_cpus is not None and self.address is not None:
+            raise UsageError("--ray-cpus sizes the Ray started here: drop it with --address")
         if self.retries < 0:
             raise ConfigError("--retries", str(self.retries), "expected 0 or more")
 

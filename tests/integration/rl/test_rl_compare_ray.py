@@ -28,13 +28,24 @@ FAST = ["--set", "action_hz=25", "--set", "control_hz=25", "--set", "episode_s=4
 TINY = ["--steps", "256", "--rollout", "128", "--n-envs", "1", "--vec", "dummy", *FAST]
 SWEEP = ["rl", "compare", "--encodings", "sinusoid,dft", "--seeds", "2", *TINY]
 TRIALS = ("sinusoid/seed-0", "sinusoid/seed-1", "dft/seed-0", "dft/seed-1")
-RAY = ["--executor", "ray", "--ray-cpus", "1"]  # one trial at a time on a busy two-core box
+RAY = ["--executor", "ray", "--ray-cpus", "1"]  # Ray started here, one trial at a time
 
 
-def cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+def cli(
+    *args: str, timeout: float = 600, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "snakebot", *args], capture_output=True, text=True, timeout=timeout
+        [sys.executable, "-m", "snakebot", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
     )
+
+
+def on(cluster: LoopbackCluster) -> list[str]:
+    """The options of a sweep on the session's two-node loopback cluster (no Ray to start)."""
+    return ["--executor", "ray", "--address", cluster.address]
 
 
 def curve(folder: Path) -> list[dict[str, str]]:
@@ -127,7 +138,9 @@ def test_a_ray_sweep_gives_the_local_table_and_policy_folders(
     assert again.returncode == 1 and "ray-tune" in again.stderr
 
 
-def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -> None:
+def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(
+    loopback_cluster: LoopbackCluster, tmp_path: Path
+) -> None:
     # A step cost of 5 per step makes every episode's return about -500 against the about -5
     # of the ordinary task's: at the first rung (128 steps) it is in the worse half, stopped.
     out = tmp_path / "asha"
@@ -141,7 +154,7 @@ def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -
         *TINY[:1],
         "512",
         *TINY[2:],
-        *RAY,
+        *on(loopback_cluster),
         "--scheduler",
         "asha",
         "--max-concurrent-trials",
@@ -149,6 +162,7 @@ def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -
         "--out",
         str(out),
         "--json",
+        env=node_environment(),
     )
     assert done.returncode == 0, done.stderr
     runs = json.loads(done.stdout)["runs"]
@@ -163,10 +177,11 @@ def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -
 
 
 def test_an_interrupted_sweep_resumes_keeping_its_finished_trials(
-    local: tuple[Path, str], tmp_path: Path
+    local: tuple[Path, str], loopback_cluster: LoopbackCluster, tmp_path: Path
 ) -> None:
     out = tmp_path / "compare"
-    lines, sweep = stream([*SWEEP, *RAY, "--out", str(out)])
+    ray = on(loopback_cluster)
+    lines, sweep = stream([*SWEEP, *ray, "--out", str(out)], env=node_environment())
     seen = []
     try:
         seen += wait_for(lines, sweep, "  sinusoid/seed-0: done")
@@ -181,12 +196,12 @@ def test_an_interrupted_sweep_resumes_keeping_its_finished_trials(
     assert "--resume" in "".join(seen)
     assert not (out / "compare.json").exists()
 
-    resumed = cli(*SWEEP, *RAY, "--out", str(out), "--resume")
+    resumed = cli(*SWEEP, *ray, "--out", str(out), "--resume", env=node_environment())
     assert resumed.returncode == 0, resumed.stderr
     assert "sinusoid/seed-0" not in resumed.stderr  # finished before Ctrl-C: not trained again
     assert "dft/seed-1: done" in resumed.stderr
     assert_same_as_local(local, out, resumed.stdout)
-    other = cli(*SWEEP, "--steps", "512", *RAY, "--out", str(out), "--resume")
+    other = cli(*SWEEP, "--steps", "512", *ray, "--out", str(out), "--resume")
     assert other.returncode == 2 and "other" in other.stderr
 
 
@@ -200,7 +215,7 @@ def test_a_sweep_across_two_loopback_nodes_survives_losing_one(
     local = cli(*sweep, "--out", str(tmp_path / "local"))
     assert local.returncode == 0, local.stderr
     out = tmp_path / "cluster"
-    argv = [*sweep, "--executor", "ray", "--address", loopback_cluster.address, "--out", str(out)]
+    argv = [*sweep, *on(loopback_cluster), "--out", str(out)]
     lines, process = stream(argv, env=node_environment())
     seen = []
     try:
