@@ -8,7 +8,7 @@ from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
 from snakebot.errors import ConfigError, UsageError
 from snakebot.estimation import ChainGeometry, ChassisOdometry, OdometryConfig
-from snakebot.estimation.goto import STEERABLE_GAITS, GoToPoint
+from snakebot.estimation.goto import STEERABLE_GAITS, GoToPoint, SteeringConfig
 from snakebot.gaits import Gait
 
 
@@ -38,7 +38,9 @@ def steered_gait(
         )
     odometry = odometry_for(robot)
     yaw_mask = [joint.axis == "yaw" for joint in robot.joints]
-    steering = GoToPoint(gait, odometry, parse_point(point), yaw_mask)
+    # It stops early by the way the ramp-out still goes: about half its length at full speed.
+    config = SteeringConfig(coast_s=0.5 * robot.safety.ramp_s)
+    steering = GoToPoint(gait, odometry, parse_point(point), yaw_mask, config)
     return f"{gait_name}:to", steering, steering
 
 

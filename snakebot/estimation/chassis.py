@@ -25,10 +25,13 @@ start pose takes y and z from the head (head up on flat ground).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+
+from snakebot.estimation.kinematics import cross3
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -155,8 +158,8 @@ class VirtualChassis:
         y_extent, z_extent = singular[1 + y_index], singular[2 - y_index]
         y = candidates[y_index] * (1.0 if scores[y_index, 0] >= 0 else -1.0)
         y = y - (y @ x) * x
-        y /= np.linalg.norm(y)
-        z = np.cross(x, y)
+        y /= math.sqrt(float(y @ y))
+        z = cross3(x, y)
         if before is None:
             z_before = np.array([0.0, 0.0, 1.0]) if last is None else last.rotation[:, 2]
             z_score = float(z @ z_before)
@@ -175,6 +178,6 @@ class VirtualChassis:
         z = reference - (reference @ x) * x
         if np.linalg.norm(z) < 1e-9:  # the body points along the reference: use the head's y
             fallback = np.array([0.0, 1.0, 0.0])
-            z = np.cross(x, fallback - (fallback @ x) * x)
+            z = cross3(x, fallback - (fallback @ x) * x)
         z /= np.linalg.norm(z)
-        return np.cross(z, x), z
+        return cross3(z, x), z

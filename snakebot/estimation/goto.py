@@ -11,6 +11,7 @@ the point is, clipped and slew-limited. The pose source is the odometry on the s
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
@@ -24,6 +25,10 @@ if TYPE_CHECKING:
     from snakebot.estimation.odometry import ChassisOdometry
 
 FloatArray = npt.NDArray[np.float64]
+
+SPEED_WINDOW_S = 2.0
+"""The estimated speed is the straight-line way over this much of the latest time (a gait
+cycle or more, so the wave's sway averages out)."""
 
 STEERABLE_GAITS = ("serpenoid", "lateral_undulation")
 """Gaits that travel along the body's axis and turn with a yaw offset."""
@@ -41,18 +46,22 @@ class HeadingSource(Protocol):
 @dataclass(frozen=True)
 class SteeringConfig:
     """The heading controller: ``gain`` rad of yaw offset per rad of heading error, at most
-    ``max_offset_rad``, changing at most ``offset_rate_rad_s``; ``tolerance_m`` how near the
-    point counts as there; ``offset_sign`` the gait's sense (+1: a positive offset turns the
-    snake counter-clockwise; the serpenoid's turns it clockwise, -1). ValueError for a value
-    out of range."""
+    ``max_offset_rad``, changing at most ``offset_rate_rad_s``. ``tolerance_m``: how near the
+    point counts as there, plus the way the snake still goes at its present speed for
+    ``coast_s`` (the ramp-out after the stop: half its length for a smooth ramp).
+    ``offset_sign``: the gait's sense (+1: a positive offset turns the snake counter-clockwise;
+    the serpenoid's turns it clockwise, -1). ValueError for a value out of range."""
 
     gain: float = 0.3
     max_offset_rad: float = 0.12
     offset_rate_rad_s: float = 0.3
     tolerance_m: float = 0.1
     offset_sign: float = -1.0
+    coast_s: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (self.coast_s >= 0 and math.isfinite(self.coast_s)):
+            raise ValueError(f"coast_s must be >= 0, got {self.coast_s!r}")
         for name in ("gain", "max_offset_rad", "offset_rate_rad_s", "tolerance_m"):
             value = getattr(self, name)
             if not (value > 0 and math.isfinite(value)):
@@ -86,7 +95,9 @@ class GoToPoint(Gait):
         self.config = config if config is not None else SteeringConfig()
         self.goal_m: FloatArray | None = None
         self.offset_rad = 0.0
+        self.speed_mps = 0.0
         self._last_time_s: float | None = None
+        self._track: deque[tuple[float, float, float]] = deque()
 
     @property
     def period_s(self) -> float | None:
@@ -103,7 +114,9 @@ class GoToPoint(Gait):
         self.gait.reset()
         self.goal_m = None
         self.offset_rad = 0.0
+        self.speed_mps = 0.0
         self._last_time_s = None
+        self._track.clear()
 
     def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
         """The gait's targets with the current offset (the offset changes only in command)."""
@@ -119,7 +132,8 @@ class GoToPoint(Gait):
     def reached(self) -> str | None:
         """A stop check: a reason once the estimate is within the tolerance of the point."""
         distance = self.distance_m()
-        if distance is not None and distance <= self.config.tolerance_m:
+        coast = self.config.coast_s * self.speed_mps
+        if distance is not None and distance <= self.config.tolerance_m + coast:
             return f"reached the point (estimated {distance:.2f} m from it)"
         return None
 
@@ -137,6 +151,14 @@ class GoToPoint(Gait):
         self._last_time_s = time_s
         if body is None or pose is None:
             return
+        track = self._track
+        track.append((pose.time_s, pose.x_m, pose.y_m))
+        while track[-1][0] - track[0][0] > SPEED_WINDOW_S:
+            track.popleft()
+        span = track[-1][0] - track[0][0]
+        if span > 0.5 * SPEED_WINDOW_S:
+            moved = math.hypot(track[-1][1] - track[0][1], track[-1][2] - track[0][2])
+            self.speed_mps = moved / span
         if self.goal_m is None:
             yaw = head_heading_rad(body.head_quat)
             x, y = self.point_m

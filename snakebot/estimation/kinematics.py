@@ -9,6 +9,7 @@ No MuJoCo here: the estimator runs on the servo bus too.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +20,13 @@ from snakebot.config.schema import RobotConfig
 FloatArray = npt.NDArray[np.float64]
 
 _AXIS_INDEX = {"yaw": 2, "pitch": 1}
+
+
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """a × b for 3-vectors (np.cross costs ten times as much on one pair)."""
+    a0, a1, a2 = float(a[0]), float(a[1]), float(a[2])
+    b0, b1, b2 = float(b[0]), float(b[1]), float(b[2])
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 @dataclass(frozen=True)
@@ -36,6 +44,10 @@ class ChainGeometry:
         unknown = sorted(set(self.axes) - set(_AXIS_INDEX))
         if unknown:
             raise ValueError(f"joint axes must be yaw or pitch, got {unknown}")
+
+    @functools.cached_property
+    def _yaw_mask(self) -> npt.NDArray[np.bool_]:
+        return np.array([axis == "yaw" for axis in self.axes], dtype=bool)
 
     @classmethod
     def of_robot(cls, robot: RobotConfig) -> ChainGeometry:
@@ -65,20 +77,22 @@ class ChainGeometry:
         if q.shape != (self.joint_count,):
             raise ValueError(f"expected ({self.joint_count},) joint angles, got shape {q.shape}")
         count = self.link_count
-        origins = np.zeros((count, 3))
+        cos, sin = np.cos(q), np.sin(q)
+        turns = np.zeros((self.joint_count, 3, 3))  # each joint's turn, built at once
+        yaw = self._yaw_mask
+        pitch = ~yaw
+        turns[yaw, 0, 0] = turns[yaw, 1, 1] = cos[yaw]  # about z: x -> (c, s, 0)
+        turns[yaw, 0, 1], turns[yaw, 1, 0] = -sin[yaw], sin[yaw]
+        turns[yaw, 2, 2] = 1.0
+        turns[pitch, 0, 0] = turns[pitch, 2, 2] = cos[pitch]  # about y: x -> (c, 0, -s)
+        turns[pitch, 0, 2], turns[pitch, 2, 0] = sin[pitch], -sin[pitch]
+        turns[pitch, 1, 1] = 1.0
         rotations = np.empty((count, 3, 3))
         rotations[0] = np.eye(3)
-        cos, sin = np.cos(q), np.sin(q)
-        for i, axis in enumerate(self.axes):
-            parent = rotations[i]
-            origins[i + 1] = origins[i] - self.length_m * parent[:, 0]
-            turn = np.eye(3)
-            c, s = cos[i], sin[i]
-            if _AXIS_INDEX[axis] == 2:  # about z: x -> (c, s, 0)
-                turn[0, 0], turn[0, 1], turn[1, 0], turn[1, 1] = c, -s, s, c
-            else:  # about y: x -> (c, 0, -s)
-                turn[0, 0], turn[0, 2], turn[2, 0], turn[2, 2] = c, s, -s, c
-            rotations[i + 1] = parent @ turn
+        for i in range(self.joint_count):
+            np.matmul(rotations[i], turns[i], out=rotations[i + 1])
+        origins = np.zeros((count, 3))
+        np.cumsum(-self.length_m * rotations[:-1, :, 0], axis=0, out=origins[1:])
         return origins, rotations
 
     def module_centres(self, position_rad: npt.ArrayLike) -> FloatArray:

@@ -2,26 +2,29 @@
 
 Method (docs/estimation.md). Each control cycle, forward kinematics of the measured joint
 angles places the modules in the virtual chassis (snakebot.estimation.chassis); the chassis is
-levelled (its x axis laid into the ground plane, z up) with "up" from the head IMU's tilt where
-the robot has one, else from the shape: the head's z for a chain that bends in yaw only, the
-chassis axis of least extent otherwise (sidewinding's body lies in the plane of its two largest
-extents). Modules that touch the ground hardly slip, so the levelled chassis moved by the planar
-rigid motion (dx, dy, dyaw) that keeps them where they were: a weighted least-squares fit (a
-linearised planar Kabsch / Umeyama, solved twice to take up the rotation exactly) between this
-cycle's module positions and the last's.
+levelled (its x axis laid into the ground plane, z up) with "up" from the body's shape: the
+head's z for a chain that bends in yaw only, else the chassis axis of clearly least extent
+(sidewinding's body lies in the plane of its two largest extents), on the side of the last up and
+of the IMU's gravity where there is one (``level_by="gravity"`` takes the IMU's up instead).
+Modules that touch the ground hardly slip, so the levelled chassis moved by the planar rigid
+motion that keeps them where they were since the last cycle:
 
-- Weights: each module weighs by how likely it touches the ground, a Gaussian of its height
-  above the lowest module (``contact_height_m``): in sidewinding the lowest modules carry the
-  body, the lifted ones move through the air.
-- Slip: ``static`` contacts keep still both ways (sidewinding's static contact); with
-  ``no_lateral_slip`` (a planar snake on wheels or scales, lateral undulation) a module slides
-  freely along its own axis and only its sideways motion counts (``axial_weight`` of the
-  along-axis residual); ``auto`` picks no_lateral_slip for a chain that bends in yaw only.
-- IMU: the head gyro's yaw rate (about "up"), less the head's turn relative to the chassis that
-  FK gives, is a second measurement of the chassis's yaw change; the two are fused by their
-  variances (the one-step Kalman combination; the kinematic variance is the fit's residual
-  variance, the gyro's its noise). The estimate never reads a pose from the backend: of the
-  body record it takes the gyro and the gravity direction in the head only.
+- Turn: the weighted least-squares rigid motion of every module, each weighed by a Gaussian of
+  its height above the lowest (``turn_height_m``): a 2-D Kabsch in closed form for static
+  contacts, two Gauss-Newton steps with no_lateral_slip's per-module metric.
+- IMU: the change of the head's heading by the gyro (``heading_rate``), less the head's turn in
+  the chassis that FK gives, is a second measurement of the turn; the two are fused by their
+  variances (the one-step Kalman combination: the fit's residual variance, the gyro's noise).
+- Shift: with the turn fixed, the translation that keeps the modules touching the ground in both
+  cycles where they were: the ``contact_modules`` lowest (sidewinding's carrying modules), all of
+  them for a body lying flat.
+- Slip: ``static`` contacts keep still both ways (sidewinding); with ``no_lateral_slip`` (a
+  planar snake on wheels or scales, lateral undulation) a module slides freely along its own axis
+  and only its sideways motion counts (``axial_weight`` of the along-axis residual); ``auto``
+  picks no_lateral_slip for a chain that bends in yaw only.
+
+The estimate never reads a pose from the backend: of the body record it takes the gyro and the
+gravity direction in the head (the IMU's tilt) only.
 
 ``ChassisOdometry`` is a cycle observer (give it to ``run_gait``'s observers) and a
 ``PoseSource`` (``body_state()``), so a goal policy, ``run --to`` or a heading controller can
@@ -38,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.estimation.chassis import ChassisFrame, VirtualChassis
-from snakebot.estimation.kinematics import ChainGeometry
+from snakebot.estimation.kinematics import ChainGeometry, cross3
 from snakebot.types import BodyState, JointState
 
 if TYPE_CHECKING:
@@ -242,21 +245,23 @@ class ChassisOdometry:
     ) -> _Levelled:
         """The chassis laid into the ground plane: where "up" is, then the modules in it."""
         rotation = frame.rotation
-        if up_in_head is not None and self.config.level_by == "gravity":
-            up_head = np.asarray(up_in_head, dtype=float)
-            up_head = up_head / np.linalg.norm(up_head)
+        gravity = None if up_in_head is None else np.asarray(up_in_head, dtype=float)
+        if gravity is not None and self.config.level_by == "gravity":
+            up_head = gravity / math.sqrt(float(gravity @ gravity))
         else:
             up_head = self._shape_up(frame)
+            if gravity is not None and up_head @ gravity < 0:  # the IMU knows which side is up
+                up_head = -up_head
         self._up_head = up_head
-        gyro_up = up_head if up_in_head is None else np.asarray(up_in_head, dtype=float)
+        gyro_up = up_head if gravity is None else gravity
         forward = rotation[:, 0] - (rotation[:, 0] @ up_head) * up_head
-        norm = float(np.linalg.norm(forward))
+        norm = math.sqrt(float(forward @ forward))
         if norm < 1e-6:  # the body stands on end: keep the chassis's y in the plane instead
             side = rotation[:, 1] - (rotation[:, 1] @ up_head) * up_head
-            forward = np.cross(side / np.linalg.norm(side), up_head)
+            forward = cross3(side / np.linalg.norm(side), up_head)
             norm = 1.0
         forward = forward / norm
-        head_to_level = np.column_stack([forward, np.cross(up_head, forward), up_head])
+        head_to_level = np.column_stack([forward, cross3(up_head, forward), up_head])
         local = (self.chassis_points(frame)) @ head_to_level
         tangent = module_x @ head_to_level[:, :2]
         lengths = np.linalg.norm(tangent, axis=1, keepdims=True)
@@ -268,7 +273,7 @@ class ChassisOdometry:
             tangent=tangent,
             head_heading_rad=math.atan2(float(head_x[1]), float(head_x[0])),
             head_to_level=head_to_level,
-            up_head=gyro_up / np.linalg.norm(gyro_up),
+            up_head=gyro_up / math.sqrt(float(gyro_up @ gyro_up)),
         )
 
     def _shape_up(self, frame: ChassisFrame) -> FloatArray:
@@ -281,7 +286,7 @@ class ChassisOdometry:
             return np.array([0.0, 0.0, 1.0])
         extent, rotation = frame.extent_m, frame.rotation
         small, large = sorted((float(extent[1]), float(extent[2])))
-        if large <= 0 or small >= CLEAR_RATIO * large:
+        if large <= self.chassis.min_extent_m or small >= CLEAR_RATIO * large:
             return last
         axis = rotation[:, 1] if extent[1] < extent[2] else rotation[:, 2]
         up: FloatArray = axis if axis @ last >= 0 else -axis
@@ -317,12 +322,16 @@ class ChassisOdometry:
     def _turn(self, last: _Levelled, now: _Levelled) -> tuple[float, float]:
         """The levelled chassis's yaw change since ``last`` (rad) and its variance (rad²): the
         rigid planar motion that best keeps the low modules where they were (weights: a
-        Gaussian of the height above the lowest), by Gauss-Newton from no motion, twice."""
+        Gaussian of the height above the lowest): closed form for static contacts, else by
+        Gauss-Newton from no motion, twice."""
         scale = self.config.turn_height_m
         weights = np.exp(-0.5 * ((last.height_m - last.height_m.min()) / scale) ** 2)
         weights *= np.exp(-0.5 * ((now.height_m - now.height_m.min()) / scale) ** 2)
-        metric = self._metric(now, np.sqrt(weights))
+        weights = np.sqrt(weights)
         points, target = now.planar_m, last.planar_m
+        if self.slip == "static":
+            return _planar_kabsch_turn(points, target, weights)
+        metric = self._metric(now, weights)
         motion = np.zeros(3)  # dx, dy, dyaw
         normal_matrix = np.eye(3)
         residual = np.zeros_like(points)
@@ -375,6 +384,25 @@ class ChassisOdometry:
         height = float(-level.height_m.min()) + self.config.radius_m
         com = np.array([pose.x_m, pose.y_m, height])
         return BodyState(com_m=com, head_quat=rotation_to_quat(head_rotation))
+
+
+def _planar_kabsch_turn(
+    points: FloatArray, target: FloatArray, weights: FloatArray
+) -> tuple[float, float]:
+    """The turn (rad) of the weighted least-squares rigid motion taking ``points`` (M, 2) onto
+    ``target`` (M, 2) (2-D Kabsch, in closed form), and its variance (rad²)."""
+    total = float(weights.sum())
+    p = points - weights @ points / total
+    q = target - weights @ target / total
+    cross = float(weights @ (p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]))
+    dot = float(weights @ (p[:, 0] * q[:, 0] + p[:, 1] * q[:, 1]))
+    turn = math.atan2(cross, dot)
+    c, s = math.cos(turn), math.sin(turn)
+    residual = q - p @ np.array([[c, s], [-s, c]])
+    cost = float(weights @ (residual * residual).sum(axis=1))
+    spread = float(weights @ (p * p).sum(axis=1))
+    dof = max(total * 2.0 - 3.0, 1.0)
+    return turn, max(cost / dof / max(spread, 1e-12), 1e-12)
 
 
 def _rotation_2d(angle_rad: float) -> FloatArray:
