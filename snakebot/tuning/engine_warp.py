@@ -22,6 +22,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleSchedule
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, MissingDependencyError
@@ -36,7 +37,9 @@ from snakebot.tuning.feasibility import (
     Envelope,
     Violations,
 )
-from snakebot.tuning.problem import GaitProblem
+from snakebot.tuning.objectives import Objective
+from snakebot.tuning.problem import EvalPlan, GaitProblem, Listener
+from snakebot.tuning.space import SearchSpace
 from snakebot.tuning.trace import FloatArray
 from snakebot.tuning.warp_scores import outcomes
 
@@ -371,15 +374,28 @@ class WarpGaitProblem(GaitProblem):
     """A GaitProblem whose candidates run as the worlds of one MuJoCo Warp model on
     ``plan.device`` (EvalPlan.engine "warp"); everything else is GaitProblem's."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        if self.plan.friction_model is not None:
+    def __init__(
+        self,
+        robot: RobotConfig,
+        space: SearchSpace,
+        objective: Objective,
+        plan: EvalPlan,
+        *,
+        listener: Listener | None = None,
+    ) -> None:
+        if plan.friction_model is not None:
             raise ConfigError(
                 "--friction-model",
-                str(self.plan.friction_model),
+                str(plan.friction_model),
                 "runs as a MuJoCo callback on the CPU; --engine warp has plain MuJoCo contacts",
             )
-        plan = self.plan
+        if plan.executor != "local":
+            raise ConfigError(
+                "--executor",
+                plan.executor,
+                "--engine warp batches a generation on this machine's device; use local",
+            )
+        super().__init__(robot, space, objective, plan, listener=listener)
         self._warp = WarpBatch(self._twin, self.envelope, device=plan.device, workers=plan.workers)
 
     def outcomes(

@@ -25,3 +25,10 @@ def test_the_warp_engine_without_the_gpu_extra_names_the_install_command(
     argv = ["tune", "gait", "--method", "grid", "--engine", "warp", "--budget", "2", "--quiet"]
     assert main(argv) != 0
     assert "pip install 'snakebot[gpu]'" in capsys.readouterr().err
+
+
+def test_the_warp_engine_refuses_the_ray_executor(capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("mujoco_warp")
+    argv = ["tune", "gait", "--method", "grid", "--engine", "warp", "--executor", "ray"]
+    assert main([*argv, "--budget", "2", "--quiet"]) == 2
+    assert "--engine warp batches a generation on this machine's device" in capsys.readouterr().err
