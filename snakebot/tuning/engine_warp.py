@@ -249,7 +249,6 @@ class WarpBatch:
             slot,
             self._qpos_index,
             self._dof_index,
-            self._damping,
             self._lower,
             self._upper,
             self._geoms,

@@ -121,7 +121,6 @@ def accumulate(
     slot: int,
     qpos_index: wp.array[int],
     dof_index: wp.array[int],
-    damping: wp.array[wp.float64],
     lower_rad: wp.array[wp.float64],
     upper_rad: wp.array[wp.float64],
     capsule_geoms: wp.array[int],
