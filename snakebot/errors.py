@@ -183,3 +183,12 @@ class ClusterError(SnakebotError, ConnectionError):
         self.address = address
         where = f"the Ray cluster at {address}" if address else "Ray on this machine"
         super().__init__(f"{where}: {message}")
+
+
+class SweepError(SnakebotError):
+    """Trials of a learning sweep (``rl compare --executor ray``) failed on every try they were
+    allowed; ``trials`` names them (their folders under the sweep's output)."""
+
+    def __init__(self, trials: list[str], message: str) -> None:
+        self.trials = trials
+        super().__init__(message)

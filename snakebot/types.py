@@ -31,7 +31,7 @@ class JointState:
     position_rad: np.ndarray
     velocity_rad_s: np.ndarray
     effort_nm: np.ndarray
-    positive_work_j: np.ndarray | None = None
+    positive_work_j: np.ndarray | None = field(default=None, kw_only=True)
 
 
 def positive_power_w(effort_nm: np.ndarray, velocity_rad_s: np.ndarray) -> np.ndarray:

@@ -88,7 +88,13 @@ def main() -> None:
     params = [space.params(tuple(float(v) for v in p)) for p in points]
 
     def plan(duration_s: float) -> EvalPlan:
-        return EvalPlan(duration_s, args.rate, args.workers, "warp", args.device)
+        return EvalPlan(
+            duration_s=duration_s,
+            rate_hz=args.rate,
+            workers=args.workers,
+            engine="warp",
+            device=args.device,
+        )
 
     start = time.perf_counter()
     problem = WarpGaitProblem(robot, space, objective, plan(args.duration))

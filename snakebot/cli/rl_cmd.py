@@ -260,21 +260,20 @@ def _ray_executor(args: argparse.Namespace) -> Any:
         if given or args.retries != 2:
             raise UsageError(f"{', '.join(given) or '--retries'}: needs --executor ray")
         return None
-    from snakebot.rl.compare_ray import RayExecutor, RayOptions, require_ray
+    from snakebot.rl.compare_ray import RayExecutor, RayOptions, require_tune
 
-    require_ray()
-    return RayExecutor(
-        RayOptions(
-            address=args.address,
-            num_cpus=args.ray_cpus,
-            scheduler=args.scheduler,
-            asha_grace_steps=args.asha_grace,
-            cpus_per_trial=args.cpus_per_trial,
-            max_concurrent_trials=args.max_concurrent_trials,
-            retries=args.retries,
-            resume=args.resume,
-        )
+    options = RayOptions(  # checked first: a usage error needs no Ray to be told
+        address=args.address,
+        num_cpus=args.ray_cpus,
+        scheduler=args.scheduler,
+        asha_grace_steps=args.asha_grace,
+        cpus_per_trial=args.cpus_per_trial,
+        max_concurrent_trials=args.max_concurrent_trials,
+        retries=args.retries,
+        resume=args.resume,
     )
+    require_tune()
+    return RayExecutor(options)
 
 
 def parse_grid(items: list[str]) -> dict[str, tuple[Any, ...]]:

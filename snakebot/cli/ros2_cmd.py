@@ -155,16 +155,17 @@ def run(args: argparse.Namespace) -> int:
         smoothing_s=args.smoothing,
         transition_s=args.transition,
         node_name=args.node_name,
-        ros_args=tuple(args.ros_args),
+        ros_args=("--ros-args", *args.ros_args) if args.ros_args else (),
     )
     if args.loopback:  # before rclpy loads: the middleware reads these once
         os.environ.update(loopback_environment())
+    if args.mcap is not None:  # the output rule first: an existing file is named, whatever else
+        check_writable(args.mcap, "MCAP file", force=args.force)
     require_rclpy()  # the extra, before anything connects
     if args.mcap is not None:
         from snakebot.telemetry.ros2_mcap import mcap_writer_module
 
         mcap_writer_module()  # the recording's extra too
-        check_writable(args.mcap, "MCAP file", force=args.force)
     from snakebot.ros2.node import run_node
 
     # ROS clients live on the wall clock: the twin is paced to it.

@@ -12,52 +12,44 @@ the trials that finished.
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import importlib
 import json
-import logging
 import math
 import os
 import re
 import shutil
 import sys
 import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
-from snakebot.errors import ConfigError, MissingDependencyError, SnakebotError, UsageError
+from snakebot.cluster import INSTALL, ray_session, require_ray
+from snakebot.errors import ConfigError, MissingDependencyError, SweepError, UsageError
 from snakebot.rl.policy_file import CURVE_FIELDS, CURVE_FILE, read_settings
 from snakebot.rl.sweep import SweepPlan, Trial, TrialOutcome
 from snakebot.rl.train import CurvePoint, TrainResult, TrainSettings, read_curve, train
 
 EXPERIMENT = "ray-tune"  # OUT/ray-tune: the Tune experiment, what --resume goes on from
 PLAN_FILE = "snakebot-plan.json"  # in it: the trials it was started with
-CLUSTER_INSTALL = "pip install 'snakebot[cluster]'"
 SCHEDULERS = ("none", "asha")
 ASHA_REDUCTION = 2  # each rung keeps the better half: a gentle cut for sweeps of a few trials
-
-
-class SweepError(SnakebotError):
-    """A trial of a Ray sweep failed on every try it was allowed (``trials`` names them)."""
-
-    def __init__(self, trials: list[str], message: str) -> None:
-        self.trials = trials
-        super().__init__(message)
 
 
 @dataclass(frozen=True)
 class RayOptions:
     """How a sweep runs on Ray.
 
-    ``address``: a running cluster (``HOST:PORT``); None starts a local one of ``num_cpus``
-    CPUs (None: all) on 127.0.0.1. ``scheduler``: "none" or "asha" (stops trials whose mean
-    return at a rung of ``asha_grace_steps`` x 2^k env steps is in the worse half; None: a
-    quarter of the trial's steps, at least one rollout). ``cpus_per_trial``: None gives
-    ``n_envs`` for subproc envs, 1 for dummy ones. ``max_concurrent_trials``: None lets Ray
-    run as many as fit. ``retries``: how often a failed trial (a lost node) runs again.
-    ``resume``: go on with the experiment in ``OUT/ray-tune``.
+    ``address``: a running cluster (``HOST:PORT``); None starts Ray on this machine with
+    ``num_cpus`` CPUs (None: all), on 127.0.0.1 only (``snakebot.cluster.connect``).
+    ``scheduler``: "none" or "asha" (stops trials whose mean return at a rung of
+    ``asha_grace_steps`` x 2^k env steps is in the worse half; None: a quarter of the trial's
+    steps, at least one rollout). ``cpus_per_trial``: None gives ``n_envs`` for subproc envs, 1
+    for dummy ones. ``max_concurrent_trials``: None lets Ray run as many as fit. ``retries``:
+    how often a failed trial (a lost node) runs again. ``resume``: go on with the experiment in
+    ``OUT/ray-tune``.
     """
 
     address: str | None = None
@@ -76,49 +68,25 @@ class RayOptions:
             raise UsageError("--asha-grace needs --scheduler asha")
         if self.cpus_per_trial is not None and not self.cpus_per_trial > 0:
             raise ConfigError("--cpus-per-trial", str(self.cpus_per_trial), "expected > 0")
+        if self.num_cpus is not None and self.address is not None:
+            raise UsageError("--ray-cpus sizes the Ray started here: drop it with --address")
         if self.retries < 0:
             raise ConfigError("--retries", str(self.retries), "expected 0 or more")
 
 
-def require_ray() -> Any:
-    """``ray`` (with Tune), usage statistics off; MissingDependencyError naming the extra."""
+def require_tune() -> Any:
+    """``ray`` with Tune, usage statistics and Tune's own tables off; MissingDependencyError
+    with the install command when either is missing."""
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     os.environ.setdefault("RAY_AIR_NEW_OUTPUT", "0")  # Tune's tables off: compare prints its own
     # Tune warns when a sweep of short trials snapshots its state often; that is the point here
     os.environ.setdefault("TUNE_WARN_EXCESSIVE_EXPERIMENT_CHECKPOINT_SYNC_THRESHOLD_S", "0")
-    try:
-        import ray
-        import ray.tune
-    except ImportError as exc:
-        raise MissingDependencyError(
-            f"--executor ray needs ray[tune], which is not installed (the 'cluster' extra): "
-            f"{CLUSTER_INSTALL}"
-        ) from exc
-    return ray
-
-
-@contextmanager
-def connected(options: RayOptions) -> Iterator[Any]:
-    """Ray initialised for the sweep (a running cluster at ``options.address``, or a local one
-    on 127.0.0.1 with no dashboard), shut down after unless it was initialised already."""
     ray = require_ray()
-    if ray.is_initialized():
-        yield ray
-        return
-    common: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING}
-    if options.address is not None:
-        ray.init(address=options.address, **common)
-    else:
-        ray.init(
-            num_cpus=options.num_cpus,
-            include_dashboard=False,
-            _node_ip_address="127.0.0.1",
-            **common,
-        )
     try:
-        yield ray
-    finally:
-        ray.shutdown()
+        importlib.import_module("ray.tune")
+    except ImportError as exc:
+        raise MissingDependencyError(f"--executor ray needs Ray Tune: {INSTALL}") from exc
+    return ray
 
 
 def trial_config(trial: Trial, settings: TrainSettings) -> dict[str, Any]:
@@ -176,7 +144,13 @@ class RayExecutor:
         experiment = out.resolve() / EXPERIMENT
         self._check_experiment(experiment, configs)
         cpus = self.options.cpus_per_trial or (plan.n_envs if plan.vec == "subproc" else 1)
-        with connected(self.options) as ray:
+        ray = require_tune()
+        # Ray prints its workers' output and the cluster's errors (a node marked dead) to
+        # stdout; they go to stderr, so stdout keeps only the table or the --json summary.
+        with (
+            contextlib.redirect_stdout(sys.stderr),
+            ray_session(self.options.address, num_cpus=self.options.num_cpus),
+        ):
             from ray import tune
 
             _check_cpus(ray, cpus)
@@ -349,7 +323,7 @@ def _progress_callback(total: int, echo: bool) -> Any:
     when ``echo`` is False); it holds no stream, so Tune can save it with the experiment."""
     from ray.tune import Callback
 
-    class Progress(Callback):  # type: ignore[misc]  # Ray is typed as Any (pyproject)
+    class Progress(Callback):  # type: ignore[misc]
         def on_trial_result(
             self, iteration: int, trials: Any, trial: Any, result: Any, **info: Any
         ) -> None:
@@ -358,6 +332,12 @@ def _progress_callback(total: int, echo: bool) -> Any:
                 sys.stderr.write(
                     f"  {trial_name(trial)}: {int(result.get('steps', 0)):>9d}/{total} steps  "
                     f"return {'n/a' if math.isnan(ret) else format(ret, '.2f')}\n"
+                )
+
+        def on_trial_recover(self, iteration: int, trials: Any, trial: Any, **info: Any) -> None:
+            if echo:
+                sys.stderr.write(
+                    f"  {trial_name(trial)}: failed, running it again from the start\n"
                 )
 
         def on_trial_error(self, iteration: int, trials: Any, trial: Any, **info: Any) -> None:

@@ -245,8 +245,10 @@ class CommandDriver:
     A steer goes through ``controller`` (``snakebot drive``'s: ``speed=V``/``turn=V`` keys,
     the stick's path); a gait selection blends the live gait into it. After ``timeout_s``
     without a motion command (armed by the first; 0 switches it off) the driver does
-    ``on_timeout``; a command after a halt drives again. ``stop_reason`` is set once the node
-    is stopping (a timeout with ``stop``, a signal); the live gait then blends to rest.
+    ``on_timeout``; a command after a halt drives again. Until the first command the joints
+    hold the pose they started in (the first steer blends into the gait from there).
+    ``stop_reason`` is set once the node is stopping (a timeout with ``stop``, a signal); the
+    live gait then blends to rest.
     """
 
     def __init__(
@@ -265,15 +267,12 @@ class CommandDriver:
         self.choice = controller.gaits[0]
         self.timeouts = 0
         self._halted = False
+        self._steering = False  # the live gait plays a gait (a steer came since the start)
 
     @property
     def stop_reason(self) -> str | None:
         """Why the node is stopping, None while it serves."""
         return self.controller.stop_reason
-
-    def begin(self) -> None:
-        """Start on the first gait, standing still."""
-        self.controller.begin()
 
     def apply(self, now_s: float) -> None:
         """Take the inbox's commands at gait time ``now_s`` (s) and check the watchdog."""
@@ -283,17 +282,19 @@ class CommandDriver:
         live = self.gait.live
         if choice is not None:
             self.choice = choice
-            if self.gait.mode == "live":
+            if self.gait.mode == "live" and self._steering:
                 live.select(choice.name, choice.params)
         if isinstance(command, Steer):
-            if self.gait.mode == "joints":
+            if not self._steering:  # from the pose held, or the last joint target: no jump
                 self.gait.go_live()
                 live.set_controls(replace(live.setpoint, speed=0.0, turn=0.0))
                 live.select(self.choice.name, self.choice.params)
+                self._steering = True
             self.controller.apply(f"speed={command.speed:g}", now_s)
             self.controller.apply(f"turn={command.turn:g}", now_s)
         elif command is not None:
             self.gait.follow(command, now_s)
+            self._steering = False
         if command is not None:
             self._halted = False
         self._watch(now_s)

@@ -29,7 +29,7 @@ from sensor_msgs.msg import JointState as JointStateMessage
 from trajectory_msgs.msg import JointTrajectory
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import OnBus, ReportsHealth
+from snakebot.backends.capabilities import OnBus, ReportsHealth, SensesCurrent
 from snakebot.config import RobotConfig
 from snakebot.control.cycle import CycleObserver, CycleRecord
 from snakebot.control.metrics import RunMetrics
@@ -126,7 +126,7 @@ def _ros_node(options: NodeOptions) -> Iterator[Node]:
     """A node in a context of its own, its executor spinning on a daemon thread; the stop
     signals stay the caller's (rclpy installs no handler)."""
     context = Context()
-    args = ["snakebot", "--ros-args", *options.ros_args] if options.ros_args else None
+    args = ["snakebot", *options.ros_args] if options.ros_args else None
     rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node(options.node_name, context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -186,7 +186,7 @@ class RosBridge:
         if [p.value for p in declared] != [first.name, params]:  # given with --ros-args -p
             result = self._on_parameters(declared)
             if not result.successful:
-                raise ConfigError("--ros-args", "", result.reason)
+                raise ConfigError("ros_args", "", result.reason)
         node.add_on_set_parameters_callback(self._on_parameters)
         self.observers = (self._publish_cycle,)
 
@@ -253,7 +253,9 @@ class RosBridge:
 
     def _servo_statuses(self) -> list[DiagnosticStatus]:
         backend = self.backend
-        health = backend.health() if isinstance(backend, ReportsHealth) else {}
+        health = dict(backend.health()) if isinstance(backend, ReportsHealth) else {}
+        if isinstance(backend, SensesCurrent):
+            health["current_a"] = backend.present_current_a()
         bus = backend.bus if isinstance(backend, OnBus) else None
         statuses = []
         for joint, (name, servo) in enumerate(zip(self.names, self.robot.servo_ids, strict=True)):

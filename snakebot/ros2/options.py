@@ -47,8 +47,9 @@ class NodeOptions:
     ``on_timeout`` ("stop": rest pose, then the stop policy, the node ends; "halt": speed and
     turn to 0, the node serves on; 0 s: no watchdog); ``gaits`` the gaits ``gait`` may start
     with (default: the robot's first drive gait), the first driven; ``smoothing_s`` and
-    ``transition_s`` as ``snakebot drive``'s; ``node_name`` and ``ros_args`` (``--ros-args``
-    words: remaps, parameters) for rclpy. Raises ConfigError naming the field for a bad value.
+    ``transition_s`` as ``snakebot drive``'s; ``node_name``; ``ros_args`` rclpy's own
+    arguments, its ``--ros-args`` marker first (remaps, ``-p`` parameters, the namespace).
+    Raises ConfigError naming the field for a bad value.
     """
 
     rate_hz: float = 100.0

@@ -56,8 +56,7 @@ def serve_commands(
     gait = driver.gait
     loop = CycleLoop(backend, GaitCycle([gait], safety), schedule, metrics, observers=observers)
     loop.start()
-    gait.live.start(loop.state.position_rad)
-    driver.begin()
+    gait.live.start(loop.state.position_rad)  # held until the first command
     stop_deadline: float | None = None
     while True:
         now = loop.elapsed_s

@@ -66,8 +66,8 @@ DIAGNOSTICS = Topic(
     "diagnostic_msgs/msg/DiagnosticArray",
     "publish",
     RELIABLE_10,
-    "1 Hz: one status per servo (temperature, voltage, current, hardware errors where the "
-    "backend reads them) and one for the node",
+    "1 Hz: one status per servo (temperature_c, input_voltage_v, current_a, hardware_errors "
+    "where the backend reads them) and the run's",
 )
 RUN_METRICS = Topic(
     "run_metrics",
@@ -129,10 +129,14 @@ WORLD_FRAME = "world"
 
 PARAM_GAIT = "gait"
 """Parameter (string): the live gait cmd_vel steers, by name (``snakebot gaits`` lists them).
-Setting it blends into that gait; a name or parameters that cannot be driven are refused."""
+Setting it blends into that gait while cmd_vel steers (else the next cmd_vel starts it); a name
+or parameters that cannot be driven are refused with the reason. Until the first command the
+node holds the pose the joints started in."""
 PARAM_GAIT_PARAMS = "gait_params"
-"""Parameter (string array): the gait's parameters over its defaults, ``KEY=VALUE`` each, as
-``snakebot drive --set`` takes them; set together with (or after) ``gait``."""
+"""Parameter (string): the gait's parameters over its defaults, ``KEY=VALUE`` items separated
+by commas or spaces, as ``snakebot drive --set`` takes them (``"amplitude_even=0.5,
+wavelength=1.2"``); set together with ``gait`` (setting ``gait`` alone keeps these, and is
+refused when they do not fit the new gait)."""
 
 DIAGNOSTICS_PERIOD_S = 1.0
 """Seconds between diagnostics and run-metrics messages."""

@@ -13,6 +13,7 @@ Needs the ``gpu`` extra (``mujoco-warp``, ``warp-lang``); runs on Warp's CPU dev
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -21,6 +22,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleSchedule
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, MissingDependencyError
@@ -35,17 +37,18 @@ from snakebot.tuning.feasibility import (
     Envelope,
     Violations,
 )
-from snakebot.tuning.problem import GaitProblem
+from snakebot.tuning.objectives import Objective
+from snakebot.tuning.problem import EvalPlan, GaitProblem, Listener
+from snakebot.tuning.space import SearchSpace
 from snakebot.tuning.trace import FloatArray
 from snakebot.tuning.warp_scores import outcomes
 
 INSTALL = "pip install 'snakebot[gpu]'"
 DEVICES = ("cpu", "cuda")
-CONTACTS_PER_WORLD = 64
-CONSTRAINTS_PER_WORLD = 256
 TABLE_CYCLES = 100  # open-loop gaits: targets of this many cycles per Gait.targets call
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
-_STOPS = ("", "airborne", "flipped", "diverged")
+STOP_REASONS = ("", "airborne", "flipped", "diverged")
+"""Why a world stopped, by warp_kernels' stop code."""
 
 assert FLIPPED_UP_Z == -0.5  # warp_kernels.accumulate has the same threshold inline
 
@@ -88,16 +91,17 @@ class WarpBatch:
     """Runs batches of commands as the worlds of one MuJoCo Warp model of the twin on ``device``.
 
     ``twin`` gives the model, its start state and the readout layout; ``envelope`` the limits
-    the device checks as the CPU engine's ``assess`` does; ``workers`` threads tabulate the
-    gaits' targets on the host. Raises ConfigError for a device Warp does not have or a model
-    MuJoCo Warp cannot run, MissingDependencyError without the gpu extra.
+    the device checks as the CPU engine's ``assess`` does; ``workers`` threads (at most one per
+    CPU) tabulate the gaits' targets on the host. Raises ConfigError for a device Warp does not
+    have or a model MuJoCo Warp cannot run, MissingDependencyError without the gpu extra.
     """
 
     def __init__(
         self, twin: TwinBatch, envelope: Envelope, *, device: str = "cpu", workers: int = 1
     ) -> None:
         wp, mjw = require_warp()
-        self.workers = max(1, workers)
+        # --workers also sizes a CMA-ES population (a multiple of it): thousands, on a GPU.
+        self.workers = max(1, min(workers, os.cpu_count() or 1))
         self._wp, self._mjw = wp, mjw
         self.twin, self.envelope = twin, envelope
         try:
@@ -172,63 +176,35 @@ class WarpBatch:
             cycles_d = wp.zeros(count, dtype=wp.int32)
             target_d = wp.zeros((count, chunk, joints), dtype=float)
             command_d = wp.zeros((count, chunk, joints), dtype=float)
+            timestep = float(twin.model.opt.timestep)
+            work = [data.qvel, data.actuator_force, self._dof_index, self._damping, timestep]
+            work += [stop_d, acc_d]
             physics = _Physics(wp, mjw, self._model, data, steps, self.device.is_cuda)
-            k = 0
-            while k < total:
-                span = range(k, min(k + chunk, total))
-                targets, sent = self.command_rows(commands, gaits, span, times, measured)
-                target_d.assign(_padded(targets, chunk))
-                command_d.assign(_padded(sent, chunk))
+            physics.after_step = (kernels.step_work, count, work)
+            span = range(0, min(chunk, total))
+            rows = self.command_rows(commands, gaits, span, times, measured)
+            while span:
+                target_d.assign(_padded(rows[0], chunk))
+                command_d.assign(_padded(rows[1], chunk))
                 for slot, c in enumerate(span):
                     wp.launch(kernels.set_ctrl, (count, joints), [command_d, slot, data.ctrl])
                     physics.step()
                     check = int((c + 1) % window == 0)
-                    wp.launch(
-                        kernels.accumulate,
-                        count,
-                        [
-                            c,
-                            dt,
-                            check,
-                            window,
-                            data.qpos,
-                            data.qvel,
-                            data.actuator_force,
-                            data.subtree_com,
-                            data.xquat,
-                            data.geom_xpos,
-                            data.geom_xmat,
-                            data.qacc_warmstart,
-                            target_d,
-                            command_d,
-                            slot,
-                            self._qpos_index,
-                            self._dof_index,
-                            self._damping,
-                            self._lower,
-                            self._upper,
-                            self._geoms,
-                            self._radius,
-                            self._half,
-                            twin.layout.head_id,
-                            self._limits,
-                            int(envelope.allow_roll),
-                            self._initial_qpos,
-                            stop_d,
-                            cycles_d,
-                            acc_d,
-                            joint_d,
-                        ],
-                    )
-                k = span.stop
+                    state = [stop_d, cycles_d, acc_d, joint_d]
+                    self.accumulate(data, c, check, window, target_d, command_d, slot, state)
                 if not commands.open_loop:
                     measured = data.qpos.numpy()[:, twin.layout.qpos_index].astype(float)
-                if k < total and stop_d.numpy().all():
-                    break
+                span = range(span.stop, min(span.stop + chunk, total))
+                if span:
+                    # Launches return at once on a CUDA device: the host makes the next chunk's
+                    # commands while the device runs this one.
+                    rows = self.command_rows(commands, gaits, span, times, measured)
+                    if stop_d.numpy().all():
+                        break
             stops = stop_d.numpy()
             overflowed = data.overflow.numpy() != 0
             reasons = tuple(
-                "diverged" if bad else _STOPS[int(s)]
+                "diverged" if bad else STOP_REASONS[int(s)]
                 for s, bad in zip(stops, overflowed, strict=True)
             )
             return WarpRun(
@@ -239,6 +215,52 @@ class WarpBatch:
                 dt_s=dt,
                 overflowed=overflowed,
             )
+
+    def accumulate(
+        self,
+        data: Any,
+        cycle: int,
+        check: int,
+        window: int,
+        target: Any,
+        command: Any,
+        slot: int,
+        state: list[Any],
+    ) -> None:
+        """Launch warp_kernels.accumulate for control cycle ``cycle`` (``slot`` of the chunk
+        arrays ``target`` and ``command``, (B, C, N)) of every world. ``data`` is MuJoCo Warp's
+        Data or anything with the same arrays; ``state`` the kernel's stop (B,), cycles (B,),
+        running values (B, ACC_SIZE) and per-joint values (B, N, JOINT_SIZE)."""
+        envelope = self.envelope
+        inputs = [
+            cycle,
+            check,
+            window,
+            data.qpos,
+            data.qvel,
+            data.actuator_force,
+            data.subtree_com,
+            data.xquat,
+            data.geom_xpos,
+            data.geom_xmat,
+            data.qacc_warmstart,
+            target,
+            command,
+            slot,
+            self._qpos_index,
+            self._dof_index,
+            self._lower,
+            self._upper,
+            self._geoms,
+            self._radius,
+            self._half,
+            self.twin.layout.head_id,
+            self._limits,
+            int(envelope.allow_roll),
+            self._initial_qpos,
+            *state,
+        ]
+        self._wp.launch(self._kernels.accumulate, data.nworld, inputs)
 
     def command_rows(
         self,
@@ -268,6 +290,7 @@ class WarpBatch:
     def _data(self, count: int) -> Any:
         """B copies of the twin's start state on the device."""
         model = self.twin.model
+        contacts, rows = capacity(model)
         start = mujoco.MjData(model)
         mujoco.mj_setState(model, start, self.twin.initial_state, _STATE)
         mujoco.mj_forward(model, start)
@@ -275,37 +298,58 @@ class WarpBatch:
             model,
             start,
             nworld=count,
-            nconmax=CONTACTS_PER_WORLD,
-            njmax=CONSTRAINTS_PER_WORLD,
+            nconmax=contacts,
+            njmax=rows,
         )
 
 
 class _Physics:
-    """One control period of physics steps; on a CUDA device a captured graph after the first
-    period (the first runs plainly so every kernel is loaded before the capture)."""
+    """One control period of physics steps, each followed by ``after_step``; on a CUDA device a
+    captured graph after the first period (the first runs plainly so every kernel is loaded
+    before the capture)."""
 
     def __init__(self, wp: Any, mjw: Any, model: Any, data: Any, steps: int, cuda: bool) -> None:
         self._wp, self._mjw, self._model, self._data = wp, mjw, model, data
         self._steps, self._cuda = steps, cuda
         self._graph: Any = None
         self._periods = 0
+        self.after_step: tuple[Any, int, list[Any]] | None = None
+        """(kernel, dim, inputs) launched after every physics step (the work integral)."""
 
     def step(self) -> None:
         """Advance every world by one control period."""
-        wp, mjw = self._wp, self._mjw
+        wp = self._wp
         if self._graph is not None:
             wp.capture_launch(self._graph)
             return
         if self._cuda and self._periods > 0:
             with wp.ScopedCapture() as capture:
-                for _ in range(self._steps):
-                    mjw.step(self._model, self._data)
+                self._period()
             self._graph = capture.graph
             wp.capture_launch(self._graph)
             return
-        for _ in range(self._steps):
-            mjw.step(self._model, self._data)
+        self._period()
         self._periods += 1
+
+    def _period(self) -> None:
+        for _ in range(self._steps):
+            self._mjw.step(self._model, self._data)
+            if self.after_step is not None:
+                kernel, dim, inputs = self.after_step
+                self._wp.launch(kernel, dim, inputs)
+
+
+def capacity(model: mujoco.MjModel) -> tuple[int, int]:
+    """Contact slots and constraint rows per world for a twin model: three contacts per geom
+    (a capsule lying on the floor touches it at both ends, plus room for self-contacts), each
+    contact's rows for its condim and cone, two rows per joint (limits), rows rounded up to 32.
+    A world that needs more overflows and scores as diverged (WarpRun.overflowed)."""
+    contacts = 3 * int(model.ngeom)
+    condim = int(model.geom_condim.max(initial=3))
+    elliptic = model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    per_contact = condim if elliptic else max(2 * (condim - 1), 1)
+    rows = contacts * per_contact + 2 * int(model.njnt)
+    return contacts, -(-rows // 32) * 32
 
 
 def tabled_gaits(commands: BatchCommands) -> list[Gait] | None:
@@ -329,15 +373,28 @@ class WarpGaitProblem(GaitProblem):
     """A GaitProblem whose candidates run as the worlds of one MuJoCo Warp model on
     ``plan.device`` (EvalPlan.engine "warp"); everything else is GaitProblem's."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        if self.plan.friction_model is not None:
+    def __init__(
+        self,
+        robot: RobotConfig,
+        space: SearchSpace,
+        objective: Objective,
+        plan: EvalPlan,
+        *,
+        listener: Listener | None = None,
+    ) -> None:
+        if plan.friction_model is not None:
             raise ConfigError(
                 "--friction-model",
-                str(self.plan.friction_model),
+                str(plan.friction_model),
                 "runs as a MuJoCo callback on the CPU; --engine warp has plain MuJoCo contacts",
             )
-        plan = self.plan
+        if plan.executor != "local":
+            raise ConfigError(
+                "--executor",
+                plan.executor,
+                "--engine warp batches a generation on this machine's device; use local",
+            )
+        super().__init__(robot, space, objective, plan, listener=listener)
         self._warp = WarpBatch(self._twin, self.envelope, device=plan.device, workers=plan.workers)
 
     def outcomes(

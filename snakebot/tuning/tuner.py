@@ -132,7 +132,8 @@ def tune_gait(
         generations: tuple[Generation, ...] = ()
         cma: tuple[float, ...] = ()
         if method == "grid":
-            grid = grid_search(problem, budget)
+            # The Warp engine runs the whole grid as one batch of worlds.
+            grid = grid_search(problem, budget, chunk=budget if plan.engine == "warp" else 20)
         elif method == "cmaes":
             from snakebot.tuning.cmaes import cmaes_search
 

@@ -1,7 +1,8 @@
 """The Warp kernels of the MuJoCo Warp engine: commands in, the run's metrics accumulated per world.
 
 One thread per world. ``accumulate`` reads what the CPU engine samples every control cycle
-(snakebot.tuning.engine.TwinBatch) and folds it into running sums and extremes, so a run's
+(snakebot.tuning.engine.TwinBatch) and ``step_work`` the positive work of every physics step
+(readouts.step_work_j), and both fold it into running sums and extremes, so a run's
 summary (snakebot.control.metrics.RunMetrics) and its violations
 (snakebot.tuning.feasibility.assess) come out of a few numbers per world, never a trace.
 Sums are float64: a run of 10^3 cycles adds 10^4 small terms.
@@ -78,9 +79,33 @@ def _remainder(a: wp.float64, b: wp.float64) -> wp.float64:
 
 
 @wp.kernel
+def step_work(
+    qvel: wp.array2d[float],
+    actuator_force: wp.array2d[float],
+    dof_index: wp.array[int],
+    damping: wp.array[wp.float64],
+    timestep_s: wp.float64,
+    stop: wp.array[int],
+    acc: wp.array2d[wp.float64],
+):
+    """After each physics step: add each live world's positive joint work in the step,
+    sum over joints of max((drive - damping * velocity) * velocity, 0) * timestep (the twin's
+    readouts.step_work_j, the velocity after the step)."""
+    w = wp.tid()
+    if stop[w] != 0:
+        return
+    work = wp.float64(0.0)
+    for j in range(dof_index.shape[0]):
+        velocity = wp.float64(qvel[w, dof_index[j]])
+        power = (wp.float64(actuator_force[w, j]) - damping[j] * velocity) * velocity
+        if power > wp.float64(0.0):
+            work += power
+    acc[w, POSITIVE_WORK_J] = acc[w, POSITIVE_WORK_J] + work * timestep_s
+
+
+@wp.kernel
 def accumulate(
     cycle: int,
-    dt_s: wp.float64,
     check: int,
     window: int,
     qpos: wp.array2d[float],
@@ -96,7 +121,6 @@ def accumulate(
     slot: int,
     qpos_index: wp.array[int],
     dof_index: wp.array[int],
-    damping: wp.array[wp.float64],
     lower_rad: wp.array[wp.float64],
     upper_rad: wp.array[wp.float64],
     capsule_geoms: wp.array[int],
@@ -112,8 +136,9 @@ def accumulate(
     joint: wp.array3d[wp.float64],
 ):
     """Fold control cycle ``cycle`` (0-based, ``slot`` in the uploaded chunk) into each live
-    world's running values; stop worlds that diverged or, on a ``check`` cycle, spent the last
-    ``window`` cycles airborne or upside down.
+    world's running values (the positive work is step_work's, every physics step); stop worlds
+    that diverged or, on a ``check`` cycle, spent the last ``window`` cycles airborne or upside
+    down.
 
     ``limits``: rest COM height, lift limit, contact tolerance (m), the saturated torque (N·m),
     the moving speed for chatter (rad/s).
@@ -152,7 +177,6 @@ def accumulate(
     first = cycle == 0
     n = qpos_index.shape[0]
     squared = zero
-    work = acc[w, POSITIVE_WORK_J]
     for j in range(n):
         position = wp.float64(qpos[w, qpos_index[j]])
         velocity = wp.float64(qvel[w, dof_index[j]])
@@ -162,9 +186,6 @@ def accumulate(
         error = sent - position
         squared += error * error
         acc[w, MAX_ABS_COMMAND] = wp.max(acc[w, MAX_ABS_COMMAND], wp.abs(sent))
-        power = (force - damping[j] * velocity) * velocity
-        if power > zero:
-            work += power * dt_s
         beyond = wp.max(goal - upper_rad[j], lower_rad[j] - goal)
         acc[w, BEYOND_LIMIT_RAD] = wp.max(acc[w, BEYOND_LIMIT_RAD], beyond)
         if not first:
@@ -187,7 +208,6 @@ def accumulate(
             acc[w, MAX_REVERSALS] = wp.max(acc[w, MAX_REVERSALS], joint[w, j, REVERSALS])
         joint[w, j, PREVIOUS_SIGN] = sign
     acc[w, SQUARED_ERROR] = acc[w, SQUARED_ERROR] + squared
-    acc[w, POSITIVE_WORK_J] = work
 
     com = subtree_com[w, head]
     acc[w, COM_X] = wp.float64(com[0])

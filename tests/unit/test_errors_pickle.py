@@ -27,6 +27,7 @@ SAMPLE_ARGS: dict[str, object] = {
     "option": "port",
     "accepted": ("friction",),
     "address": "10.0.0.5:6379",
+    "trials": ["dft/seed-1"],
 }
 
 CLASSES = [

@@ -74,6 +74,8 @@ CASES = {
     ("drive", "--log"): Case((*DRIVE, "--log", "{out}"), "drive.csv", force_is_cheap=True),
     ("drive", "--record"): Case((*DRIVE, "--record", "{out}"), "keys.txt", force_is_cheap=True),
     ("drive", "--mcap"): Case((*DRIVE, "--mcap", "{out}"), "drive.mcap"),
+    # Refused before rclpy is needed; --force would serve until stopped (tests/integration/ros2).
+    ("ros2", "--mcap"): Case(("ros2", "--mcap", "{out}"), "ros2.mcap"),
     ("model", "--out"): Case(("model", "--out", "{out}"), "snake.xml", force_is_cheap=True),
     ("calibrate", "--out"): Case(
         ("calibrate", "--robot", "snake12", "--out", "{out}"), "snake12.toml"

@@ -21,18 +21,31 @@ import pytest
 
 pytest.importorskip("ray.tune", reason="the 'cluster' extra (ray[tune]) is not installed")
 
-pytestmark = pytest.mark.slow
+from snakebot.testing.cluster import LoopbackCluster, node_environment
+
+pytestmark = [pytest.mark.slow, pytest.mark.cluster]
 FAST = ["--set", "action_hz=25", "--set", "control_hz=25", "--set", "episode_s=4"]
 TINY = ["--steps", "256", "--rollout", "128", "--n-envs", "1", "--vec", "dummy", *FAST]
 SWEEP = ["rl", "compare", "--encodings", "sinusoid,dft", "--seeds", "2", *TINY]
 TRIALS = ("sinusoid/seed-0", "sinusoid/seed-1", "dft/seed-0", "dft/seed-1")
-RAY = ["--executor", "ray", "--ray-cpus", "1"]  # one trial at a time on a busy two-core box
+RAY = ["--executor", "ray", "--ray-cpus", "1"]  # Ray started here, one trial at a time
 
 
-def cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+def cli(
+    *args: str, timeout: float = 600, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "snakebot", *args], capture_output=True, text=True, timeout=timeout
+        [sys.executable, "-m", "snakebot", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
     )
+
+
+def on(cluster: LoopbackCluster) -> list[str]:
+    """The options of a sweep on the session's two-node loopback cluster (no Ray to start)."""
+    return ["--executor", "ray", "--address", cluster.address]
 
 
 def curve(folder: Path) -> list[dict[str, str]]:
@@ -40,6 +53,52 @@ def curve(folder: Path) -> list[dict[str, str]]:
     with (folder / "learning_curve.csv").open() as f:
         rows = list(csv.DictReader(f))
     return [{k: v for k, v in r.items() if k not in ("wall_s", "steps_per_s")} for r in rows]
+
+
+def stream(
+    argv: list[str], env: dict[str, str] | None = None
+) -> tuple[queue.Queue[str], subprocess.Popen[str]]:
+    """``snakebot ARGV`` started, its stderr lines arriving in the queue as it prints them."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "snakebot", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    lines: queue.Queue[str] = queue.Queue()
+    stderr = process.stderr
+    assert stderr is not None
+
+    def read() -> None:
+        for line in stderr:
+            lines.put(line)
+
+    threading.Thread(target=read, daemon=True).start()
+    return lines, process
+
+
+def wait_for(
+    lines: queue.Queue[str], process: subprocess.Popen[str], text: str, timeout_s: float = 400
+) -> list[str]:
+    """The lines up to the first that holds ``text``; fails when the process ends first."""
+    seen: list[str] = []
+    deadline = time.monotonic() + timeout_s
+    while not seen or text not in seen[-1]:
+        assert time.monotonic() < deadline and process.poll() is None, "".join(seen)
+        try:
+            seen.append(lines.get(timeout=1))
+        except queue.Empty:
+            continue
+    return seen
+
+
+def drain(lines: queue.Queue[str]) -> list[str]:
+    time.sleep(0.5)  # the reader's last lines
+    out = []
+    while not lines.empty():
+        out.append(lines.get())
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +138,9 @@ def test_a_ray_sweep_gives_the_local_table_and_policy_folders(
     assert again.returncode == 1 and "ray-tune" in again.stderr
 
 
-def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -> None:
+def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(
+    loopback_cluster: LoopbackCluster, tmp_path: Path
+) -> None:
     # A step cost of 5 per step makes every episode's return about -500 against the about -5
     # of the ordinary task's: at the first rung (128 steps) it is in the worse half, stopped.
     out = tmp_path / "asha"
@@ -93,7 +154,7 @@ def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -
         *TINY[:1],
         "512",
         *TINY[2:],
-        *RAY,
+        *on(loopback_cluster),
         "--scheduler",
         "asha",
         "--max-concurrent-trials",
@@ -101,6 +162,7 @@ def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -
         "--out",
         str(out),
         "--json",
+        env=node_environment(),
     )
     assert done.returncode == 0, done.stderr
     runs = json.loads(done.stdout)["runs"]
@@ -115,51 +177,64 @@ def test_asha_stops_a_clearly_hopeless_trial_at_its_first_rung(tmp_path: Path) -
 
 
 def test_an_interrupted_sweep_resumes_keeping_its_finished_trials(
-    local: tuple[Path, str], tmp_path: Path
+    local: tuple[Path, str], loopback_cluster: LoopbackCluster, tmp_path: Path
 ) -> None:
     out = tmp_path / "compare"
-    sweep = subprocess.Popen(
-        [sys.executable, "-m", "snakebot", *SWEEP, *RAY, "--out", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    lines: queue.Queue[str] = queue.Queue()
-    stderr = sweep.stderr
-    assert stderr is not None
-
-    def read() -> None:
-        for line in stderr:
-            lines.put(line)
-
-    reader = threading.Thread(target=read, daemon=True)
-    reader.start()
+    ray = on(loopback_cluster)
+    lines, sweep = stream([*SWEEP, *ray, "--out", str(out)], env=node_environment())
     seen = []
     try:
-        deadline = time.monotonic() + 400
-        while "  sinusoid/seed-0: done\n" not in seen:
-            assert time.monotonic() < deadline and sweep.poll() is None, "".join(seen)
-            try:
-                seen.append(lines.get(timeout=1))
-            except queue.Empty:
-                continue
+        seen += wait_for(lines, sweep, "  sinusoid/seed-0: done")
         sweep.send_signal(signal.SIGINT)  # Ctrl-C: Tune saves the experiment and ends
         sweep.wait(timeout=300)
     finally:
         if sweep.poll() is None:
             sweep.kill()
             sweep.wait()
-    reader.join(timeout=10)
-    while not lines.empty():
-        seen.append(lines.get())
+    seen += drain(lines)
     assert sweep.returncode == 130, "".join(seen)
     assert "--resume" in "".join(seen)
     assert not (out / "compare.json").exists()
 
-    resumed = cli(*SWEEP, *RAY, "--out", str(out), "--resume")
+    resumed = cli(*SWEEP, *ray, "--out", str(out), "--resume", env=node_environment())
     assert resumed.returncode == 0, resumed.stderr
     assert "sinusoid/seed-0" not in resumed.stderr  # finished before Ctrl-C: not trained again
     assert "dft/seed-1: done" in resumed.stderr
     assert_same_as_local(local, out, resumed.stdout)
-    other = cli(*SWEEP, "--steps", "512", *RAY, "--out", str(out), "--resume")
+    other = cli(*SWEEP, "--steps", "512", *ray, "--out", str(out), "--resume")
     assert other.returncode == 2 and "other" in other.stderr
+
+
+def test_a_sweep_across_two_loopback_nodes_survives_losing_one(
+    loopback_cluster: LoopbackCluster, tmp_path: Path
+) -> None:
+    # Two trials at once, one on each one-CPU node; the second node dies while they train: its
+    # trial fails, runs again from the start on the head, and the table is the local run's.
+    sweep = ["rl", "compare", "--encodings", "sinusoid", "--seeds", "2", *TINY]
+    sweep[sweep.index("--steps") + 1] = "1024"  # eight rollouts: the kill lands mid-trial
+    local = cli(*sweep, "--out", str(tmp_path / "local"))
+    assert local.returncode == 0, local.stderr
+    out = tmp_path / "cluster"
+    argv = [*sweep, *on(loopback_cluster), "--out", str(out)]
+    lines, process = stream(argv, env=node_environment())
+    seen = []
+    try:
+        seen += wait_for(lines, process, "128/1024 steps")  # both nodes are training now
+        loopback_cluster.kill_node(1)
+        process.wait(timeout=400)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        loopback_cluster.restore()
+    seen += drain(lines)
+    stderr = "".join(seen)
+    assert process.returncode == 0, stderr
+    assert ": failed, running it again from the start" in stderr  # the lost node's trial
+    assert process.stdout is not None
+    assert process.stdout.read().splitlines()[:2] == local.stdout.splitlines()[:2]
+    for name in ("sinusoid/seed-0", "sinusoid/seed-1"):
+        assert curve(out / name) == curve(tmp_path / "local" / name), name
+        assert (out / name / "actor.npz").read_bytes() == (
+            tmp_path / "local" / name / "actor.npz"
+        ).read_bytes()

@@ -68,7 +68,10 @@ class Client:
         self.cmd_vel = self.node.create_publisher(Twist, "cmd_vel", reliable)
         self.joint_commands = self.node.create_publisher(JointState, "joint_commands", reliable)
         self.trajectory = self.node.create_publisher(JointTrajectory, "joint_trajectory", reliable)
-        self.node.create_subscription(JointState, "joint_states", self._on_joints, reliable)
+        # A deep reader history: DDS's own threads keep receiving while this (Python, GIL-bound)
+        # executor is starved on a loaded machine, so a late spin loses nothing.
+        deep = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        self.node.create_subscription(JointState, "joint_states", self._on_joints, deep)
         self.node.create_subscription(TransformStamped, "body_pose", self._on_pose, reliable)
         self.node.create_subscription(DiagnosticArray, "diagnostics", self._on_diag, reliable)
         self.executor = SingleThreadedExecutor(context=self.context)

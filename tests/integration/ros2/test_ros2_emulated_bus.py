@@ -87,6 +87,15 @@ def test_joint_commands_reach_the_bus_within_limits_and_ctrl_c_ends_holding_at_r
     assert measured[:, 0].max() > upper - TOLERANCE_RAD  # the clipped joint went to its limit
     assert torque == [1] * 12  # hold: torque on...
     assert max(abs(g - 2048) for g in goals) <= 2  # ...at the straight pose
+    servo = [
+        status
+        for array in ros.heard.diagnostics
+        for status in array.status
+        if status.name == "snakebot: joint0"
+    ]
+    assert servo and servo[-1].hardware_id == "servo 1" and servo[-1].message == "OK"
+    keys = {value.key for value in servo[-1].values}
+    assert {"temperature_c", "input_voltage_v", "hardware_errors"} <= keys
 
 
 def test_a_stale_command_stream_ends_the_node_limp_when_the_robot_says_limp(

@@ -61,3 +61,16 @@ def test_c_and_numpy_apply_the_finite_rule_alike() -> None:
 def test_a_ratio_below_one_is_refused() -> None:
     with pytest.raises(ConfigError, match="backward_ratio"):
         SoftBodyBackend(WORM, backward_ratio=0.5)
+
+
+def test_the_ratchet_bound_of_one_segment_is_its_stroke_and_millers_worm_nears_it() -> None:
+    """One segment pushing its head out and pulling its tail in, never sliding back, advances
+    its full stroke 2 A L0 per cycle; the six-segment worm's bound is what the table compares
+    against (docs/soft-bodies.md)."""
+    from tools.soft_backward_friction import ratchet_bound_m
+
+    gait = make_gait("rectilinear", 3, {"amplitude": 0.25})
+    assert ratchet_bound_m(gait, 1, 0.02) == pytest.approx(2 * 0.25 * 0.02, rel=1e-6)  # type: ignore[arg-type]
+    worm = make_gait("rectilinear", WORM.joint_count)
+    bound = ratchet_bound_m(worm, WORM.lattice.segments, WORM.lattice.segment_length_m)  # type: ignore[arg-type]
+    assert 2 * 0.3 * 0.02 < bound < 6 * 2 * 0.3 * 0.02

@@ -105,3 +105,34 @@ def test_a_device_warp_does_not_have_is_a_config_error() -> None:
     envelope = Envelope.for_robot(robot, float(twin.start_com_m[2]))
     with pytest.raises(ConfigError, match="--device"):
         WarpBatch(twin, envelope, device="cuda:7")
+
+
+def test_a_feedback_gait_reads_the_device_poses_every_cycle() -> None:
+    """Keyframes that wait for the measured pose (closed loop, one cycle per upload): the Warp
+    engine feeds back its own poses and ends where the CPU engine does."""
+    pytest.importorskip("mujoco_warp")
+    from snakebot.gaits import make_gait
+    from snakebot.tuning.commands import GaitCommands
+    from snakebot.tuning.engine import TwinBatch
+    from snakebot.tuning.engine_warp import WarpBatch
+    from snakebot.tuning.feasibility import Envelope
+    from snakebot.tuning.trace import summarise
+    from snakebot.tuning.warp_scores import outcomes
+
+    robot = load_robot("snake8")
+    waiting = {"advance": "error", "durations": (0.3,), "error_threshold_rad": 0.05}
+    twin = TwinBatch(robot)
+    envelope = Envelope.for_robot(robot, float(twin.start_com_m[2]))
+    cpu_commands = GaitCommands([make_gait("keyframes", 8, waiting)], robot)
+    assert not cpu_commands.open_loop
+    trace = twin.run(cpu_commands, 0.6, 100.0, envelope=envelope)[0]
+    gait = make_gait("keyframes", 8, waiting)
+    run = WarpBatch(twin, envelope).run(GaitCommands([gait], robot), 0.6, 100.0)
+    start = twin.start_com_m
+    ((summary, violations),) = outcomes(run, robot, envelope, 0.6, [gait.period_s], start)
+    expected = summarise(trace, robot, gait.period_s)
+    assert summary["control_cycles"] == expected["control_cycles"] == 60
+    for key, tolerance in (("tracking_rms_rad", 0.005), ("max_abs_command_rad", 0.01)):
+        assert abs(float(summary[key]) - float(expected[key])) < tolerance, key  # type: ignore[arg-type]
+    assert abs(float(summary["distance_m"]) - float(expected["distance_m"])) < DISTANCE_TOLERANCE_M  # type: ignore[arg-type]
+    assert violations.feasible

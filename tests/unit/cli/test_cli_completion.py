@@ -33,7 +33,7 @@ def complete(line: str, tmp_path: Path) -> list[str]:
     ("line", "expected"),
     [
         ("snakebot tu", ["tune"]),
-        ("snakebot ro", ["robots"]),
+        ("snakebot ro", ["robots", "ros2"]),
         ("snakebot run --dur", ["--duration"]),
         ("snakebot tune gains --dr", ["--dry-run"]),
         ("snakebot config a", ["apply", "assign-id"]),

@@ -97,6 +97,11 @@ def test_ray_options_are_usage_errors_on_a_local_run(
     assert main([*argv, "--resume"]) == 2
     assert main([*argv, "--grid", "gamma"]) == 2  # a flag's value: KEY=V1,...
     assert "--grid" in capsys.readouterr().err
+    ray = [*argv, "--executor", "ray", "--address", "127.0.0.1:6390"]
+    assert main([*ray, "--ray-cpus", "2"]) == 2  # sizes only the Ray started here
+    assert "--ray-cpus" in capsys.readouterr().err
+    assert main([*ray, "--asha-grace", "512"]) == 2
+    assert "--asha-grace needs --scheduler asha" in capsys.readouterr().err
 
 
 def test_a_dry_run_lists_every_trial(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -43,7 +43,6 @@ def driver(clock: Clock, *, timeout_s: float = 1.0, on_timeout: str = "stop") ->
     inbox = CommandInbox(clock)
     made = CommandDriver(gait, controller, inbox, timeout_s=timeout_s, on_timeout=on_timeout)  # type: ignore[arg-type]
     live.start(np.zeros(ROBOT.joint_count))
-    made.begin()
     return made
 
 
@@ -107,6 +106,21 @@ def test_steering_after_joint_commands_starts_the_live_gait_where_the_joints_wer
     first = made.gait.command(0.01)
     assert np.abs(first - 0.2).max() < 1e-9  # no jump: the live gait holds the last target
     assert made.gait.live.setpoint.speed > 0  # and the stick's speed is set, as drive's
+
+
+def test_until_the_first_command_the_start_pose_is_held() -> None:
+    made = driver(Clock())
+    pose = np.linspace(-0.2, 0.2, 12)
+    made.gait.live.start(pose)
+    for k in range(100):
+        made.apply(k * 0.01)
+        assert np.array_equal(made.gait.command(k * 0.01), pose)
+    made.inbox.put(Steer(0.0, 0.0))  # a steer, even standing still, blends into the gait
+    made.apply(1.0)
+    shapes = [made.gait.command(1.0 + k * 0.01) for k in range(1, 150)]
+    assert np.abs(shapes[-1] - pose).max() > 0.1
+    steps = np.abs(np.diff([pose, *shapes], axis=0)).max()
+    assert steps <= ROBOT.max_speed_rad_s * 0.01  # no jump on the way
 
 
 def test_the_watchdog_is_armed_by_the_first_command_and_stops_after_the_timeout() -> None:
