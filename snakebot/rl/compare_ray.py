@@ -138,7 +138,9 @@ class RayExecutor:
     def __call__(self, plan: SweepPlan, out: Path, progress: TextIO | None) -> list[TrialOutcome]:
         """Run every trial; their outcomes in plan order. Raises SweepError when a trial
         failed every try, KeyboardInterrupt when the sweep was interrupted (``--resume`` goes
-        on), UsageError when ``--resume`` finds no experiment or another plan."""
+        on), UsageError when ``--resume`` finds no experiment or another plan. Without
+        ``resume`` an experiment already in ``OUT/ray-tune`` is replaced (the CLI refuses that
+        without ``--force``)."""
         trials = plan.trials()
         configs = [trial_config(t, plan.settings(t)) for t in trials]
         experiment = out.resolve() / EXPERIMENT
@@ -302,7 +304,10 @@ def _last_attempt(rows: list[dict[str, Any]]) -> list[CurvePoint]:
         if points and row["steps"] <= points[-1].steps:
             points = []
         if not row.get("finished"):
-            points.append(CurvePoint(**{name: row[name] for name in CURVE_FIELDS}))
+            # Tune's table gives numpy numbers; the curve holds Python ones, as a local run's
+            fields: dict[str, Any] = {name: float(row[name]) for name in CURVE_FIELDS}
+            fields["steps"], fields["episodes"] = int(row["steps"]), int(row["episodes"])
+            points.append(CurvePoint(**fields))
     return points
 
 
