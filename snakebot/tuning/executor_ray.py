@@ -94,7 +94,8 @@ class Timing:
     ``wall_s``: from handing a generation out to having all its scores; ``critical_s``: the
     longest share's own run time on its actor, per generation (the least ``wall_s`` could be);
     ``compute_s``: every share's run time on its actor. ``wall_s - critical_s`` is Ray's
-    overhead (scheduling, transfer, the driver's own work) plus re-runs after a lost worker.
+    overhead (scheduling, transfer, the driver's own work) plus re-runs after a lost worker; the
+    first generation's also holds the actors' start (Ray workers starting, models building).
     """
 
     candidates: int = 0
@@ -125,6 +126,8 @@ class RayEvaluator:
 
     Connects to ``plan.address`` (None: starts Ray on this machine). Raises
     MissingDependencyError without Ray, ClusterError when no node can take an actor.
+    ``rescored`` counts candidates scored again after their actor was lost, ``lost_shares`` the
+    shares that were; ``timing`` sums where the time went (:class:`Timing`).
     """
 
     def __init__(
@@ -154,9 +157,9 @@ class RayEvaluator:
         again elsewhere."""
         if not rows:
             return []
-        self._add_actors()
-        self._await_ready()
         start = time.perf_counter()
+        self._add_actors()  # Ray's node table, once a generation: part of the overhead
+        self._await_ready()
         longest = 0.0
         results: list[Evaluation | None] = [None] * len(rows)
         queue = deque(self._split(_Share(0, tuple(rows)), self._ready_actors()))

@@ -15,9 +15,10 @@ pytest.importorskip("ray", reason="the cluster tests need Ray: pip install 'snak
 from snakebot.cli.main import main
 from snakebot.config import load_robot
 from snakebot.errors import ConfigError
+from snakebot.gaits.keyframes import default_poses
 from snakebot.testing.cluster import LoopbackCluster
 from snakebot.tuning.objectives import objective_for
-from snakebot.tuning.problem import EvalPlan, SearchProblem
+from snakebot.tuning.problem import EvalPlan, Listener, SearchProblem
 from snakebot.tuning.space import build_space, tuning_base
 from snakebot.tuning.tuner import TuneResult, evaluation_dict, tune_gait
 
@@ -26,9 +27,16 @@ pytestmark = pytest.mark.cluster
 PLAN = EvalPlan(duration_s=2.0)
 
 
-def search(method: str, budget: int, plan: EvalPlan, listener=None) -> TuneResult:  # type: ignore[no-untyped-def]
+def search(
+    method: str, budget: int, plan: EvalPlan, listener: Listener | None = None
+) -> TuneResult:
+    """snake8: serpenoid's omega x phase_lag, or for the GA its keyframe poses (mirrored)."""
     robot = load_robot("snake8")
-    space = build_space("serpenoid", tuning_base("serpenoid", 8, {}), joint_limit_rad=1.5)
+    gait, fixed = "serpenoid", {}
+    if method == "ga":
+        gait, fixed = "keyframes", {"poses": tuple(0.15 * v for v in default_poses(8)[:16])}
+        fixed["mirror"] = 1
+    space = build_space(gait, tuning_base(gait, 8, fixed), joint_limit_rad=1.5)
     objective = objective_for("speed", 0.0, robot.body_length_m)
     return tune_gait(
         robot, space, objective, method, budget=budget, seed=7, plan=plan, listener=listener
@@ -42,7 +50,7 @@ def same_search(a: TuneResult, b: TuneResult) -> None:
     assert evaluation_dict(a.baseline) == evaluation_dict(b.baseline)
 
 
-@pytest.mark.parametrize(("method", "budget"), [("cmaes", 12), ("grid", 9)])
+@pytest.mark.parametrize(("method", "budget"), [("cmaes", 12), ("grid", 9), ("ga", 32)])
 def test_ray_searches_like_local(
     loopback_cluster: LoopbackCluster, method: str, budget: int
 ) -> None:
