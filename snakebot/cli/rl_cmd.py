@@ -206,6 +206,7 @@ def _executor_options(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--asha-grace",
+        dest="asha_grace_steps",
         type=positive_int,
         metavar="STEPS",
         help="first ASHA rung, env steps (default a quarter of --steps, one rollout at least)",
@@ -220,6 +221,7 @@ def _executor_options(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--ray-cpus",
+        dest="num_cpus",
         type=positive_int,
         help="CPUs of the local Ray cluster started without --address (default all)",
     )
@@ -236,15 +238,15 @@ def _executor_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-RAY_ONLY = (
-    "address",
-    "scheduler",
-    "asha_grace",
-    "cpus_per_trial",
-    "max_concurrent_trials",
-    "ray_cpus",
-    "resume",
-)
+RAY_ONLY = {  # dest -> flag of the options only --executor ray takes
+    "address": "--address",
+    "scheduler": "--scheduler",
+    "asha_grace_steps": "--asha-grace",
+    "cpus_per_trial": "--cpus-per-trial",
+    "max_concurrent_trials": "--max-concurrent-trials",
+    "num_cpus": "--ray-cpus",
+    "resume": "--resume",
+}
 
 
 def _ray_executor(args: argparse.Namespace) -> Any:
@@ -252,8 +254,8 @@ def _ray_executor(args: argparse.Namespace) -> Any:
     Ray option is a usage error."""
     defaults = {"scheduler": "none", "resume": False}
     given = [
-        f"--{key.replace('_', '-')}"
-        for key in RAY_ONLY
+        flag
+        for key, flag in RAY_ONLY.items()
         if getattr(args, key) not in (None, defaults.get(key))
     ]
     if args.executor == "local":
@@ -264,9 +266,9 @@ def _ray_executor(args: argparse.Namespace) -> Any:
 
     options = RayOptions(  # checked first: a usage error needs no Ray to be told
         address=args.address,
-        num_cpus=args.ray_cpus,
+        num_cpus=args.num_cpus,
         scheduler=args.scheduler,
-        asha_grace_steps=args.asha_grace,
+        asha_grace_steps=args.asha_grace_steps,
         cpus_per_trial=args.cpus_per_trial,
         max_concurrent_trials=args.max_concurrent_trials,
         retries=args.retries,

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from snakebot.cluster import INSTALL, ray_session, require_ray
-from snakebot.errors import ConfigError, MissingDependencyError, SweepError, UsageError
+from snakebot.errors import ConfigError, MissingDependencyError, SweepError
 from snakebot.rl.policy_file import CURVE_FIELDS, CURVE_FILE, read_settings
 from snakebot.rl.sweep import SweepPlan, Trial, TrialOutcome
 from snakebot.rl.train import CurvePoint, TrainResult, TrainSettings, read_curve, train
@@ -63,15 +63,15 @@ class RayOptions:
 
     def __post_init__(self) -> None:
         if self.scheduler not in SCHEDULERS:
-            raise ConfigError("--scheduler", self.scheduler, f"expected {' or '.join(SCHEDULERS)}")
+            raise ConfigError("scheduler", self.scheduler, f"expected {' or '.join(SCHEDULERS)}")
         if self.asha_grace_steps is not None and self.scheduler != "asha":
-            raise UsageError("--asha-grace needs --scheduler asha")
+            raise ConfigError("asha_grace_steps", "", "sets the asha scheduler's first rung")
         if self.cpus_per_trial is not None and not self.cpus_per_trial > 0:
-            raise ConfigError("--cpus-per-trial", str(self.cpus_per_trial), "expected > 0")
+            raise ConfigError("cpus_per_trial", str(self.cpus_per_trial), "expected > 0")
         if self.num_cpus is not None and self.address is not None:
-            raise UsageError("--ray-cpus sizes the Ray started here: drop it with --address")
+            raise ConfigError("num_cpus", "", "sizes the Ray started here, not a cluster's")
         if self.retries < 0:
-            raise ConfigError("--retries", str(self.retries), "expected 0 or more")
+            raise ConfigError("retries", str(self.retries), "expected 0 or more")
 
 
 def require_tune() -> Any:
@@ -85,7 +85,7 @@ def require_tune() -> Any:
     try:
         importlib.import_module("ray.tune")
     except ImportError as exc:
-        raise MissingDependencyError(f"--executor ray needs Ray Tune: {INSTALL}") from exc
+        raise MissingDependencyError(f"the Ray sweeps need Ray Tune: {INSTALL}") from exc
     return ray
 
 
@@ -138,7 +138,10 @@ class RayExecutor:
     def __call__(self, plan: SweepPlan, out: Path, progress: TextIO | None) -> list[TrialOutcome]:
         """Run every trial; their outcomes in plan order. Raises SweepError when a trial
         failed every try, KeyboardInterrupt when the sweep was interrupted (``--resume`` goes
-        on), UsageError when ``--resume`` finds no experiment or another plan."""
+        on), ConfigError naming ``resume`` when there is no experiment to resume or it has
+        another plan. Without
+        ``resume`` an experiment already in ``OUT/ray-tune`` is replaced (the CLI refuses that
+        without ``--force``)."""
         trials = plan.trials()
         configs = [trial_config(t, plan.settings(t)) for t in trials]
         experiment = out.resolve() / EXPERIMENT
@@ -177,11 +180,13 @@ class RayExecutor:
         saved = experiment / PLAN_FILE
         if self.options.resume:
             if not saved.is_file():
-                raise UsageError(f"--resume: {experiment.parent} holds no Ray sweep to go on with")
+                raise ConfigError("resume", "", f"{experiment.parent} holds no Ray sweep to go on")
             if json.loads(saved.read_text()) != json.loads(json.dumps(configs)):
-                raise UsageError(
-                    f"--resume: the sweep in {experiment.parent} was started with other "
-                    "encodings, seeds, grid or settings; give the same options to go on"
+                raise ConfigError(
+                    "resume",
+                    "",
+                    f"the sweep in {experiment.parent} was started with other encodings, "
+                    "seeds, grid or settings; give the same ones to go on",
                 )
         elif experiment.exists():
             shutil.rmtree(experiment)  # the CLI refused this without --force
@@ -205,7 +210,7 @@ class RayExecutor:
             grace = self.options.asha_grace_steps or max(plan.rollout_steps, plan.steps // 4)
             if grace >= final:
                 raise ConfigError(
-                    "--asha-grace", str(grace), f"expected fewer steps than a trial's ({final})"
+                    "asha_grace_steps", str(grace), f"expected fewer steps than a trial's ({final})"
                 )
             # Rungs below the last rollout only, and no stop at max_t: a trial that got to
             # its end always reports its policy.
@@ -245,7 +250,7 @@ class RayExecutor:
             raise SweepError(
                 failed,
                 f"{len(failed)} trial(s) failed on every try ({', '.join(failed)}); "
-                f"their errors are under {out / EXPERIMENT}; --resume runs them again",
+                f"their errors are under {out / EXPERIMENT}; resuming the sweep runs them again",
             )
         outcomes = []
         for trial in trials:
@@ -272,10 +277,10 @@ def _check_cpus(ray: Any, cpus: float) -> None:
     most = max((n["Resources"].get("CPU", 0.0) for n in ray.nodes() if n["Alive"]), default=0)
     if cpus > most:
         raise ConfigError(
-            "--cpus-per-trial",
+            "cpus_per_trial",
             f"{cpus:g}",
-            f"no node of the cluster has that many CPUs (the most is {most:g}): give fewer, "
-            "or --vec dummy / fewer --n-envs",
+            f"no node of the cluster has that many CPUs (the most is {most:g}): ask fewer, "
+            "or train on dummy envs or fewer of them",
         )
 
 
@@ -302,7 +307,10 @@ def _last_attempt(rows: list[dict[str, Any]]) -> list[CurvePoint]:
         if points and row["steps"] <= points[-1].steps:
             points = []
         if not row.get("finished"):
-            points.append(CurvePoint(**{name: row[name] for name in CURVE_FIELDS}))
+            # Tune's table gives numpy numbers; the curve holds Python ones, as a local run's
+            fields: dict[str, Any] = {name: float(row[name]) for name in CURVE_FIELDS}
+            fields["steps"], fields["episodes"] = int(row["steps"]), int(row["episodes"])
+            points.append(CurvePoint(**fields))
     return points
 
 

@@ -62,14 +62,14 @@ class SweepPlan:
 
     def __post_init__(self) -> None:
         if not self.runs:
-            raise ConfigError("--encodings", "", "expected at least one encoding")
+            raise ConfigError("runs", "", "expected at least one encoding")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds):
-            raise ConfigError("--seeds", "", f"expected distinct seeds, got {self.seeds!r}")
+            raise ConfigError("seeds", "", f"expected distinct seeds, got {self.seeds!r}")
         for key, values in self.grid.items():
             if not values or len(set(values)) != len(values):
-                raise ConfigError("--grid", key, f"expected distinct values, got {values!r}")
+                raise ConfigError("grid", key, f"expected distinct values, got {values!r}")
             if key in ("robot", "encoding"):
-                raise ConfigError("--grid", key, "the encodings are a sweep's own axis")
+                raise ConfigError("grid", key, "the encodings are a sweep's own axis")
         for trial in self.trials():  # every point is checked before anything trains
             self.settings(trial)
 
@@ -93,19 +93,19 @@ class SweepPlan:
         return list(itertools.product(*self.grid.values()))
 
     def settings(self, trial: Trial) -> TrainSettings:
-        """The TrainSettings of ``trial``; ConfigError naming ``--grid KEY`` for a value its
-        setting refuses."""
+        """The TrainSettings of ``trial``; ConfigError naming ``grid`` and the key for a value
+        its setting refuses."""
         ppo = dict(self.ppo)
         env = dict(self.runs[trial.encoding])
         for key, value in trial.point:
             if key in PPO_SETTINGS:
-                check_ppo({key: value}, "--grid")
+                check_ppo({key: value}, "grid")
                 ppo[key] = value
             elif key in env:
                 env[key] = value
             else:
                 raise ConfigError(
-                    "--grid",
+                    "grid",
                     key,
                     "expected a PPO setting or an env setting, one of "
                     f"{', '.join(sorted(set(PPO_SETTINGS) | set(env) - {'robot', 'encoding'}))}",
@@ -115,7 +115,7 @@ class SweepPlan:
             try:
                 env = settings_dict(*split_kwargs(env, task))
             except ConfigError as exc:
-                raise ConfigError("--grid", exc.key or exc.source, exc.reason) from None
+                raise ConfigError("grid", exc.key or exc.source, exc.reason) from None
         return TrainSettings(
             self.env_id,
             env,

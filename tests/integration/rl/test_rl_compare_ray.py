@@ -1,5 +1,7 @@
-"""`rl compare --executor ray` as a user runs it: Ray Tune trials on a local Ray, the same table
-and policy folders as a local run, ASHA stopping a hopeless trial, and --resume after Ctrl-C.
+"""`rl compare --executor ray` as a user runs it: Ray Tune trials on Ray started here (the laptop
+case) and on the session's two-node loopback cluster; the same table, curves and actors as a
+local run, ASHA stopping a hopeless trial, --resume after Ctrl-C, and a lost node's trial run
+again.
 
 Tiny trainings (256 steps a trial, 128-step rollouts, 4 s episodes at 25 Hz); PPO on one CPU is
 deterministic for a seed on a machine, so the Ray run must match the local one bit for bit.

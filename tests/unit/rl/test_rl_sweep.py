@@ -59,7 +59,7 @@ def test_a_bad_grid_is_refused_before_anything_trains(
 ) -> None:
     with pytest.raises(ConfigError, match=named) as caught:
         plan(grid=grid)
-    assert caught.value.source == "--grid"
+    assert caught.value.source == "grid"
 
 
 def outcome(name: str, seed: int, returns: list[float], stopped: bool = False) -> TrialOutcome:
@@ -101,7 +101,7 @@ def test_ray_options_are_usage_errors_on_a_local_run(
     assert main([*ray, "--ray-cpus", "2"]) == 2  # sizes only the Ray started here
     assert "--ray-cpus" in capsys.readouterr().err
     assert main([*ray, "--asha-grace", "512"]) == 2
-    assert "--asha-grace needs --scheduler asha" in capsys.readouterr().err
+    assert "--asha-grace: sets the asha scheduler's first rung" in capsys.readouterr().err
 
 
 def test_a_dry_run_lists_every_trial(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
