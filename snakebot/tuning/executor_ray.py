@@ -272,7 +272,7 @@ class RayEvaluator:
                     except self._lost_errors() as exc:
                         self._drop(pending[ref])
                         self._failed_starts += 1
-                        if self._failed_starts > MAX_FAILED_STARTS:
+                        if self._failed_starts >= MAX_FAILED_STARTS:
                             raise ClusterError(
                                 self.info.address,
                                 f"{self._failed_starts} workers in a row died before they "
