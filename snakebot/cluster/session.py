@@ -24,6 +24,9 @@ from snakebot.errors import ClusterError, MissingDependencyError
 
 INSTALL = "pip install 'snakebot[cluster]'"
 LOOPBACK = "127.0.0.1"
+_RAY_SETS = ("RAY_AUTH_MODE",)
+"""Environment variables ``ray.init`` sets in the driver's own process."""
+_saved_env: dict[str, str | None] = {}
 
 
 @dataclass(frozen=True)
@@ -97,10 +100,13 @@ def connect(address: str | None = None, *, num_cpus: int | None = None) -> Clust
     local = address is None or is_loopback(address)
     if local:
         options["_node_ip_address"] = LOOPBACK
+    _saved_env.clear()
+    _saved_env.update({name: os.environ.get(name) for name in _RAY_SETS})
     try:
         with keep_loopback() if local else contextlib.nullcontext():
             ray.init(**options)
     except (ConnectionError, RuntimeError, ValueError) as exc:
+        _restore_env()
         raise ClusterError(address, f"cannot connect: {exc}") from exc
     return cluster_info(address, started_here=True)
 
@@ -127,10 +133,25 @@ def wait_for_nodes(count: int, *, timeout_s: float = 60.0) -> ClusterInfo:
 
 
 def disconnect() -> None:
-    """Disconnect this driver from Ray (and stop Ray when it was started here)."""
+    """Disconnect this driver from Ray (and stop Ray when it was started here), leaving the
+    process's Ray settings as they were before :func:`connect`."""
     ray = require_ray()
     if ray.is_initialized():
         ray.shutdown()
+    _restore_env()
+
+
+def _restore_env() -> None:
+    """Undo what ``ray.init`` set in this process's environment, so that processes started
+    later do not inherit it: starting Ray here sets ``RAY_AUTH_MODE=token`` (Ray 2.60). Ray's
+    core keeps token authentication on in this process all the same, and a later connection of
+    the same process to a cluster without it creates no actor (docs/cluster.md)."""
+    for name, value in _saved_env.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value
+    _saved_env.clear()
 
 
 @contextlib.contextmanager

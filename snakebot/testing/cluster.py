@@ -33,6 +33,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -58,7 +59,8 @@ _HEAD_ONLY = ("port", "dashboard-port", "ray-client-server-port")
 
 @dataclass(frozen=True)
 class Node:
-    """One started node: its index (0 = head), the ``ray start`` process group, its folder."""
+    """One started node: its serial number (0 = head), the ``ray start`` process group, its
+    folder and its ports."""
 
     index: int
     pgid: int
@@ -100,6 +102,7 @@ class LoopbackCluster:
         }
         self.nodes: list[Node] = []
         self.killed: list[Node] = []
+        self._started = 0  # nodes started so far: the next one's serial number
         self.root: Path | None = None
         self.gcs_port = 0
 
@@ -125,7 +128,8 @@ class LoopbackCluster:
     def add_node(self) -> Node:
         """Start one more node (the head when there is none yet) and return it."""
         assert self.root is not None, "start() first"
-        index = len(self.nodes)
+        index = self._started
+        self._started += 1
         ports = _free_block()
         named = dict(zip(_NAMED, ports, strict=False))
         if index == 0:
@@ -170,12 +174,13 @@ class LoopbackCluster:
         return node
 
     def kill_node(self, index: int) -> None:
-        """Kill every process of node ``index`` at once (SIGKILL), as a lost machine would."""
-        node = self.nodes[index]
+        """Kill every process of the live node ``index`` (0 = the head, which ends the cluster)
+        at once with SIGKILL, as a lost machine would; it leaves ``nodes`` for ``killed``."""
+        node = self.nodes.pop(index)
+        self.killed.append(node)
         _kill_all(self._pids([node]))
         _kill_matching(str(node.temp_dir))
         _wait_gone(node.pgid, timeout_s=10.0)
-        self.killed.append(node)
 
     def restore(self) -> None:
         """Start a new node for each one killed, so the cluster has ``nodes`` live nodes again."""
@@ -189,42 +194,27 @@ class LoopbackCluster:
         return self._pids(self.nodes)
 
     def _pids(self, nodes: list[Node]) -> list[int]:
-        table = _processes()
         groups = {node.pgid for node in nodes}
-        found = {pid for pid, (_, pgid) in table.items() if pgid in groups}
-        grown = True
-        while grown:
-            children = {pid for pid, (ppid, _) in table.items() if ppid in found} - found
-            found |= children
-            grown = bool(children)
-        return sorted(found)
+        return process_tree(pid for pid, (_, pgid) in _processes().items() if pgid in groups)
 
     def foreign_sockets(self, extra_pids: tuple[int, ...] = ()) -> list[str]:
-        """Internet sockets of the cluster's processes (and ``extra_pids``, e.g. the driver's)
-        bound to or connected to any address but loopback: ``'pid local -> remote'`` each.
-        A socket listening on every interface counts as foreign."""
-        inodes = _socket_table()
-        found = []
-        for pid in [*self.pids(), *extra_pids]:
-            for inode in _socket_inodes(pid):
-                if inode in inodes:
-                    local, remote = inodes[inode]
-                    if not (_loopback_or_unset(local) and _loopback_or_unset(remote, remote=True)):
-                        found.append(f"{pid} {local} -> {remote}")
-        return found
+        """:func:`foreign_sockets` of the cluster's processes and ``extra_pids`` (the driver's)."""
+        return foreign_sockets([*self.pids(), *extra_pids])
 
     def stop(self) -> None:
         """Kill every node, newest first, and remove their folders. Safe to call twice."""
-        _kill_all(self._pids(self.nodes))
-        for node in reversed(self.nodes):
+        every = [*self.nodes, *self.killed]
+        _kill_all(self._pids(every))
+        for node in reversed(every):
             _kill_group(node.pgid)
         if self.root is not None:
             _kill_matching(str(self.root))
-            for node in self.nodes:
+            for node in every:
                 _wait_gone(node.pgid, timeout_s=10.0)
             shutil.rmtree(self.root, ignore_errors=True)
         self.nodes = []
         self.killed = []
+        self._started = 0
         self.root = None
 
     def __enter__(self) -> LoopbackCluster:
@@ -237,6 +227,32 @@ class LoopbackCluster:
         traceback: TracebackType | None,
     ) -> None:
         self.stop()
+
+
+def process_tree(roots: Iterable[int]) -> list[int]:
+    """``roots`` and every live process they started, and those started, and so on."""
+    table = _processes()
+    found = {pid for pid in roots if pid in table}
+    grown = True
+    while grown:
+        children = {pid for pid, (ppid, _) in table.items() if ppid in found} - found
+        found |= children
+        grown = bool(children)
+    return sorted(found)
+
+
+def foreign_sockets(pids: Iterable[int]) -> list[str]:
+    """Internet sockets (TCP, UDP; IPv4, IPv6) of ``pids`` bound to or connected to any address
+    but loopback, ``'pid local -> remote'`` each; one listening on every interface counts."""
+    inodes = _socket_table()
+    found = []
+    for pid in pids:
+        for inode in _socket_inodes(pid):
+            if inode in inodes:
+                local, remote = inodes[inode]
+                if not (_loopback_or_unset(local) and _loopback_or_unset(remote, remote=True)):
+                    found.append(f"{pid} {local} -> {remote}")
+    return found
 
 
 def node_environment() -> dict[str, str]:

@@ -30,6 +30,8 @@ from snakebot.tuning.space import SearchSpace
 Row = tuple[float, ...]
 READY_TIMEOUT_S = 600.0
 """How long a generation waits for a first actor to be ready (model built) before failing."""
+MAX_FAILED_STARTS = 8
+"""Actors that may die before they start, one after another, before the search gives up."""
 
 
 class ShardWorker:
@@ -140,6 +142,7 @@ class RayEvaluator:
         self._actors: dict[str, _Actor] = {}
         self.lost_shares = 0
         self._started = False
+        self._failed_starts = 0
         self.rescored = 0
         self.timing = Timing()
 
@@ -267,10 +270,18 @@ class RayEvaluator:
                 for ref in done:
                     try:
                         self._ray.get(ref)
-                    except self._lost_errors():
+                    except self._lost_errors() as exc:
                         self._drop(pending[ref])
+                        self._failed_starts += 1
+                        if self._failed_starts >= MAX_FAILED_STARTS:
+                            raise ClusterError(
+                                self.info.address,
+                                f"{self._failed_starts} workers in a row died before they "
+                                f"started; the last: {exc}",
+                            ) from exc
                     else:
                         pending[ref].live = True
+                        self._failed_starts = 0
             everyone = all(a.live for a in self._actors.values())
             if self._ready_actors() and (self._started or everyone):
                 self._started = True

@@ -40,7 +40,7 @@ class ProgressBar:
         text += f"  {elapsed:5.1f} s  {done / elapsed if elapsed > 0 else 0.0:.1f} cand/s"
         live = getattr(problem, "live_workers", None)
         if isinstance(live, int):
-            text += f"  {live} workers live"
+            text += f"  {live} worker{'s' * (live != 1)} live"
         rescored = getattr(problem, "rescored", 0)
         if isinstance(rescored, int) and rescored:
             text += f" ({rescored} re-run after a lost worker)"

@@ -91,6 +91,7 @@ def test_a_node_lost_mid_search_costs_only_its_candidates(
             kill_during_the_next_generation,
         )
         killer[0].join()
+        assert len(loopback_cluster.killed) == 1 and len(loopback_cluster.nodes) == 1
     finally:
         loopback_cluster.restore()
     same_search(local, remote)
