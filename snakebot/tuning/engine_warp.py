@@ -63,7 +63,7 @@ def require_warp() -> tuple[Any, Any]:
         import mujoco_warp
     except ImportError as exc:
         raise MissingDependencyError(
-            f"--engine warp needs MuJoCo Warp (mujoco-warp, warp-lang): {INSTALL}"
+            f"the warp engine needs MuJoCo Warp (mujoco-warp, warp-lang): {INSTALL}"
         ) from exc
     return warp, mujoco_warp
 
@@ -108,7 +108,7 @@ class WarpBatch:
             self.device = wp.get_device(device)
         except (RuntimeError, ValueError) as exc:
             names = ", ".join(str(d.alias) for d in wp.get_devices())
-            raise ConfigError("--device", device, f"Warp has no such device ({names})") from exc
+            raise ConfigError("device", device, f"Warp has no such device ({names})") from exc
         from snakebot.tuning import warp_kernels
 
         self._kernels = warp_kernels
@@ -117,7 +117,7 @@ class WarpBatch:
             try:
                 self._model = mjw.put_model(model)
             except NotImplementedError as exc:
-                raise ConfigError("--engine", "warp", f"MuJoCo Warp cannot run it: {exc}") from exc
+                raise ConfigError("engine", "warp", f"MuJoCo Warp cannot run it: {exc}") from exc
             f64 = wp.float64
             self._qpos_index = wp.array(lay.qpos_index.astype(np.int32), dtype=wp.int32)
             self._dof_index = wp.array(lay.dof_index.astype(np.int32), dtype=wp.int32)
@@ -384,15 +384,15 @@ class WarpGaitProblem(GaitProblem):
     ) -> None:
         if plan.friction_model is not None:
             raise ConfigError(
-                "--friction-model",
+                "friction_model",
                 str(plan.friction_model),
-                "runs as a MuJoCo callback on the CPU; --engine warp has plain MuJoCo contacts",
+                "runs as a MuJoCo callback on the CPU; the warp engine has plain MuJoCo contacts",
             )
         if plan.executor != "local":
             raise ConfigError(
-                "--executor",
+                "executor",
                 plan.executor,
-                "--engine warp batches a generation on this machine's device; use local",
+                "the warp engine batches a generation on this machine's device; use local",
             )
         super().__init__(robot, space, objective, plan, listener=listener)
         self._warp = WarpBatch(self._twin, self.envelope, device=plan.device, workers=plan.workers)

@@ -114,7 +114,7 @@ def tune_gait(
         from snakebot.tuning.softbody import SoftGaitProblem
 
         if plan.engine == "warp":
-            raise ConfigError("--engine", "warp", "a mass-spring body tunes through the runner")
+            raise ConfigError("engine", "warp", "a mass-spring body tunes through the runner")
         if plan.executor != "local":
             raise ConfigError("executor", plan.executor, "a mass-spring body tunes locally only")
         plan = replace(plan, engine="processes")

@@ -51,7 +51,8 @@ def test_no_library_error_names_a_command_line_flag() -> None:
     offenders = [
         hit
         for path in sorted(PACKAGE.rglob("*.py"))
-        if "cli" not in path.relative_to(PACKAGE).parts[:1]
+        # snakebot/testing starts other programs (Ray's nodes) with their own flags
+        if path.relative_to(PACKAGE).parts[0] not in ("cli", "testing")
         for hit in _flags_in_raises(
             path.read_text(encoding="utf-8"), str(path.relative_to(PACKAGE.parent))
         )

@@ -103,7 +103,7 @@ def test_a_device_warp_does_not_have_is_a_config_error() -> None:
     robot = load_robot("snake8")
     twin = TwinBatch(robot)
     envelope = Envelope.for_robot(robot, float(twin.start_com_m[2]))
-    with pytest.raises(ConfigError, match="--device"):
+    with pytest.raises(ConfigError, match="device"):
         WarpBatch(twin, envelope, device="cuda:7")
 
 

@@ -31,4 +31,4 @@ def test_the_warp_engine_refuses_the_ray_executor(capsys: pytest.CaptureFixture[
     pytest.importorskip("mujoco_warp")
     argv = ["tune", "gait", "--method", "grid", "--engine", "warp", "--executor", "ray"]
     assert main([*argv, "--budget", "2", "--quiet"]) == 2
-    assert "--engine warp batches a generation on this machine's device" in capsys.readouterr().err
+    assert "the warp engine batches a generation on this machine" in capsys.readouterr().err
