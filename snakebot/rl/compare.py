@@ -18,7 +18,7 @@ from typing import Any, TextIO
 from snakebot.errors import OutputError
 from snakebot.rl.plots import curve_plot
 from snakebot.rl.sweep import SweepPlan, TrialOutcome, comparison_rows, run_summary
-from snakebot.rl.train import train
+from snakebot.rl.train import ROLLOUT_STEPS, train
 
 # Runs every trial of a plan into its folder under ``out``; the outcomes in plan order.
 Executor = Callable[[SweepPlan, Path, TextIO | None], list[TrialOutcome]]
@@ -36,7 +36,7 @@ def compare(
     progress: TextIO | None = sys.stderr,
     seeds: int = 1,
     grid: dict[str, tuple[Any, ...]] | None = None,
-    rollout_steps: int = 2048,
+    rollout_steps: int = ROLLOUT_STEPS,
     ppo: dict[str, Any] | None = None,
     executor: Executor | None = None,
 ) -> dict[str, Any]:

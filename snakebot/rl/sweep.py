@@ -25,7 +25,13 @@ from snakebot.rl.settings import (
     settings_dict,
     split_kwargs,
 )
-from snakebot.rl.train import CurvePoint, TrainResult, TrainSettings, dump_json
+from snakebot.rl.train import (
+    ROLLOUT_STEPS,
+    CurvePoint,
+    TrainResult,
+    TrainSettings,
+    dump_json,
+)
 
 Value = float | int | str
 
@@ -57,7 +63,7 @@ class SweepPlan:
     grid: Mapping[str, tuple[Value, ...]] = field(default_factory=dict)
     n_envs: int = 1
     vec: str = "dummy"
-    rollout_steps: int = 2048
+    rollout_steps: int = ROLLOUT_STEPS
     ppo: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:

@@ -37,6 +37,10 @@ from snakebot.rl.resume import ResumePoint, check_ppo, ppo_defaults
 VECTORISATIONS = ("dummy", "subproc")
 
 
+ROLLOUT_STEPS = 2048
+"""PPO's rollout length in env steps when none is given (stable-baselines3's default)."""
+
+
 @dataclass(frozen=True)
 class TrainSettings:
     """One training run: PPO for ``steps`` env steps over ``n_envs`` envs vectorised ``vec``
@@ -49,7 +53,7 @@ class TrainSettings:
     n_envs: int
     vec: str
     seed: int = 0
-    rollout_steps: int = 2048
+    rollout_steps: int = ROLLOUT_STEPS
     algo: str = "ppo"
     ppo: dict[str, Any] = field(default_factory=dict)
     resume: ResumePoint | None = None
