@@ -208,7 +208,7 @@ class SoftBodyBackend(Backend):
             yaw, pitch, axial, self._ring_scale()
         )
         self.data.ctrl[:] = rest
-        self._power_rows: tuple[np.ndarray, np.ndarray] | None = None  # made when stepping
+        self._power_rows: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # when stepping
 
     # -- the cycle ---------------------------------------------------------------------------
     def _measure(self) -> _Snapshot:
@@ -269,10 +269,10 @@ class SoftBodyBackend(Backend):
         self._snapshot = None
         if self._power_rows is None:
             self._power_rows = self.muscles.power_rows(self._jacobian, self._layout)
-        effort_rows, rate_rows = self._power_rows
+        columns, effort_rows, rate_rows = self._power_rows
         timestep = float(model.opt.timestep)
         if self._stepper is not None:
-            work = self._stepper.advance(steps, effort_rows, rate_rows)
+            work = self._stepper.advance(steps, columns, effort_rows, rate_rows)
             self._previous = self.start_positions + self._stepper.previous
             self._previous_time = self._stepper.previous_time_s
             self._work_j = self._work_j + work
@@ -291,7 +291,9 @@ class SoftBodyBackend(Backend):
             if rule.enabled and data.ncon:
                 normal = None if rule.ideal else contact_normal_forces(data)
                 rule.apply(displacement, velocity, data.contact.geom, normal)
-        self._work_j = self._work_j + muscle_work_j(forces, rates, effort_rows, rate_rows, timestep)
+        self._work_j = self._work_j + muscle_work_j(
+            forces, rates, columns, effort_rows, rate_rows, timestep
+        )
         self._finish_advance(steps, dt_s)
 
     def _finish_advance(self, steps: int, dt_s: float) -> None:
@@ -339,13 +341,17 @@ class SoftBodyBackend(Backend):
 def muscle_work_j(
     force_n: np.ndarray,
     rate_m_s: np.ndarray,
+    columns: np.ndarray,
     effort_rows: np.ndarray,
     rate_rows: np.ndarray,
     timestep_s: float,
 ) -> np.ndarray:
     """Each joint's positive muscle work (N,) J over S physics steps: the springs' forces and
     rates of length (S, M) at the start of each step, turned into joint efforts and channel
-    rates by ``MuscleMap.power_rows`` (N, M) each; a step counts max(effort · rate, 0) · h."""
-    power = (force_n @ effort_rows.T) * (rate_m_s @ rate_rows.T)
+    rates by ``MuscleMap.power_rows`` (its springs ``columns`` and weights, (N, K) each); a
+    step counts max(effort · rate, 0) · h."""
+    effort = (force_n[:, columns] * effort_rows).sum(axis=-1)  # (S, N)
+    rate = (rate_m_s[:, columns] * rate_rows).sum(axis=-1)
+    power = effort * rate
     work: np.ndarray = np.where(power > 0.0, power, 0.0).sum(axis=0) * timestep_s
     return work
