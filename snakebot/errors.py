@@ -153,3 +153,7 @@ class PhysicsHealthError(BackendError):
             "here: lower the gains or the timestep (twin.timestep_s), raise the armature, or "
             "see docs/physics.md"
         )
+
+    def __reduce__(self) -> tuple[type[PhysicsHealthError], tuple[float, str, str]]:
+        """Pickles with its fields, so it crosses a process pool (tuning workers)."""
+        return (type(self), (self.time_s, self.check, self.detail))
