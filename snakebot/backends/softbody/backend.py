@@ -101,6 +101,7 @@ class SoftBodyBackend(Backend):
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
         self._command = np.zeros(self.joint_count)
         self._work_j = np.zeros(self.joint_count)  # positive muscle work per joint since connect
+        self._spring_work_j = 0.0  # every spring's positive work since connect (health budget)
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
 
@@ -163,10 +164,12 @@ class SoftBodyBackend(Backend):
         """Start the physics-health account afresh (ChecksPhysics): the checks and the muscles'
         work count from here; they stay off where they are off."""
         self._work_at_reset = float(self._work_j.sum())
+        self._spring_work_at_reset = self._spring_work_j
         if self._health_limits is None:
             return
         self.physics_monitor = BodyHealthMonitor(
             self.model,
+            self.data,
             self._point_geoms,
             self._point_bodies,
             self.body.lattice.point_radius_m,
@@ -178,7 +181,10 @@ class SoftBodyBackend(Backend):
         the checks off."""
         if self.physics_monitor is None:
             return None
-        return self.physics_monitor.summary(float(self._work_j.sum()) - self._work_at_reset)
+        return self.physics_monitor.summary(
+            float(self._work_j.sum()) - self._work_at_reset,
+            self._spring_work_j - self._spring_work_at_reset,
+        )
 
     def _close(self) -> None:
         self.stats.extra.update(self.travel())
@@ -272,7 +278,8 @@ class SoftBodyBackend(Backend):
         columns, effort_rows, rate_rows = self._power_rows
         timestep = float(model.opt.timestep)
         if self._stepper is not None:
-            work = self._stepper.advance(steps, columns, effort_rows, rate_rows)
+            work, spring = self._stepper.advance(steps, columns, effort_rows, rate_rows)
+            self._spring_work_j += spring
             self._previous = self.start_positions + self._stepper.previous
             self._previous_time = self._stepper.previous_time_s
             self._work_j = self._work_j + work
@@ -294,13 +301,13 @@ class SoftBodyBackend(Backend):
         self._work_j = self._work_j + muscle_work_j(
             forces, rates, columns, effort_rows, rate_rows, timestep
         )
+        self._spring_work_j += spring_work_j(forces, rates, timestep)
         self._finish_advance(steps, dt_s)
 
     def _finish_advance(self, steps: int, dt_s: float) -> None:
         self._step_check.finish(steps)
         if self.physics_monitor is not None:
-            work = float(self._work_j.sum()) - self._work_at_reset
-            self.physics_monitor.sample(self.data, work)
+            self.physics_monitor.sample(self.data, self._spring_work_j - self._spring_work_at_reset)
         self._track()
         if self._pacer is not None:
             self._pacer.wait(dt_s)
@@ -355,3 +362,11 @@ def muscle_work_j(
     power = effort * rate
     work: np.ndarray = np.where(power > 0.0, power, 0.0).sum(axis=0) * timestep_s
     return work
+
+
+def spring_work_j(force_n: np.ndarray, rate_m_s: np.ndarray, timestep_s: float) -> float:
+    """All springs' positive work over S physics steps, J: Σ max(f·dl/dt, 0)·h over the steps
+    and springs, from their forces and rates of length (S, M) at each step's start. Every joule
+    of motion the springs give the points passes through it (the physics check's budget)."""
+    power = force_n * rate_m_s
+    return float(np.where(power > 0.0, power, 0.0).sum()) * timestep_s

@@ -105,7 +105,11 @@ static long rule(const mjModel* m, mjData* d, int points, const int64_t* geom_po
    power_rows), both computed at the start of the step. */
 static void add_work(const mjModel* m, const mjData* d, int joints, int width,
                      const int64_t* columns, const double* effort_rows,
-                     const double* rate_rows, double* work) {
+                     const double* rate_rows, double* work, double* spring_work) {
+  for (int a = 0; a < m->nu; a++) {
+    double power = d->actuator_force[a] * d->actuator_velocity[a];
+    if (power > 0.0) *spring_work += power * m->opt.timestep;
+  }
   for (int j = 0; j < joints; j++) {
     const int64_t* c = columns + (long)j * width;
     const double* e = effort_rows + (long)j * width;
@@ -130,7 +134,7 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
                            double* ring, double* spine, double* previous, int joints,
                            int width, const int64_t* columns, const double* effort_rows,
                            const double* rate_rows, double* work, int finite,
-                           double impulse_per_n, double* load) {
+                           double impulse_per_n, double* load, double* spring_work) {
   long projected = 0;
   for (int i = 0; i < steps; i++) {
     if (i == steps - 1) {
@@ -138,7 +142,7 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
       previous[3 * points] = d->time;
     }
     mj_step(m, d);
-    add_work(m, d, joints, width, columns, effort_rows, rate_rows, work);
+    add_work(m, d, joints, width, columns, effort_rows, rate_rows, work, spring_work);
     if (enabled && d->ncon)
       projected += rule(m, d, points, geom_point, point_ring, ahead, behind, start_spine,
                         touch, ring, spine, finite, impulse_per_n, load);
@@ -167,7 +171,7 @@ def load() -> ctypes.CDLL:
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 3 + [ctypes.c_void_p] * 9
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 2 + [ctypes.c_void_p] * 4
         library.snakebot_soft_advance.argtypes += [ctypes.c_int, ctypes.c_double]
-        library.snakebot_soft_advance.argtypes += [ctypes.c_void_p]
+        library.snakebot_soft_advance.argtypes += [ctypes.c_void_p] * 2
         _LIBRARY = library
     return _LIBRARY
 
@@ -213,15 +217,17 @@ class CompiledStepper:
 
     def advance(
         self, steps: int, columns: np.ndarray, effort_rows: np.ndarray, rate_rows: np.ndarray
-    ) -> np.ndarray:
+    ) -> tuple[np.ndarray, float]:
         """``steps`` physics steps, the rule after each (if the rule is enabled); returns each
         joint's positive muscle work over them (N,) J, from ``MuscleMap.power_rows``'s springs
-        and weights (N, K) each (the numpy path's ``muscle_work_j``, summed in another order)."""
+        and weights (N, K) each (the numpy path's ``muscle_work_j``, summed in another order),
+        and all springs' positive work, J (``spring_work_j``)."""
         model, data = self._pointers
         springs = np.ascontiguousarray(columns, dtype=np.int64)
         effort = np.ascontiguousarray(effort_rows, dtype=np.float64)
         rate = np.ascontiguousarray(rate_rows, dtype=np.float64)
         work = np.zeros(effort.shape[0])
+        spring = np.zeros(1)
         self.rule.projected += self._function(
             model,
             data,
@@ -238,5 +244,6 @@ class CompiledStepper:
             int(not self.rule.ideal),
             self.rule._impulse_per_n,
             self._load.ctypes.data,
+            spring.ctypes.data,
         )
-        return work
+        return work, float(spring[0])
