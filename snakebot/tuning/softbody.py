@@ -22,7 +22,7 @@ from snakebot.control.cycle import CycleRecord
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
-from snakebot.errors import SimulationDivergedError
+from snakebot.errors import PhysicsHealthError, SimulationDivergedError
 from snakebot.gaits import make_gait
 from snakebot.gaits.spec import ParamValue
 from snakebot.tuning.feasibility import Violations
@@ -78,6 +78,9 @@ def run_soft_job(job: SoftJob) -> SoftOutcome:
             summary = result.summary
         except SimulationDivergedError:
             stopped = "diverged"
+            summary = metrics.summary(gait.period_s)
+        except PhysicsHealthError as exc:  # the body's physics stopped being credible
+            stopped = f"physics health: {exc.check}"
             summary = metrics.summary(gait.period_s)
     summary.update(backend.stats.extra)
     targets = np.array(targets_seen) if targets_seen else np.zeros((1, body.joint_count))

@@ -5,6 +5,7 @@ MuJoCo; gaits drive its muscles through the same safety layer as a servo chain's
 """
 
 from snakebot.backends.softbody.backend import SoftBodyBackend
+from snakebot.backends.softbody.health import BodyHealthLimits
 from snakebot.backends.softbody.model import build_body_model, build_body_spec
 
-__all__ = ["SoftBodyBackend", "build_body_model", "build_body_spec"]
+__all__ = ["BodyHealthLimits", "SoftBodyBackend", "build_body_model", "build_body_spec"]

@@ -101,6 +101,7 @@ class SoftBodyBackend(Backend):
         self._layout = ChannelLayout(body.muscles.channels, body.lattice.segments)
         self._command = np.zeros(self.joint_count)
         self._work_j = np.zeros(self.joint_count)  # positive muscle work per joint since connect
+        self._spring_work_j = 0.0  # every spring's positive work since connect (health budget)
         self.model: mujoco.MjModel
         self.data: mujoco.MjData
 
@@ -163,10 +164,12 @@ class SoftBodyBackend(Backend):
         """Start the physics-health account afresh (ChecksPhysics): the checks and the muscles'
         work count from here; they stay off where they are off."""
         self._work_at_reset = float(self._work_j.sum())
+        self._spring_work_at_reset = self._spring_work_j
         if self._health_limits is None:
             return
         self.physics_monitor = BodyHealthMonitor(
             self.model,
+            self.data,
             self._point_geoms,
             self._point_bodies,
             self.body.lattice.point_radius_m,
@@ -178,7 +181,10 @@ class SoftBodyBackend(Backend):
         the checks off."""
         if self.physics_monitor is None:
             return None
-        return self.physics_monitor.summary(float(self._work_j.sum()) - self._work_at_reset)
+        return self.physics_monitor.summary(
+            float(self._work_j.sum()) - self._work_at_reset,
+            self._spring_work_j - self._spring_work_at_reset,
+        )
 
     def _close(self) -> None:
         self.stats.extra.update(self.travel())
@@ -208,7 +214,7 @@ class SoftBodyBackend(Backend):
             yaw, pitch, axial, self._ring_scale()
         )
         self.data.ctrl[:] = rest
-        self._power_rows: tuple[np.ndarray, np.ndarray] | None = None  # made when stepping
+        self._power_rows: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # when stepping
 
     # -- the cycle ---------------------------------------------------------------------------
     def _measure(self) -> _Snapshot:
@@ -269,10 +275,11 @@ class SoftBodyBackend(Backend):
         self._snapshot = None
         if self._power_rows is None:
             self._power_rows = self.muscles.power_rows(self._jacobian, self._layout)
-        effort_rows, rate_rows = self._power_rows
+        columns, effort_rows, rate_rows = self._power_rows
         timestep = float(model.opt.timestep)
         if self._stepper is not None:
-            work = self._stepper.advance(steps, effort_rows, rate_rows)
+            work, spring = self._stepper.advance(steps, columns, effort_rows, rate_rows)
+            self._spring_work_j += spring
             self._previous = self.start_positions + self._stepper.previous
             self._previous_time = self._stepper.previous_time_s
             self._work_j = self._work_j + work
@@ -291,14 +298,16 @@ class SoftBodyBackend(Backend):
             if rule.enabled and data.ncon:
                 normal = None if rule.ideal else contact_normal_forces(data)
                 rule.apply(displacement, velocity, data.contact.geom, normal)
-        self._work_j = self._work_j + muscle_work_j(forces, rates, effort_rows, rate_rows, timestep)
+        self._work_j = self._work_j + muscle_work_j(
+            forces, rates, columns, effort_rows, rate_rows, timestep
+        )
+        self._spring_work_j += spring_work_j(forces, rates, timestep)
         self._finish_advance(steps, dt_s)
 
     def _finish_advance(self, steps: int, dt_s: float) -> None:
         self._step_check.finish(steps)
         if self.physics_monitor is not None:
-            work = float(self._work_j.sum()) - self._work_at_reset
-            self.physics_monitor.sample(self.data, work)
+            self.physics_monitor.sample(self.data, self._spring_work_j - self._spring_work_at_reset)
         self._track()
         if self._pacer is not None:
             self._pacer.wait(dt_s)
@@ -339,13 +348,25 @@ class SoftBodyBackend(Backend):
 def muscle_work_j(
     force_n: np.ndarray,
     rate_m_s: np.ndarray,
+    columns: np.ndarray,
     effort_rows: np.ndarray,
     rate_rows: np.ndarray,
     timestep_s: float,
 ) -> np.ndarray:
     """Each joint's positive muscle work (N,) J over S physics steps: the springs' forces and
     rates of length (S, M) at the start of each step, turned into joint efforts and channel
-    rates by ``MuscleMap.power_rows`` (N, M) each; a step counts max(effort · rate, 0) · h."""
-    power = (force_n @ effort_rows.T) * (rate_m_s @ rate_rows.T)
+    rates by ``MuscleMap.power_rows`` (its springs ``columns`` and weights, (N, K) each); a
+    step counts max(effort · rate, 0) · h."""
+    effort = (force_n[:, columns] * effort_rows).sum(axis=-1)  # (S, N)
+    rate = (rate_m_s[:, columns] * rate_rows).sum(axis=-1)
+    power = effort * rate
     work: np.ndarray = np.where(power > 0.0, power, 0.0).sum(axis=0) * timestep_s
     return work
+
+
+def spring_work_j(force_n: np.ndarray, rate_m_s: np.ndarray, timestep_s: float) -> float:
+    """All springs' positive work over S physics steps, J: Σ max(f·dl/dt, 0)·h over the steps
+    and springs, from their forces and rates of length (S, M) at each step's start. Every joule
+    of motion the springs give the points passes through it (the physics check's budget)."""
+    power = force_n * rate_m_s
+    return float(np.where(power > 0.0, power, 0.0).sum()) * timestep_s

@@ -100,18 +100,24 @@ static long rule(const mjModel* m, mjData* d, int points, const int64_t* geom_po
 }
 
 /* Each joint's positive muscle power over the step just taken, times the timestep, added to
-   `work` (joints): effort row . actuator forces times rate row . actuator velocities (rows of
-   nu values each, MuscleMap.power_rows), both computed at the start of the step. */
-static void add_work(const mjModel* m, const mjData* d, int joints, const double* effort_rows,
-                     const double* rate_rows, double* work) {
-  int nu = m->nu;
+   `work` (joints): its weights on its segment's `width` springs (`columns`) times their
+   actuator forces, times the rate weights times their actuator velocities (MuscleMap.
+   power_rows), both computed at the start of the step. */
+static void add_work(const mjModel* m, const mjData* d, int joints, int width,
+                     const int64_t* columns, const double* effort_rows,
+                     const double* rate_rows, double* work, double* spring_work) {
+  for (int a = 0; a < m->nu; a++) {
+    double power = d->actuator_force[a] * d->actuator_velocity[a];
+    if (power > 0.0) *spring_work += power * m->opt.timestep;
+  }
   for (int j = 0; j < joints; j++) {
-    const double* e = effort_rows + (long)j * nu;
-    const double* r = rate_rows + (long)j * nu;
+    const int64_t* c = columns + (long)j * width;
+    const double* e = effort_rows + (long)j * width;
+    const double* r = rate_rows + (long)j * width;
     double effort = 0.0, rate = 0.0;
-    for (int a = 0; a < nu; a++) {
-      effort += e[a] * d->actuator_force[a];
-      rate += r[a] * d->actuator_velocity[a];
+    for (int k = 0; k < width; k++) {
+      effort += e[k] * d->actuator_force[c[k]];
+      rate += r[k] * d->actuator_velocity[c[k]];
     }
     double power = effort * rate;
     if (power > 0.0) work[j] += power * m->opt.timestep;
@@ -126,8 +132,9 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
                            const int64_t* ahead, const int64_t* behind,
                            const double* start_spine, unsigned char* touch,
                            double* ring, double* spine, double* previous, int joints,
-                           const double* effort_rows, const double* rate_rows, double* work,
-                           int finite, double impulse_per_n, double* load) {
+                           int width, const int64_t* columns, const double* effort_rows,
+                           const double* rate_rows, double* work, int finite,
+                           double impulse_per_n, double* load, double* spring_work) {
   long projected = 0;
   for (int i = 0; i < steps; i++) {
     if (i == steps - 1) {
@@ -135,7 +142,7 @@ long snakebot_soft_advance(const mjModel* m, mjData* d, int steps, int enabled, 
       previous[3 * points] = d->time;
     }
     mj_step(m, d);
-    add_work(m, d, joints, effort_rows, rate_rows, work);
+    add_work(m, d, joints, width, columns, effort_rows, rate_rows, work, spring_work);
     if (enabled && d->ncon)
       projected += rule(m, d, points, geom_point, point_ring, ahead, behind, start_spine,
                         touch, ring, spine, finite, impulse_per_n, load);
@@ -162,9 +169,9 @@ def load() -> ctypes.CDLL:
         library.snakebot_soft_advance.restype = ctypes.c_long
         library.snakebot_soft_advance.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 3 + [ctypes.c_void_p] * 9
-        library.snakebot_soft_advance.argtypes += [ctypes.c_int] + [ctypes.c_void_p] * 3
+        library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 2 + [ctypes.c_void_p] * 4
         library.snakebot_soft_advance.argtypes += [ctypes.c_int, ctypes.c_double]
-        library.snakebot_soft_advance.argtypes += [ctypes.c_void_p]
+        library.snakebot_soft_advance.argtypes += [ctypes.c_void_p] * 2
         _LIBRARY = library
     return _LIBRARY
 
@@ -208,14 +215,19 @@ class CompiledStepper:
         """Simulated time before the last step of the latest ``advance``."""
         return float(self._previous[-1])
 
-    def advance(self, steps: int, effort_rows: np.ndarray, rate_rows: np.ndarray) -> np.ndarray:
+    def advance(
+        self, steps: int, columns: np.ndarray, effort_rows: np.ndarray, rate_rows: np.ndarray
+    ) -> tuple[np.ndarray, float]:
         """``steps`` physics steps, the rule after each (if the rule is enabled); returns each
-        joint's positive muscle work over them (N,) J, from ``MuscleMap.power_rows`` (N, nu)
-        each (the numpy path's ``muscle_work_j``, summed in another order)."""
+        joint's positive muscle work over them (N,) J, from ``MuscleMap.power_rows``'s springs
+        and weights (N, K) each (the numpy path's ``muscle_work_j``, summed in another order),
+        and all springs' positive work, J (``spring_work_j``)."""
         model, data = self._pointers
+        springs = np.ascontiguousarray(columns, dtype=np.int64)
         effort = np.ascontiguousarray(effort_rows, dtype=np.float64)
         rate = np.ascontiguousarray(rate_rows, dtype=np.float64)
         work = np.zeros(effort.shape[0])
+        spring = np.zeros(1)
         self.rule.projected += self._function(
             model,
             data,
@@ -224,11 +236,14 @@ class CompiledStepper:
             self._points,
             *self._arrays,
             effort.shape[0],
+            effort.shape[1],
+            springs.ctypes.data,
             effort.ctypes.data,
             rate.ctypes.data,
             work.ctypes.data,
             int(not self.rule.ideal),
             self.rule._impulse_per_n,
             self._load.ctypes.data,
+            spring.ctypes.data,
         )
-        return work
+        return work, float(spring[0])

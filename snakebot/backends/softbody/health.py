@@ -8,9 +8,11 @@ and springs fails differently, so it has its own four, sampled once per control 
 - spring strain: how far any spring is from its rest length, |l / L - 1| (a lattice that folds
   or tears stretches springs far beyond what the muscles ask: the commanded shapes never strain
   a spring, since every rest length is its length in the target shape);
-- energy: the kinetic energy of the points against what could have made it, the muscles'
-  positive work plus the height the body lost (m g Δz); more than that is energy from nowhere,
-  the signature of an integration going unstable.
+- energy: the kinetic energy of the points against what could have made it, the springs'
+  positive work (every spring's force times its rate of length where positive, integrated every
+  physics step: all the motion the springs give the points passes through it) plus the height
+  the body lost (m g Δz); more than that is energy from nowhere, the signature of an
+  integration going unstable.
 
 Past a warning threshold the summary lists a warning; past a hard one the run stops with the
 rigid twin's ``PhysicsHealthError``, at the time it happened. Limits and why:
@@ -39,7 +41,7 @@ class BodyHealthLimits:
     radii under the surface, from where contacts push it through rather than back); strain is
     |l / L - 1| of the worst spring (the snake body's sidewinding reaches 0.55: a warning; 1.0 is
     a spring doubled or collapsed, a torn or inverted lattice);
-    ``energy_*`` is the kinetic energy of the points over the muscles' positive work plus the
+    ``energy_*`` is the kinetic energy of the points over the springs' positive work plus the
     potential energy the body lost plus ``energy_floor_j`` (1.0: all of it became motion,
     which a damped body never does). A period is airborne when no point touches the ground and
     the lowest point is more than ``contact_tolerance_m`` above it. ``hard`` False turns hard
@@ -66,12 +68,14 @@ class BodyHealthMonitor:
 
     ``point_geoms`` (P,) are the points' sphere geoms, ``point_bodies`` (P,) their bodies, all of
     ``radius_m``; every other geom is ground. The springs are the model's actuators, each on a
-    tendon whose rest length is its ``ctrl``.
+    tendon whose rest length is its ``ctrl``. ``data`` is the state the account starts from (the
+    height the body's fall is counted from).
     """
 
     def __init__(
         self,
         model: mujoco.MjModel,
+        data: mujoco.MjData,
         point_geoms: np.ndarray,
         point_bodies: np.ndarray,
         radius_m: float,
@@ -86,7 +90,7 @@ class BodyHealthMonitor:
         self._mass = model.body_mass[self._bodies].copy()  # (P,)
         self._total_mass = float(self._mass.sum())
         self._tendons = model.actuator_trnid[:, 0].copy()  # the spring of each actuator
-        self._start_z: float | None = None
+        self._start_z = self._com_z(data)
         self.cycles = 0
         self.max_penetration_m = 0.0
         self.max_strain = 0.0
@@ -95,14 +99,12 @@ class BodyHealthMonitor:
         self._airborne_cycles = 0
 
     def sample(self, data: mujoco.MjData, work_j: float) -> None:
-        """Account the control period ending now; ``work_j`` is the muscles' positive work since
+        """Account the control period ending now; ``work_j`` is the springs' positive work since
         the start, J. Raises PhysicsHealthError past a hard limit."""
         limits = self.limits
         self.cycles += 1
         z = data.xpos[self._bodies, 2]
         com_z = float(self._mass @ z) / self._total_mass
-        if self._start_z is None:
-            self._start_z = com_z
         grounded = False
         ncon = data.ncon
         if ncon:
@@ -144,13 +146,18 @@ class BodyHealthMonitor:
             raise PhysicsHealthError(
                 time_s,
                 "energy",
-                f"the points move with {kinetic:.3g} J, {ratio:.1f} x what the muscles put in "
+                f"the points move with {kinetic:.3g} J, {ratio:.1f} x what the springs put in "
                 f"({work_j:.3g} J) and the body's fall could give",
             )
 
-    def summary(self, energy_injected_j: float) -> dict[str, object]:
+    def _com_z(self, data: mujoco.MjData) -> float:
+        """Height of the points' centre of mass, m."""
+        return float(self._mass @ data.xpos[self._bodies, 2]) / self._total_mass
+
+    def summary(self, energy_injected_j: float, spring_work_j: float) -> dict[str, object]:
         """JSON-ready health figures and the warnings past ``limits`` (docs/soft-bodies.md);
-        ``energy_injected_j`` is the muscles' positive work over the run."""
+        ``energy_injected_j`` is the muscles' positive work over the run, ``spring_work_j``
+        every spring's (the energy check's budget)."""
         limits = self.limits
         airborne = self._airborne_cycles / max(self.cycles, 1)
         radius_mm = self._radius * 1e3
@@ -160,6 +167,7 @@ class BodyHealthMonitor:
             "airborne_fraction": airborne,
             "max_spring_strain": self.max_strain,
             "energy_injected_j": energy_injected_j,
+            "spring_work_j": spring_work_j,
             "max_kinetic_energy_j": self.max_kinetic_j,
             "max_energy_ratio": self.max_energy_ratio,
         }
@@ -178,7 +186,7 @@ class BodyHealthMonitor:
             )
         if self.max_energy_ratio > limits.energy_warn:
             warnings.append(
-                f"the points' kinetic energy reached {self.max_energy_ratio:.2f} x the muscles' "
+                f"the points' kinetic energy reached {self.max_energy_ratio:.2f} x the springs' "
                 "work plus the body's fall: energy from nowhere"
             )
         out["warnings"] = warnings

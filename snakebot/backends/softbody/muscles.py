@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from snakebot.backends.softbody.lattice import (
     CORNER_SIGNS,
@@ -206,13 +207,14 @@ class MuscleMap:
 
     def power_rows(
         self, jacobian: FloatArray, layout: ChannelLayout
-    ) -> tuple[FloatArray, FloatArray]:
-        """Per joint of ``layout``, rows (N, M) that turn the springs' forces (M,) N into the
-        joint's effort (``segment_efforts``, as ``read_state`` reports it) and the springs' rates
-        of length (M,) m/s into the joint's channel rate: the least-squares channel rates whose
-        rest-length changes ``jacobian``ᵀ·rate best match the springs' (a segment has more
-        springs than channels). Effort row · force times rate row · rates is the muscle's power
-        at any instant, which the backend integrates every physics step."""
+    ) -> tuple[npt.NDArray[np.int64], FloatArray, FloatArray]:
+        """Per joint of ``layout``, the K springs of its segment (N, K) and weights on them
+        (N, K) each that turn the springs' forces N into the joint's effort
+        (``segment_efforts``, as ``read_state`` reports it) and the springs' rates of length
+        m/s into the joint's channel rate: the least-squares channel rates whose rest-length
+        changes ``jacobian``ᵀ·rate best match the springs' (a segment has more springs than
+        channels). Effort times rate is the muscle's power at any instant, which the backend
+        integrates every physics step."""
         segments = self.lattice.segments
         springs = self._seg_springs.reshape(segments, -1)  # (S, K)
         blocks = np.moveaxis(jacobian[:, springs], 0, -1)  # (S, K, 3)
@@ -224,12 +226,10 @@ class MuscleMap:
         joints = np.arange(layout.joint_count)
         segment = joints // len(layout.channels)
         axis = np.array([AXES.index(c) for c in layout.channels])[joints % len(layout.channels)]
-        effort_rows = np.zeros((layout.joint_count, self.lattice.spring_count))
-        rate_rows = np.zeros_like(effort_rows)
-        columns = springs[segment]  # (N, K)
-        effort_rows[joints[:, None], columns] = jacobian[axis[:, None], columns]
-        rate_rows[joints[:, None], columns] = rates[segment, axis]
-        return effort_rows, rate_rows
+        columns = springs[segment].astype(np.int64)  # (N, K)
+        effort_rows: FloatArray = jacobian[axis[:, None], columns]
+        rate_rows: FloatArray = rates[segment, axis]
+        return columns, effort_rows, rate_rows
 
     def ring_scale(self, segment_length_m: FloatArray) -> FloatArray:
         """Miller's volume preservation: ring size factor (R,) from segment lengths (S,) in m.

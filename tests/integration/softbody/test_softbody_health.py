@@ -59,6 +59,7 @@ def monitor_of(soft: SoftBodyBackend, **limits: object) -> BodyHealthMonitor:
     assert soft._point_geoms is not None
     return BodyHealthMonitor(
         soft.model,
+        soft.data,
         soft._point_geoms,
         soft._point_bodies,
         WORM.lattice.point_radius_m,
@@ -72,7 +73,7 @@ def test_each_check_raises_past_its_hard_limit_and_warns_below_it() -> None:
         radius = WORM.lattice.point_radius_m
         calm = monitor_of(soft)
         calm.sample(data, 0.0)  # at rest on the floor
-        assert calm.summary(0.0)["warnings"] == []
+        assert calm.summary(0.0, 0.0)["warnings"] == []
 
         bottom = 3 * 2 + 2  # point 2 (a bottom corner of the head ring): its z slide
         data.qpos[bottom] = -3.5 * radius  # sunk 3.5 radii: through the floor
@@ -87,7 +88,7 @@ def test_each_check_raises_past_its_hard_limit_and_warns_below_it() -> None:
             monitor_of(soft).sample(data, 0.0)
         soft_limits = monitor_of(soft, hard=False)
         soft_limits.sample(data, 0.0)
-        assert any("rest length" in w for w in soft_limits.summary(0.0)["warnings"])  # type: ignore[attr-defined]
+        assert any("rest length" in w for w in soft_limits.summary(0.0, 0.0)["warnings"])  # type: ignore[attr-defined]
         data.qpos[0] = 0.0
 
         data.qvel.reshape(-1, 3)[:, 0] = 1.0  # 1 m/s with no work done: energy from nowhere
@@ -100,7 +101,7 @@ def test_each_check_raises_past_its_hard_limit_and_warns_below_it() -> None:
         mujoco.mj_forward(model, data)
         flying = monitor_of(soft)
         flying.sample(data, 0.0)
-        health = flying.summary(0.0)
+        health = flying.summary(0.0, 0.0)
         assert health["airborne_fraction"] == 1.0
         assert any("no point touched" in w for w in health["warnings"])  # type: ignore[attr-defined]
 
