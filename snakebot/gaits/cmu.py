@@ -487,7 +487,7 @@ LOOK_SPEC = GaitSpec(
     summary=(
         "Head-look: a body gait (base, at its defaults) with the four joints behind the head "
         "holding it level and pointed (pan/tilt in the body's virtual chassis frame); for a "
-        "camera. HeadLookGait wraps any gait from Python."
+        "camera. HeadLookGait wraps any phased gait from Python."
     ),
     params=(
         ParamSpec("base", "", "sidewinding", "the body's gait", _LOOK_BASES),

@@ -1,8 +1,9 @@
 """The CMU parity gaits on the twin: conical sidewinding steers by its taper's sign, head-look
 holds the head nearer level than the same gait without it, the rolling helix coils by the pole.
 
-Measured on snake12 (docs/gaits.md has the figures): over 6 s, taper +0.8 turns the body
-+49 deg (anticlockwise seen from above), -0.8 turns it -44 deg, plain sidewinding 2 deg.
+Measured on snake12 (docs/twin.md, "CMU gait-library parity", has the figures): over 6 s,
+taper +0.8 turns the body +49 deg (anticlockwise seen from above), -0.8 turns it -44 deg, plain
+sidewinding 2 deg.
 """
 
 from __future__ import annotations
