@@ -256,7 +256,9 @@ HELIX_SPEC = GaitSpec(
     summary=(
         "CMU rolling helix for pole climbing (Zhen, Gong & Choset 2015): the body coils into a "
         "helix of the pole's radius and rolls about its backbone, screwing up the pole; set "
-        "pole_radius_m to the pole's (the pole terrain's diameter_m / 2) and the module size."
+        "pole_radius_m to the pole's (the pole terrain's diameter_m / 2; on 12 joints 5 mm more "
+        "keeps the coil off the pole) and the module size. Wrapped head end up, omega < 0 "
+        "climbs (docs/twin.md)."
     ),
     params=(
         ParamSpec("pole_radius_m", "m", 0.05, "radius of the pole to wrap", bounds=(0.0, 0.3)),
