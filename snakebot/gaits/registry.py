@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from snakebot.errors import GaitAxesWarning, GaitError, GaitParamError
-from snakebot.gaits import compound, dft, keyframes, miller, serpenoid, simple
+from snakebot.gaits import cmu, compound, dft, keyframes, miller, serpenoid, simple
 from snakebot.gaits.base import FloatArray, Gait, check_joint_count
 from snakebot.gaits.spec import (
     GaitSpec,
@@ -67,6 +67,7 @@ GAITS: Registry[GaitSpec] = Registry(
             simple.SPEC,
             keyframes.SPEC,
             *miller.SPECS,
+            *cmu.SPECS,
         )
     },
 )

@@ -22,6 +22,7 @@ PHASES = {
     "rectilinear": 1,
     "undulation": 1,
     "miller_sidewinding": 1,
+    "rolling_helix": 1,
 }
 
 

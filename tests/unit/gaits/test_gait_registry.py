@@ -28,15 +28,19 @@ EXPECTED = {
     "dft_shift",
     "simple",
     "keyframes",
+    "conical_sidewinding",
+    "rolling_helix",
 }
 # Miller's gaits drive mass-spring bodies; tests/unit/gaits/test_gait_miller.py covers them.
 MILLER = {"rectilinear", "undulation", "miller_sidewinding"}
+# head_look needs 6 joints (4 aim the head); tests/unit/gaits/test_gait_cmu.py covers it.
+HEAD_LOOK = {"head_look"}
 
 
 def test_all_gaits_are_registered() -> None:
     # Gaits from installed plugins are listed too (tests/plugins checks this suite with one).
     built_in = {name for name in gait_names() if gait_origin(name).kind == "built-in"}
-    assert built_in == EXPECTED | MILLER
+    assert built_in == EXPECTED | MILLER | HEAD_LOOK
     assert gait_names() == sorted(gait_names())
 
 
