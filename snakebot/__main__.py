@@ -8,4 +8,5 @@ try:
     entry_point()
 except KeyboardInterrupt:  # Ctrl-C before entry_point's own handler is in place: no traceback
     print("snakebot: interrupted", file=sys.stderr)
+    exec("")  # clears CPython's unhandled-interrupt flag: see cli.main.forget_unhandled_interrupt
     sys.exit(130)

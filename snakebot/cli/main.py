@@ -168,9 +168,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         _decided_exit_code = EXIT_INTERRUPTED
         print(_interrupted_message(), file=sys.stderr)
         return EXIT_INTERRUPTED
-    except ImportError as exc:
-        # Ctrl-C while a C extension (MuJoCo) initialises reaches us as "initialization failed".
-        if not _caused_by_interrupt(exc):
+    except Exception as exc:
+        # Ctrl-C inside foreign code can come out as another exception: MuJoCo's C extensions
+        # turn it into an ImportError ("initialization failed"), ctypes (PyOpenGL, which MuJoCo
+        # imports for EGL) into ``ctypes.ArgumentError: argument 1: KeyboardInterrupt``.
+        if not (_interrupt_seen or _caused_by_interrupt(exc)):
             raise
         _decided_exit_code = EXIT_INTERRUPTED
         print(_interrupted_message(), file=sys.stderr)
@@ -230,6 +232,8 @@ def _main(argv: Sequence[str] | None) -> int:
     except BrokenPipeError:
         return EXIT_ERROR
     except Exception:
+        if _interrupt_seen:
+            raise  # what a stop signal broke, not a bug: main() ends it as interrupted
         traceback.print_exc()
         return _fail(
             "snakebot: internal error (a bug in snakebot); please report it with the traceback",
@@ -328,6 +332,7 @@ def entry_point() -> None:
         _decided_exit_code = code = EXIT_INTERRUPTED
         print(_interrupted_message(), file=sys.stderr)
     _ignore_signals_from_now_on()
+    forget_unhandled_interrupt()
     sys.exit(code)
 
 
@@ -345,6 +350,17 @@ def _on_signal(signum: int, frame: object) -> None:
             _interrupt_signal = signum
         raise KeyboardInterrupt
     # The command is over; the exit code it decided stands.
+
+
+def forget_unhandled_interrupt() -> None:
+    """Clear CPython's record of a KeyboardInterrupt that left code run from a string.
+
+    CPython remembers a KeyboardInterrupt escaping any ``exec``/``eval`` of source text (which
+    ``dataclasses`` and ``namedtuple`` do for every class they make, so a Ctrl-C during start-up
+    often lands there) and, under ``python -m``, ends the process by SIGINT after it exits, even
+    when the interrupt was caught and the exit code decided. Running a string clears it.
+    """
+    exec("")  # an empty string: runs nothing, clears the flag
 
 
 def _install_signal_handlers() -> None:

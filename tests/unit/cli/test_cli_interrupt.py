@@ -6,6 +6,8 @@ import os
 import signal
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -106,3 +108,85 @@ def test_the_start_up_guard_is_for_the_snakebot_command_only(
 ) -> None:
     # A program that only imports snakebot keeps Python's own Ctrl-C.
     assert started_as_command(argv, orig_argv) is expected
+
+
+def test_ctrl_c_in_generated_code_does_not_end_python_m_by_signal(tmp_path: Path) -> None:
+    # CPython records a KeyboardInterrupt that escapes source run from a string (dataclasses and
+    # namedtuple exec one for every class they make, so a Ctrl-C while the parser is built often
+    # lands there) and under `python -m` ends the process by SIGINT once it exits, caught or not:
+    # CI saw `snakebot: interrupted` and then returncode -2. Here the signal lands in such code.
+    (tmp_path / "ctrl_c_in_exec.py").write_text(
+        "import sys\n"
+        "from snakebot.cli import main\n"
+        "def build_parser():\n"
+        "    exec('import os, signal; os.kill(os.getpid(), signal.SIGINT); "
+        "signal.sigtimedwait([], 0)')\n"
+        "    raise AssertionError('the signal handler did not run')\n"
+        "main.build_parser = build_parser\n"
+        "sys.argv = ['snakebot', 'gaits']\n"
+        "main.entry_point()\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-m", "ctrl_c_in_exec"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
+    )
+    assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert proc.stderr.rstrip().endswith("snakebot: interrupted")
+    assert proc.returncode == 130
+
+
+def test_ctrl_c_that_foreign_code_turns_into_another_error_is_still_an_interrupt() -> None:
+    # ctypes wraps a KeyboardInterrupt raised while it converts an argument in its own error
+    # (seen from PyOpenGL, which MuJoCo imports while the parser is built): `ctypes.ArgumentError:
+    # argument 1: KeyboardInterrupt`, a traceback and exit 1 before this was handled.
+    script = (
+        "import ctypes, os, signal\n"
+        "from snakebot.cli import main\n"
+        "def build_parser():\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        signal.sigtimedwait([], 0)\n"  # let the handler run here
+        "    except KeyboardInterrupt as exc:\n"
+        "        raise ctypes.ArgumentError(f'argument 1: {type(exc).__name__}: ') from None\n"
+        "    raise AssertionError('the signal handler did not run')\n"
+        "main.build_parser = build_parser\n"
+        "import sys\n"
+        "sys.argv = ['snakebot', 'gaits']\n"
+        "main.entry_point()\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
+    assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert proc.stderr.rstrip().endswith("snakebot: interrupted")
+    assert proc.returncode == 130
+
+
+@pytest.mark.parametrize("delay_s", [0.0, 0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8])
+def test_ctrl_c_anywhere_in_start_up_is_exit_130_or_the_finished_command(delay_s: float) -> None:
+    # Wherever the signal lands after the CLI's module is in (dataclasses, ctypes, C extensions):
+    # interrupted with 130 and nothing printed, or, if the command was already over, its output
+    # and 0; never a traceback or a death by signal.
+    proc = subprocess.Popen(
+        [sys.executable, "-X", "importtime", "-m", "snakebot", "gaits"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stderr is not None
+    for line in proc.stderr:
+        if imported(line) == "snakebot.cli.main":
+            time.sleep(delay_s)
+            proc.send_signal(signal.SIGINT)
+            break
+    out, err = proc.communicate(timeout=60)
+    assert "Traceback" not in err, err[-2000:]
+    if proc.returncode == 0:
+        assert "serpenoid" in out
+    else:
+        assert proc.returncode == 130
+        assert err.rstrip().endswith("snakebot: interrupted")
+        assert out == ""
