@@ -8,8 +8,10 @@ run ends:
 - The gait window closes (``plan.duration_s``), or a ``stop()`` check gives a reason: ramp-out,
   and the run is not counted as interrupted.
 - Ctrl-C or SIGTERM (as KeyboardInterrupt) during the gait starts the ramp-out; the scored window
-  ends there. Another one during the ramp-out ends it at once and propagates: the backend's
-  ``close`` then stops at the joint speed limit, still ending in the stop policy.
+  ends there. The stop signals are held back to the start of the next cycle
+  (snakebot.interrupts), so the cycle they came in is whole in every observer. Another one
+  during the ramp-out ends it at once and propagates: the backend's ``close`` then stops at the
+  joint speed limit, still ending in the stop policy.
 - Any other error while the bus still works (the gait raised, the safety layer refused its
   output, telemetry or a per-cycle hook failed) ramps out too, holding the gait's last good target
   while the amplitude falls, then re-raises the error. What failed is left out of the ramp-out.
@@ -42,6 +44,7 @@ from snakebot.control.summary import run_summary
 from snakebot.errors import BackendError
 from snakebot.gaits import Gait
 from snakebot.gaits.table import CommandTable
+from snakebot.interrupts import DeferredInterrupts
 
 __all__ = [
     "CycleHook",
@@ -120,25 +123,34 @@ def run_gait(
     interrupted = False
     stopped_by = ""
     failure: Exception | None = None
+    signals = DeferredInterrupts()  # a stop signal reaches the loop between cycles
+    signals.arm()
     try:
-        while schedule.in_gait(loop.elapsed_s):
-            if stop is not None and (reason := stop()) is not None:
-                stopped_by = reason
-                break
-            loop.gait_step()
-    except KeyboardInterrupt:
-        interrupted = True
-    except BackendError:
-        raise
-    except Exception as exc:
-        if loop.stage == "backend":
+        try:
+            while schedule.in_gait(loop.elapsed_s):
+                signals.deliver()
+                if stop is not None and (reason := stop()) is not None:
+                    stopped_by = reason
+                    break
+                loop.gait_step()
+        except KeyboardInterrupt:
+            interrupted = True
+        except BackendError:
             raise
-        failure = exc
-        loop.leave_out(loop.stage)
-    if plan.ramp_out and safety.ramp_s > 0:
-        _ramp_out(loop, safety, loop.elapsed_s, failure)
+        except Exception as exc:
+            if loop.stage == "backend":
+                raise
+            failure = exc
+            loop.leave_out(loop.stage)
+        if plan.ramp_out and safety.ramp_s > 0:
+            _ramp_out(loop, safety, loop.elapsed_s, failure, signals)
+    except BaseException:
+        signals.abandon()
+        raise
     if failure is not None:
+        signals.abandon()
         raise failure
+    signals.release()  # one that came in the last cycle: raised now
     summary = run_summary(
         metrics,
         backend,
@@ -186,15 +198,20 @@ def play_commands(
 
 
 def _ramp_out(
-    loop: CycleLoop, safety: SafetyLayer, gait_end_s: float, failure: Exception | None
+    loop: CycleLoop,
+    safety: SafetyLayer,
+    gait_end_s: float,
+    failure: Exception | None,
+    signals: DeferredInterrupts,
 ) -> None:
     """Ramp the amplitude to zero over ``safety.ramp_s``; the last command is the rest pose.
 
     Late cycles (a loaded host) shorten the ramp in cycles, not in time; the slew limit may then
     hold the command back, so the ramp goes on at zero amplitude until it reaches the rest pose.
 
-    A KeyboardInterrupt here ends the ramp: it propagates when nothing else failed (the backend
-    then stops fast), and gives way to ``failure`` otherwise. With ``failure`` pending, anything
+    A KeyboardInterrupt here (``signals`` deliver at the start of each cycle) ends the ramp: it
+    propagates when nothing else failed (the backend then stops fast), and gives way to
+    ``failure`` otherwise. With ``failure`` pending, anything
     else that goes wrong also ends the ramp; ``failure`` is what the caller raises.
     """
     schedule = loop.schedule
@@ -204,6 +221,7 @@ def _ramp_out(
         while fraction > 0.0:
             since_end = loop.elapsed_s - gait_end_s
             fraction = schedule.ramp_out_fraction(since_end)
+            signals.deliver()
             loop.step(gait_end_s + since_end, start_amplitude * smooth_ramp(fraction), scored=False)
         # The last command is exactly the rest pose, whatever the timing.
         span = float(np.max(np.abs(loop.command - safety.rest_rad)))
@@ -211,6 +229,7 @@ def _ramp_out(
             if np.array_equal(loop.command, safety.rest_rad):
                 break
             since_end = loop.elapsed_s - gait_end_s
+            signals.deliver()
             loop.step(gait_end_s + since_end, 0.0, scored=False)
     except KeyboardInterrupt:
         if failure is None:

@@ -41,7 +41,6 @@ from snakebot.backends.chain.faults import (
     ServoSettingsError,
     ServoSettingsWarning,
 )
-from snakebot.backends.chain.interrupts import deferred_interrupts
 from snakebot.backends.chain.plans import Row, SyncWritePlan
 from snakebot.backends.chain.rate import (
     CycleBudget,
@@ -59,6 +58,7 @@ from snakebot.backends.dynamixel.sdk import PortHandlerFactory
 from snakebot.backends.pacing import Pacer
 from snakebot.config.schema import PID_GAIN_KEYS, GainRegisters, RobotConfig
 from snakebot.errors import BusError
+from snakebot.interrupts import deferred_interrupts
 from snakebot.servo_tables import supported_models, table_for_model
 from snakebot.types import JointState, PDGains
 

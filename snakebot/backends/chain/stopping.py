@@ -35,7 +35,6 @@ from snakebot.backends.chain.faults import (
     TrackingError,
     WatchdogTripError,
 )
-from snakebot.backends.chain.interrupts import DeferredInterrupts
 from snakebot.backends.chain.shutdown import (
     fastest_ramp_s,
     ramp_duration_s,
@@ -44,6 +43,7 @@ from snakebot.backends.chain.shutdown import (
 )
 from snakebot.backends.chain.supervision import CatchUp, Stall, TrackingLimits, TripCounter
 from snakebot.errors import BusError
+from snakebot.interrupts import DeferredInterrupts
 
 if TYPE_CHECKING:
     from snakebot.backends.chain.backend import ServoChainBackend

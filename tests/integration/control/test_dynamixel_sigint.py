@@ -131,7 +131,14 @@ def wait_for_rows(log: Path, rows: int, run: subprocess.Popen[bytes]) -> None:
         if log.exists() and log.read_text().count("\n") > rows:
             return
         time.sleep(0.02)
-    raise AssertionError(f"the run did not log {rows} rows")
+    if run.poll() is not None:
+        _out, err = run.communicate()
+        said = [line for line in err.decode().splitlines() if "Return Delay" not in line]
+        raise AssertionError(
+            f"the run ended (exit {run.returncode}) before it logged {rows} rows: "
+            + "\n".join(said)[-3000:]
+        )
+    raise AssertionError(f"the run did not log {rows} rows in 150 s")
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])

@@ -19,8 +19,8 @@ from typing import Any
 
 import pytest
 
+from snakebot import interrupts
 from snakebot.backends.base import Backend
-from snakebot.backends.chain import interrupts
 from snakebot.backends.chain.backend import ServoChainBackend
 from snakebot.backends.chain.stopping import StopSequence
 from snakebot.control import runner

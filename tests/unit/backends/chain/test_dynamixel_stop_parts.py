@@ -10,7 +10,6 @@ import signal
 import numpy as np
 import pytest
 
-from snakebot.backends.chain.interrupts import deferred_interrupts
 from snakebot.backends.chain.shutdown import fastest_ramp_s, ramp_duration_s, ramp_poses
 from snakebot.backends.chain.supervision import (
     CatchUp,
@@ -18,6 +17,7 @@ from snakebot.backends.chain.supervision import (
     TrackingMonitor,
     TripCounter,
 )
+from snakebot.interrupts import deferred_interrupts
 
 RAD_PER_TICK = 2 * math.pi / 4096
 

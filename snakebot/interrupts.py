@@ -1,4 +1,9 @@
-"""Hold the stop signals (``snakebot.signals.STOP_SIGNALS``) back while servos may be energised.
+"""Hold the stop signals (``snakebot.signals.STOP_SIGNALS``) back to safe points.
+
+Two users: a servo chain, from the moment it may put torque on until its stop policy is out
+(below), and ``run_gait``, for the whole run on any backend, so that a stop reaches the loop
+between cycles and every observer of a cycle's record (the CSV log, the MCAP file) sees the same
+cycles: a KeyboardInterrupt between two sinks once left the MCAP file a joint state short.
 
 A signal handler that raises (Python's SIGINT handler, the CLI's SIGTERM/SIGHUP one) can land
 between any two bytecodes: inside the SDK's packet code, or at the entry of the ``__exit__`` that
@@ -148,6 +153,25 @@ class DeferredInterrupts:
             raise self._raised.pop(0)
         if self._armed and (signum := _RECORDER.take()) is not None:
             deliver_to(_RECORDER.previous.get(signum), signum)
+
+    def release(self) -> None:
+        """Stop recording, outside a stop: the first interruption still waiting (a noted one
+        first) is raised now, as at a clean exit of the context manager; the others are kept
+        for the holders still armed, or dropped with the last one. Call it only when no
+        exception is leaving (``abandon`` then)."""
+        first = _RECORDER.release(self, take=not self._raised) if self._armed else None
+        self._armed = False
+        if self._raised:
+            raise self._raised.pop(0)
+        if first is not None:
+            deliver_to(_RECORDER.previous.get(first), first)
+
+    def abandon(self) -> None:
+        """Stop recording while an exception leaves: nothing is delivered or raised."""
+        if self._armed:
+            self._armed = False
+            _RECORDER.release(self, take=False)
+        self._raised.clear()
 
     def __enter__(self) -> DeferredInterrupts:
         self.arm()

@@ -9,8 +9,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from snakebot.backends.chain import interrupts
-from snakebot.backends.chain.interrupts import deferred_interrupts
+from snakebot import interrupts
+from snakebot.interrupts import deferred_interrupts
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="signals to self need POSIX")
 
