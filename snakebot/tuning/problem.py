@@ -131,6 +131,7 @@ class GaitProblem:
         *,
         listener: Listener | None = None,
     ) -> None:
+        self._check_plan(plan)
         self.robot = robot
         self.space = space
         self.objective = objective
@@ -159,6 +160,16 @@ class GaitProblem:
             from snakebot.tuning.executor_ray import RayEvaluator
 
             self._remote = RayEvaluator(robot, space, objective, plan)
+        self._start_engine()
+
+    @staticmethod
+    def _check_plan(plan: EvalPlan) -> None:
+        """Raise ConfigError (naming the field) for a plan this problem cannot run; called
+        before anything is built. The CPU engines run every plan."""
+
+    def _start_engine(self) -> None:
+        """Build what scores the candidates besides the twin, the pool and the Ray actors;
+        called last in ``__init__``. The CPU engines need nothing more."""
 
     def close(self) -> None:
         """Release the worker processes or Ray actors, if any."""
