@@ -119,7 +119,23 @@ class SearchProblem(Protocol):
 Listener = Callable[[SearchProblem], None]
 
 
-class GaitProblem:
+class EvaluationHistory:
+    """``history``, every evaluation in order, and what the search reads of it."""
+
+    history: list[Evaluation]
+
+    @property
+    def evaluations(self) -> int:
+        """Candidates run so far."""
+        return len(self.history)
+
+    @property
+    def best(self) -> Evaluation | None:
+        """The lowest-loss evaluation so far (the first one found, on ties)."""
+        return min(self.history, key=lambda e: e.loss, default=None)
+
+
+class GaitProblem(EvaluationHistory):
     """Scores points of ``space`` for ``objective`` by running them on the twin of ``robot``."""
 
     def __init__(
@@ -187,16 +203,6 @@ class GaitProblem:
     def rescored(self) -> int:
         """Candidates scored again because the Ray worker holding them was lost (0 locally)."""
         return 0 if self._remote is None else self._remote.rescored
-
-    @property
-    def evaluations(self) -> int:
-        """Candidates run so far."""
-        return len(self.history)
-
-    @property
-    def best(self) -> Evaluation | None:
-        """The lowest-loss evaluation so far (the first one found, on ties)."""
-        return min(self.history, key=lambda e: e.loss, default=None)
 
     def evaluate(self, points: Sequence[FloatArray] | FloatArray) -> list[Evaluation]:
         """Run every point (D,) on the twin in parallel and score it; returns them in order."""
