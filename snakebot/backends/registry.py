@@ -150,6 +150,24 @@ _DIRECTIONAL = BackendOption(
     metavar="on|off",
 )
 
+
+def _serial_chain_options(sdk: str) -> tuple[BackendOption, ...]:
+    """The options of a servo chain on a serial port driven through the vendor SDK ``sdk``."""
+    return (
+        BackendOption("port", "serial port (default: the robot file's bus.port)", metavar="PORT"),
+        BackendOption("baud", "baud rate (default: the robot file's bus.baud)", metavar="BAUD"),
+        BackendOption(
+            "allow_extra_servos",
+            "servos on the bus that the robot file does not name are expected (left alone); "
+            "without it connecting refuses, naming them",
+            flag=True,
+        ),
+        BackendOption("port_handler_factory", f"a {sdk} PortHandler class (tests, tools)"),
+        BackendOption("clock", "a monotonic clock in s (tests, tools)"),
+        BackendOption("sleep", "a sleep in s (tests, tools)"),
+    )
+
+
 TWIN = BackendSpec(
     name="twin",
     summary="the MuJoCo digital twin of the robot file (a mass-spring body's too)",
@@ -194,19 +212,7 @@ DYNAMIXEL = BackendSpec(
     name="dynamixel",
     summary="the Dynamixel servo chain on a serial port (Protocol 2.0 or 1.0)",
     factory="snakebot.backends.chain.factory:make_dynamixel",
-    options=(
-        BackendOption("port", "serial port (default: the robot file's bus.port)", metavar="PORT"),
-        BackendOption("baud", "baud rate (default: the robot file's bus.baud)", metavar="BAUD"),
-        BackendOption(
-            "allow_extra_servos",
-            "servos on the bus that the robot file does not name are expected (left alone); "
-            "without it connecting refuses, naming them",
-            flag=True,
-        ),
-        BackendOption("port_handler_factory", "a dynamixel_sdk PortHandler class (tests, tools)"),
-        BackendOption("clock", "a monotonic clock in s (tests, tools)"),
-        BackendOption("sleep", "a sleep in s (tests, tools)"),
-    ),
+    options=_serial_chain_options("dynamixel_sdk"),
     hardware=True,
 )
 
@@ -214,19 +220,7 @@ FEETECH = BackendSpec(
     name="feetech",
     summary="the Feetech servo chain on a serial port (STS/SCS, scservo_sdk)",
     factory="snakebot.backends.chain.factory:make_feetech",
-    options=(
-        BackendOption("port", "serial port (default: the robot file's bus.port)", metavar="PORT"),
-        BackendOption("baud", "baud rate (default: the robot file's bus.baud)", metavar="BAUD"),
-        BackendOption(
-            "allow_extra_servos",
-            "servos on the bus that the robot file does not name are expected (left alone); "
-            "without it connecting refuses, naming them",
-            flag=True,
-        ),
-        BackendOption("port_handler_factory", "a scservo_sdk PortHandler class (tests, tools)"),
-        BackendOption("clock", "a monotonic clock in s (tests, tools)"),
-        BackendOption("sleep", "a sleep in s (tests, tools)"),
-    ),
+    options=_serial_chain_options("scservo_sdk"),
     hardware=True,
 )
 

@@ -24,12 +24,11 @@ from snakebot.cli.backend_options import (
 from snakebot.cli.common import (
     add_dry_run,
     add_robot_option,
-    gait_list_arg,
-    positive_float,
     print_json,
     report_dry_run,
     robot_name,
 )
+from snakebot.cli.gait_options import add_gait_options, gait_choices
 from snakebot.cli.telemetry_options import (
     add_telemetry_options,
     check_outputs,
@@ -43,16 +42,13 @@ from snakebot.drive.run import DriveObserver, DriveResult
 from snakebot.drive.setup import (
     DEFAULT_SMOOTHING_S,
     DEFAULT_TRANSITION_S,
-    MAX_GAITS,
     SPATIAL_GAITS,
-    default_gaits,
     live_gait,
 )
 from snakebot.drive.signals import StopSignals
 from snakebot.drive.sources import DriveInputError, InputSource, ScriptRecorder, ScriptSource
 from snakebot.errors import ConfigError, OutputError
-from snakebot.gaits import check_joint_axes, parse_set_options
-from snakebot.session import DEFAULT_BACKEND, DEFAULT_RATE_HZ, Snake, watched
+from snakebot.session import DEFAULT_BACKEND, Snake, watched
 from snakebot.telemetry.sidecar import gait_facts
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction", "realtime")
@@ -81,19 +77,10 @@ def add_parser(subparsers: Any) -> None:
             "does not name are expected (left alone); without it connect refuses, naming them",
         },
     )
-    parser.add_argument(
-        "--gaits",
-        type=gait_list_arg,
-        help="comma-separated gaits for keys 1-9 (default: serpenoid on all-yaw robots; "
+    add_gait_options(
+        parser,
+        gaits_help="comma-separated gaits for keys 1-9 (default: serpenoid on all-yaw robots; "
         f"{','.join(SPATIAL_GAITS)} on yaw/pitch ones)",
-    )
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="GAIT.KEY=VALUE",
-        help="a gait parameter (repeatable), e.g. --set sidewinding.amplitude_even=0.5; "
-        "KEY=VALUE alone when one gait is listed",
     )
     source = parser.add_mutually_exclusive_group()
     source.add_argument("--script", type=Path, help="play '<time_s> <key>' lines from FILE")
@@ -101,27 +88,6 @@ def add_parser(subparsers: Any) -> None:
         "--gamepad", action="store_true", help="drive with a gamepad (extra: snakebot[gamepad])"
     )
     parser.add_argument("--record", type=Path, help="write the keys applied as a script")
-    parser.add_argument(
-        "--rate",
-        type=positive_float,
-        default=DEFAULT_RATE_HZ,
-        help=f"control rate in Hz (default {DEFAULT_RATE_HZ:g})",
-    )
-    parser.add_argument(
-        "--smoothing",
-        type=float,
-        default=DEFAULT_SMOOTHING_S,
-        metavar="S",
-        help=f"seconds for a control to move one unit (default {DEFAULT_SMOOTHING_S:g})",
-    )
-    parser.add_argument(
-        "--transition",
-        type=float,
-        default=DEFAULT_TRANSITION_S,
-        metavar="S",
-        help=f"shortest blend between gaits in s (default {DEFAULT_TRANSITION_S:g}; longer when "
-        "the servos need it)",
-    )
     add_option_flags(
         parser,
         ("friction", "realtime"),
@@ -135,37 +101,6 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     add_dry_run(parser, "no servo moves, no log or script")
     parser.set_defaults(handler=run, writes=True)
-
-
-def gait_choices(robot: RobotConfig, args: argparse.Namespace) -> list[GaitChoice]:
-    """The gait list from --gaits (or the robot's default) with the --set overrides."""
-    names = (
-        [n.strip() for n in args.gaits.split(",") if n.strip()]
-        if args.gaits
-        else list(default_gaits(robot))
-    )
-    if not names or len(names) > MAX_GAITS:
-        raise ConfigError(
-            "--gaits", "", f"expected 1 to {MAX_GAITS} gait names, got {args.gaits!r}"
-        )
-    overrides: dict[str, list[str]] = {name: [] for name in names}
-    for item in args.set:
-        key = item.partition("=")[0]
-        gait, dot, _ = key.partition(".")
-        if dot and gait in overrides:
-            overrides[gait].append(item[len(gait) + 1 :])
-        elif not dot and len(names) == 1:
-            overrides[names[0]].append(item)
-        else:
-            raise ConfigError(
-                "--set",
-                "",
-                f"{item}: expected GAIT.KEY=VALUE with GAIT one of {', '.join(names)} "
-                "(KEY=VALUE alone only when one gait is listed)",
-            )
-    for name in names:
-        check_joint_axes(name, [joint.axis for joint in robot.joints], robot.name)
-    return [GaitChoice(name, parse_set_options(name, overrides[name])) for name in names]
 
 
 def make_source(args: argparse.Namespace) -> InputSource:

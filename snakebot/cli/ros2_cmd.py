@@ -20,19 +20,17 @@ from snakebot.cli.common import (
     add_force_option,
     add_robot_option,
     check_writable,
-    gait_list_arg,
-    positive_float,
     print_json,
     report_dry_run,
     robot_name,
 )
-from snakebot.cli.drive_cmd import gait_choices
+from snakebot.cli.gait_options import add_gait_options, gait_choices
 from snakebot.config import load_robot
-from snakebot.drive.setup import DEFAULT_SMOOTHING_S, DEFAULT_TRANSITION_S, SPATIAL_GAITS
+from snakebot.drive.setup import SPATIAL_GAITS
 from snakebot.drive.signals import StopSignals
 from snakebot.errors import SnakebotError
 from snakebot.ros2.topics import DEFAULT_COMMAND_TIMEOUT_S, NODE_NAME
-from snakebot.session import DEFAULT_RATE_HZ, Snake, watched
+from snakebot.session import Snake, watched
 
 BACKEND_OPTIONS = ("port", "baud", "allow_extra_servos", "friction")
 """The backend option flags ``ros2`` offers (the twin always runs in real time here)."""
@@ -66,24 +64,10 @@ def add_parser(subparsers: Any) -> None:
             "friction": "twin ground friction along and across each module",
         },
     )
-    parser.add_argument(
-        "--gaits",
-        type=gait_list_arg,
-        help="comma-separated gaits; the first is the one cmd_vel steers at the start "
+    add_gait_options(
+        parser,
+        gaits_help="comma-separated gaits; the first is the one cmd_vel steers at the start "
         f"(default: serpenoid on all-yaw robots, {SPATIAL_GAITS[0]} on yaw/pitch ones)",
-    )
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="GAIT.KEY=VALUE",
-        help="a gait parameter (repeatable), as snakebot drive takes it",
-    )
-    parser.add_argument(
-        "--rate",
-        type=positive_float,
-        default=DEFAULT_RATE_HZ,
-        help=f"control rate in Hz (default {DEFAULT_RATE_HZ:g})",
     )
     parser.add_argument(
         "--command-timeout",
@@ -99,20 +83,6 @@ def add_parser(subparsers: Any) -> None:
         default="stop",
         help="stop: rest pose, then the stop policy, and the node ends (exit 1); halt: speed "
         "and turn to 0, joint targets held, the node serves on (default stop)",
-    )
-    parser.add_argument(
-        "--smoothing",
-        type=float,
-        default=DEFAULT_SMOOTHING_S,
-        metavar="S",
-        help=f"seconds for speed or turn to move one unit (default {DEFAULT_SMOOTHING_S:g})",
-    )
-    parser.add_argument(
-        "--transition",
-        type=float,
-        default=DEFAULT_TRANSITION_S,
-        metavar="S",
-        help=f"shortest blend between gaits in s (default {DEFAULT_TRANSITION_S:g})",
     )
     parser.add_argument("--node-name", default=NODE_NAME, help=f"default {NODE_NAME}")
     parser.add_argument(

@@ -33,7 +33,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -206,7 +206,7 @@ class LoopbackCluster:
         every = [*self.nodes, *self.killed]
         _kill_all(self._pids(every))
         for node in reversed(every):
-            _kill_group(node.pgid)
+            _sigkill(os.killpg, node.pgid)
         if self.root is not None:
             _kill_matching(str(self.root))
             for node in every:
@@ -293,14 +293,17 @@ def _bindable(port: int) -> bool:
     return True
 
 
-def _kill_group(pgid: int) -> None:
+def _sigkill(send: Callable[[int, int], None], target: int) -> None:
+    """SIGKILL ``target`` with ``send`` (os.kill a process, os.killpg a group), quietly when it
+    is gone already or not ours."""
     with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.killpg(pgid, signal.SIGKILL)
+        send(target, signal.SIGKILL)
 
 
 def _kill_matching(text: str) -> None:
     """SIGKILL processes whose command line names ``text`` (this cluster's own folder), for
     any that left the node's process group."""
+    matching = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit() or int(entry.name) == os.getpid():
             continue
@@ -309,14 +312,13 @@ def _kill_matching(text: str) -> None:
         except OSError:
             continue
         if text.encode() in command:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.kill(int(entry.name), signal.SIGKILL)
+            matching.append(int(entry.name))
+    _kill_all(matching)
 
 
 def _kill_all(pids: list[int]) -> None:
     for pid in pids:
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.kill(pid, signal.SIGKILL)
+        _sigkill(os.kill, pid)
 
 
 def _processes() -> dict[int, tuple[int, int]]:

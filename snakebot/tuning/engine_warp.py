@@ -22,7 +22,6 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from snakebot.config.schema import RobotConfig
 from snakebot.control.cycle import CycleSchedule
 from snakebot.control.metrics import head_yaw_rad
 from snakebot.errors import ConfigError, MissingDependencyError
@@ -37,9 +36,7 @@ from snakebot.tuning.feasibility import (
     Envelope,
     Violations,
 )
-from snakebot.tuning.objectives import Objective
-from snakebot.tuning.problem import EvalPlan, GaitProblem, Listener
-from snakebot.tuning.space import SearchSpace
+from snakebot.tuning.problem import EvalPlan, GaitProblem
 from snakebot.tuning.trace import FloatArray
 from snakebot.tuning.warp_scores import outcomes
 
@@ -373,15 +370,9 @@ class WarpGaitProblem(GaitProblem):
     """A GaitProblem whose candidates run as the worlds of one MuJoCo Warp model on
     ``plan.device`` (EvalPlan.engine "warp"); everything else is GaitProblem's."""
 
-    def __init__(
-        self,
-        robot: RobotConfig,
-        space: SearchSpace,
-        objective: Objective,
-        plan: EvalPlan,
-        *,
-        listener: Listener | None = None,
-    ) -> None:
+    @staticmethod
+    def _check_plan(plan: EvalPlan) -> None:
+        """ConfigError for a scale-friction model or a Ray executor, before anything is built."""
         if plan.friction_model is not None:
             raise ConfigError(
                 "friction_model",
@@ -394,8 +385,12 @@ class WarpGaitProblem(GaitProblem):
                 plan.executor,
                 "the warp engine batches a generation on this machine's device; use local",
             )
-        super().__init__(robot, space, objective, plan, listener=listener)
-        self._warp = WarpBatch(self._twin, self.envelope, device=plan.device, workers=plan.workers)
+
+    def _start_engine(self) -> None:
+        """The batched Warp model on ``plan.device``."""
+        self._warp = WarpBatch(
+            self._twin, self.envelope, device=self.plan.device, workers=self.plan.workers
+        )
 
     def outcomes(
         self, params: Sequence[Mapping[str, ParamValue]]

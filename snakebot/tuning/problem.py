@@ -119,7 +119,23 @@ class SearchProblem(Protocol):
 Listener = Callable[[SearchProblem], None]
 
 
-class GaitProblem:
+class EvaluationHistory:
+    """``history``, every evaluation in order, and what the search reads of it."""
+
+    history: list[Evaluation]
+
+    @property
+    def evaluations(self) -> int:
+        """Candidates run so far."""
+        return len(self.history)
+
+    @property
+    def best(self) -> Evaluation | None:
+        """The lowest-loss evaluation so far (the first one found, on ties)."""
+        return min(self.history, key=lambda e: e.loss, default=None)
+
+
+class GaitProblem(EvaluationHistory):
     """Scores points of ``space`` for ``objective`` by running them on the twin of ``robot``."""
 
     def __init__(
@@ -131,6 +147,7 @@ class GaitProblem:
         *,
         listener: Listener | None = None,
     ) -> None:
+        self._check_plan(plan)
         self.robot = robot
         self.space = space
         self.objective = objective
@@ -159,6 +176,16 @@ class GaitProblem:
             from snakebot.tuning.executor_ray import RayEvaluator
 
             self._remote = RayEvaluator(robot, space, objective, plan)
+        self._start_engine()
+
+    @staticmethod
+    def _check_plan(plan: EvalPlan) -> None:
+        """Raise ConfigError (naming the field) for a plan this problem cannot run; called
+        before anything is built. The CPU engines run every plan."""
+
+    def _start_engine(self) -> None:
+        """Build what scores the candidates besides the twin, the pool and the Ray actors;
+        called last in ``__init__``. The CPU engines need nothing more."""
 
     def close(self) -> None:
         """Release the worker processes or Ray actors, if any."""
@@ -176,16 +203,6 @@ class GaitProblem:
     def rescored(self) -> int:
         """Candidates scored again because the Ray worker holding them was lost (0 locally)."""
         return 0 if self._remote is None else self._remote.rescored
-
-    @property
-    def evaluations(self) -> int:
-        """Candidates run so far."""
-        return len(self.history)
-
-    @property
-    def best(self) -> Evaluation | None:
-        """The lowest-loss evaluation so far (the first one found, on ties)."""
-        return min(self.history, key=lambda e: e.loss, default=None)
 
     def evaluate(self, points: Sequence[FloatArray] | FloatArray) -> list[Evaluation]:
         """Run every point (D,) on the twin in parallel and score it; returns them in order."""

@@ -27,7 +27,7 @@ from snakebot.gaits import make_gait
 from snakebot.gaits.spec import ParamValue
 from snakebot.tuning.feasibility import Violations
 from snakebot.tuning.objectives import Objective
-from snakebot.tuning.problem import EvalPlan, Evaluation, Listener
+from snakebot.tuning.problem import EvalPlan, Evaluation, EvaluationHistory, Listener
 from snakebot.tuning.space import SearchSpace
 from snakebot.tuning.trace import FloatArray
 
@@ -97,7 +97,7 @@ def run_soft_job(job: SoftJob) -> SoftOutcome:
     return SoftOutcome(summary, violations)
 
 
-class SoftGaitProblem:
+class SoftGaitProblem(EvaluationHistory):
     """Scores points of ``space`` for ``objective`` by running them on the soft body ``body``.
 
     The search methods use it as they use ``GaitProblem`` (snakebot.tuning.problem.SearchProblem).
@@ -124,16 +124,6 @@ class SoftGaitProblem:
     def close(self) -> None:
         """Stop the worker processes."""
         self._executor.shutdown(cancel_futures=True)
-
-    @property
-    def evaluations(self) -> int:
-        """Candidates run so far."""
-        return len(self.history)
-
-    @property
-    def best(self) -> Evaluation | None:
-        """The lowest-loss evaluation so far (the first one found, on ties)."""
-        return min(self.history, key=lambda e: e.loss, default=None)
 
     def run(self, params: Sequence[Mapping[str, ParamValue]]) -> list[SoftOutcome]:
         """Run full gait parameter sets across the workers; results in order."""

@@ -4,25 +4,20 @@ The numpy rule (friction.py) costs about as much as the mj_step it follows on a 
 because every step pays a dozen numpy calls. Here the loop ``mj_step; rule`` runs in a small C
 function called once per control period through ctypes, with the same arithmetic in the same
 order as DirectionalFriction.apply, so both give the same velocities bit for bit (the tests hold
-them to it). It is compiled and cached like the scale friction (twin/friction/scale_c.py); with
-no compiler the backend warns and steps with the numpy rule.
+them to it). It is compiled and cached as the scale friction is (native_cache.py); with no
+compiler the backend warns and steps with the numpy rule.
 """
 
 from __future__ import annotations
 
 import ctypes
-import hashlib
 
 import mujoco
 import numpy as np
 
+from snakebot.backends import native_cache
+from snakebot.backends.native_cache import CompileError
 from snakebot.backends.softbody.friction import DirectionalFriction
-from snakebot.backends.twin.friction.scale_c import (
-    CompileError,
-    cache_dir,
-    compile_object,
-    libmujoco,
-)
 
 __all__ = ["C_SOURCE", "CompileError", "CompiledStepper", "load"]
 
@@ -158,14 +153,7 @@ def load() -> ctypes.CDLL:
     """The compiled stepping library, compiling it on first use; CompileError if impossible."""
     global _LIBRARY
     if _LIBRARY is None:
-        key = hashlib.sha256(f"{C_SOURCE}{mujoco.__version__}{libmujoco()}".encode())
-        path = cache_dir() / f"soft_friction_{key.hexdigest()[:16]}.so"
-        if not path.exists():
-            compile_object(path, C_SOURCE)
-        try:
-            library = ctypes.CDLL(str(path))
-        except OSError as exc:
-            raise CompileError(f"cannot load {path}: {exc}") from exc
+        library = native_cache.load_library("soft_friction", C_SOURCE)
         library.snakebot_soft_advance.restype = ctypes.c_long
         library.snakebot_soft_advance.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         library.snakebot_soft_advance.argtypes += [ctypes.c_int] * 3 + [ctypes.c_void_p] * 9

@@ -5,24 +5,19 @@ per period: 10-17 % of a snake8 cycle. Here the loop ``mj_step; add max(τ·ω, 
 C function called once per period through ctypes, with ``readouts.step_work_j``'s arithmetic in
 its order (no fused multiply-add), so the twin, the numpy fallback and the batched engine agree
 bit for bit (tests/integration/tuning/test_tuning_engine.py holds them to it). Compiled and
-cached like the scale friction (friction/scale_c.py); without a compiler the twin steps in
-Python with a warning.
+cached as the scale friction is (native_cache.py); without a compiler the twin steps in Python
+with a warning.
 """
 
 from __future__ import annotations
 
 import ctypes
-import hashlib
 
 import mujoco
 import numpy as np
 
-from snakebot.backends.twin.friction.scale_c import (
-    CompileError,
-    cache_dir,
-    compile_object,
-    libmujoco,
-)
+from snakebot.backends import native_cache
+from snakebot.backends.native_cache import CompileError
 
 __all__ = ["C_SOURCE", "CompileError", "WorkStepper", "load"]
 
@@ -58,14 +53,7 @@ def load() -> ctypes.CDLL:
     """The compiled stepping library, compiling it on first use; CompileError if impossible."""
     global _LIBRARY
     if _LIBRARY is None:
-        key = hashlib.sha256(f"{C_SOURCE}{mujoco.__version__}{libmujoco()}".encode())
-        path = cache_dir() / f"twin_work_{key.hexdigest()[:16]}.so"
-        if not path.exists():
-            compile_object(path, C_SOURCE)
-        try:
-            library = ctypes.CDLL(str(path))
-        except OSError as exc:
-            raise CompileError(f"cannot load {path}: {exc}") from exc
+        library = native_cache.load_library("twin_work", C_SOURCE)
         library.snakebot_twin_advance.restype = None
         library.snakebot_twin_advance.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         library.snakebot_twin_advance.argtypes += [ctypes.c_int] * 2 + [ctypes.c_void_p] * 2

@@ -8,23 +8,20 @@ recipe in learning-softbody-terrain.md §3.2, inside ``mj_step`` itself. Steppin
 time, ``mujoco.rollout`` and ``mujoco.batch`` threads all get the friction without Python.
 
 The source is kept here as a string, so the wheel needs no package data; the shared object is
-cached under the user cache folder, keyed by a hash of the source and MuJoCo's version.
+cached under the user cache folder, keyed by a hash of the source and MuJoCo's version
+(native_cache.py).
 """
 
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
-import shutil
-import subprocess
-import sys
-import tempfile
 from pathlib import Path
 
-import mujoco
-
+from snakebot.backends import native_cache
+from snakebot.backends.native_cache import CompileError
 from snakebot.backends.twin.friction.layout import NUMERIC_NAME, SENSOR_NAME, Slot
+
+__all__ = ["C_SOURCE", "CompileError", "load", "object_path"]
 
 _TEMPLATE = r"""
 #include <math.h>
@@ -151,73 +148,9 @@ C_SOURCE = _TEMPLATE.replace("%(numeric)s", NUMERIC_NAME).replace("%(sensor)s", 
 assert [slot.value for slot in Slot] == list(range(len(Slot)))
 
 
-class CompileError(RuntimeError):
-    """No C compiler, or it refused the source; the numpy model takes over."""
-
-
-def cache_dir() -> Path:
-    """Where the compiled object is kept: $SNAKEBOT_CACHE, else the platform's user cache."""
-    override = os.environ.get("SNAKEBOT_CACHE")
-    if override:
-        return Path(override)
-    if sys.platform == "darwin":
-        return Path.home() / "Library" / "Caches" / "snakebot"
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "snakebot"
-
-
-def _mujoco_dir() -> Path:
-    return Path(mujoco.__file__).resolve().parent
-
-
-def libmujoco() -> Path:
-    """The libmujoco shared library the Python bindings load (the callback links the same)."""
-    return _libmujoco()
-
-
-def _libmujoco() -> Path:
-    found = sorted(_mujoco_dir().glob("libmujoco.so*")) + sorted(
-        _mujoco_dir().glob("libmujoco*.dylib")
-    )
-    if not found:
-        raise CompileError(f"no libmujoco shared library next to {_mujoco_dir()}")
-    return found[0]
-
-
 def object_path() -> Path:
     """The cached shared object for this source and this MuJoCo."""
-    key = hashlib.sha256(f"{C_SOURCE}{mujoco.__version__}{_libmujoco()}".encode()).hexdigest()
-    return cache_dir() / f"scale_friction_{key[:16]}.so"
-
-
-def compile_object(target: Path, source_text: str = C_SOURCE) -> Path:
-    """Compile ``source_text`` (this module's source unless given) into ``target`` with the
-    first of $CC, cc, gcc, clang on PATH.
-
-    CompileError if there is no compiler or it fails (its output in the message).
-    """
-    compiler = next(
-        (c for c in (os.environ.get("CC"), "cc", "gcc", "clang") if c and shutil.which(c)), None
-    )
-    if compiler is None:
-        raise CompileError("no C compiler on PATH (cc, gcc or clang)")
-    lib = _libmujoco()
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory() as scratch:
-        source = Path(scratch) / "scale_friction.c"
-        source.write_text(source_text)
-        built = Path(scratch) / target.name
-        command = [
-            compiler, "-O2", "-shared", "-fPIC", "-std=c99",
-            f"-I{_mujoco_dir() / 'include'}", str(source), "-o", str(built),
-            str(lib), f"-Wl,-rpath,{lib.parent}", "-lm",
-        ]  # fmt: skip
-        done = subprocess.run(command, capture_output=True, text=True, check=False)
-        if done.returncode != 0:
-            raise CompileError(f"{compiler} failed: {done.stderr.strip()[:2000]}")
-        # Atomic: two processes compiling at once each rename a whole file into place.
-        os.replace(built, target)
-    return target
+    return native_cache.object_path("scale_friction", C_SOURCE)
 
 
 _LIBRARY: ctypes.CDLL | None = None
@@ -227,13 +160,7 @@ def load() -> ctypes.CDLL:
     """The compiled callback library, compiling it on first use; CompileError if impossible."""
     global _LIBRARY
     if _LIBRARY is None:
-        path = object_path()
-        if not path.exists():
-            compile_object(path)
-        try:
-            library = ctypes.CDLL(str(path))
-        except OSError as exc:
-            raise CompileError(f"cannot load {path}: {exc}") from exc
+        library = native_cache.load_library("scale_friction", C_SOURCE)
         for name in ("snakebot_install", "snakebot_uninstall"):
             getattr(library, name).restype = None
         library.snakebot_installed.restype = ctypes.c_int
