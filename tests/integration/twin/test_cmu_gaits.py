@@ -8,18 +8,17 @@ sidewinding 2 deg.
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
 
 from snakebot.backends.twin import TwinBackend
 from snakebot.backends.twin.model_builder import link_name
+from snakebot.backends.twin.pole_wrap import wrap_on_pole
 from snakebot.config import load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
 from snakebot.control.safety import SafetyLayer
-from snakebot.estimation.kinematics import ChainGeometry
-from snakebot.gaits import Gait, make_gait
+from snakebot.gaits import make_gait
 from snakebot.types import JointCommand
 from tests.integration.twin.terrain_runs import play
 
@@ -121,64 +120,6 @@ def test_the_rolling_helix_of_the_poles_radius_lifts_the_body_beside_the_pole() 
     assert min(heights[2:]) > 1.7 * lying
 
 
-def _circle_across(centres: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """The least-squares circle of ``centres`` (M, 3) projected across ``axis``: its centre
-    (3,), radius (m) and the spread (m, RMS) of the modules' distances from the axis."""
-    u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    v = np.cross(axis, u)
-    x, y = centres @ u, centres @ v
-    (d, e, _), *_ = np.linalg.lstsq(np.column_stack([x, y, np.ones_like(x)]), -(x * x + y * y))
-    cx, cy = -d / 2, -e / 2
-    radial = np.hypot(x - cx, y - cy)
-    return cx * u + cy * v, float(radial.mean()), float(radial.std())
-
-
-def helix_axis(centres: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """(axis (3,) towards the head's end, a point on it (3,), radius m) of the helix through
-    ``centres`` (M, 3): the
-    axis the modules' second differences (their turns) are most nearly normal to, then tilted
-    to make the modules' distances from it as equal as it can (a pattern search)."""
-    _, _, vt = np.linalg.svd(np.diff(centres, 2, axis=0))
-    axis = vt[2]
-    spread = _circle_across(centres, axis)[2]
-    step = 0.2
-    while step > 1e-4:
-        u = np.linalg.svd(axis[None, :])[2][1:]  # two directions across the axis
-        trials = [axis + sign * step * w for w in u for sign in (1.0, -1.0)]
-        best = min(trials, key=lambda a: _circle_across(centres, a / np.linalg.norm(a))[2])
-        best /= np.linalg.norm(best)
-        best_spread = _circle_across(centres, best)[2]
-        if best_spread < spread:
-            axis, spread = best, best_spread
-        else:
-            step /= 2
-    point, radius, _ = _circle_across(centres, axis)
-    if np.dot(centres[0] - centres[-1], axis) < 0:
-        axis = -axis  # pointing from the tail's end of the coil to the head's
-    return axis, point, radius
-
-
-def wrap_on_pole(twin: TwinBackend, gait: Gait) -> None:
-    """Start the snake coiled around the pole in the gait's t = 0 shape, head end up, its lowest
-    module just off the floor: what CMU's robots get by being wrapped on the pole by hand."""
-    pose = gait.targets(0.0)
-    twin.reset(pose)
-    centres = ChainGeometry.of_robot(twin.robot).module_centres(pose)  # in the head's frame
-    axis, point, _ = helix_axis(centres)
-    x = np.cross([0.0, 1.0, 0.0], axis)
-    x /= np.linalg.norm(x)
-    turn = np.stack([x, np.cross(axis, x), axis])  # head frame -> world, the axis upright
-    world = (centres - point) @ turn.T
-    pole = np.asarray(twin.model.geom("pole").pos)
-    lift = twin.robot.link.radius_m + 0.005 - world[:, 2].min()
-    twin.data.qpos[:3] = np.array([pole[0], pole[1], lift]) - point @ turn.T
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, turn.flatten())
-    twin.data.qpos[3:7] = quat
-    mujoco.mj_forward(twin.model, twin.data)
-
-
 def climb_m(omega: float, duration_s: float = 6.0) -> list[float]:
     """Centre-of-mass heights (m) every 0.5 s of the rolling helix wrapped on the 0.1 m pole."""
     robot = load_robot(ROBOT)
@@ -193,7 +134,7 @@ def climb_m(omega: float, duration_s: float = 6.0) -> list[float]:
     )
     heights = []
     with TwinBackend(robot, terrain="pole:diameter_m=0.1,height_m=1.5") as twin:
-        wrap_on_pole(twin, made)
+        wrap_on_pole(twin, made.targets(0.0))
         for cycle in range(round(duration_s * 100)):
             if cycle % 50 == 0:
                 heights.append(float(twin.body_state().com_m[2]))
