@@ -35,6 +35,7 @@ __all__ = [
     "SensesBody",
     "SensesCurrent",
     "SensesImu",
+    "SensesTorque",
     "Simulated",
     "claimed",
 ]
@@ -97,6 +98,19 @@ class SensesCurrent(Protocol):
 
     def present_current_a(self) -> FloatArray:
         """Current per joint (N,) A as of the last ``read_state``."""
+        ...
+
+
+@runtime_checkable
+class SensesTorque(Protocol):
+    """Measures each joint's output torque with every ``read_state``: its
+    ``JointState.effort_nm`` is a measurement, not an estimate. A servo model with a Present
+    Current register (torque = kt * current, the torque constant from the servo file), or the
+    rigid twin (its servo model's output torque, what that register would read). What
+    gait-based compliance yields to (snakebot.control.compliance)."""
+
+    def measured_torque_nm(self) -> FloatArray:
+        """Output torque per joint (N,) N*m as of the last ``read_state`` (its ``effort_nm``)."""
         ...
 
 
@@ -189,6 +203,7 @@ CAPABILITIES: tuple[type, ...] = (
     ReportsHealth,
     ChecksPhysics,
     SensesCurrent,
+    SensesTorque,
     ReportsTravel,
     Resettable,
     Simulated,

@@ -7,7 +7,7 @@ import contextlib
 import os
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -34,6 +34,9 @@ from snakebot.cli.common import (
 from snakebot.cli.goto_options import odometry_for, steered_gait, steering_summary
 from snakebot.cli.telemetry_options import add_telemetry_options, check_outputs, open_telemetry
 from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, terrain_help
+from snakebot.config import RobotConfig
+from snakebot.control.compliance import CompliantGait, StallMeter, check_torque_sensing
+from snakebot.control.cycle import CycleRecord
 from snakebot.errors import ConfigError, OutputError, UsageError
 from snakebot.estimation import ChassisOdometry
 from snakebot.estimation.goto import STEERABLE_GAITS, GoToPoint
@@ -109,6 +112,13 @@ def add_parser(subparsers: Any) -> None:
         action="store_true",
         help="with a goal --policy: its pose from the odometry of the measured joints and the "
         "head IMU (docs/estimation.md), so it runs on the servos with no motion capture",
+    )
+    parser.add_argument(
+        "--comply",
+        action="store_true",
+        help="gait-based compliance: the gait's amplitude and offset give way, window by "
+        "window along the body, where the servos measure a hard push (docs/compliance.md); "
+        "needs servos that measure current, or the twin",
     )
     add_backend_argument(parser)
     parser.add_argument(
@@ -209,6 +219,17 @@ def run(args: argparse.Namespace) -> int:
         odometry = odometry_for(snake.robot) if args.odometry else None
         gait_name, gait = policy_gait(snake.robot, snake.backend, args, pose=odometry)
         observers.extend([] if odometry is None else [odometry])
+    compliance: tuple[CompliantGait, StallMeter] | None = None
+    if args.comply:
+        robot = snake.robot
+        check_torque_sensing(
+            snake.backend, servo=robot.servo.name if isinstance(robot, RobotConfig) else ""
+        )
+        if not isinstance(snake.robot, RobotConfig):
+            raise ConfigError("--comply", "", "compliance needs a servo robot, not a soft body")
+        physics = snake.robot.servo.physics
+        gait = CompliantGait(gait, physics.stall_torque_nm)
+        compliance = gait, StallMeter(physics.stall_torque_nm, physics.no_load_speed_rad_s)
     if (args.video or args.viewer) and spec.hardware:
         raise ConfigError(
             "--video" if args.video else "--viewer",
@@ -264,16 +285,21 @@ def run(args: argparse.Namespace) -> int:
         for estimator in observers:  # a pose before the first cycle's gait asks for one
             estimator.start(snake.read_state())
         hooks = _cycle_hooks(stack, snake.backend, args)
+        cycle_observers: list[Callable[[CycleRecord], None]] = (
+            [] if compliance is None else [compliance[0].observe, compliance[1]]
+        )
         summary = snake.run(
             gait,
             duration_s=args.duration,
             rate_hz=args.rate,
             log=log,
             on_cycle=_chain(hooks) if hooks else None,
-            observers=observers,
+            observers=[*observers, *cycle_observers],
             stop=None if steering is None else steering.reached,
         )
     goal = {} if steering is None else steering_summary(steering)
+    if compliance is not None:
+        goal["compliance"] = {**compliance[0].summary(), **compliance[1].summary()}
     summary = replace(
         summary,
         gait=gait_name,

@@ -38,6 +38,7 @@ from snakebot.backends.capabilities import (
     SensesBody,
     SensesCurrent,
     SensesImu,
+    SensesTorque,
     Simulated,
 )
 from snakebot.config import RobotConfig, load_robot
@@ -278,6 +279,27 @@ class BackendContract:
             settled = np.abs(backend.present_current_a())
         assert driving.shape == (8,) and np.isfinite(driving).all()
         assert driving.sum() > 2 * settled.sum() and driving.sum() > 0.01, (driving, settled)
+
+    def test_torque_is_the_states_effort_and_follows_the_drive(
+        self, make_backend: Callable[[str], Backend]
+    ) -> None:
+        """SensesTorque: a finite (N,) torque in N*m, the last state's effort; more while the
+        joints drive a step than once they have settled still."""
+        backend = make_backend("snake8")
+        if not isinstance(backend, SensesTorque):
+            pytest.skip(_not_claimed(backend, SensesTorque))
+        with backend:
+            backend.send_command(JointCommand(np.full(8, 0.4)))
+            backend.advance(0.01)
+            state = backend.read_state()
+            driving = backend.measured_torque_nm()
+            self._bend(backend, np.full(8, 0.4), self.settle_s)
+            backend.read_state()
+            settled = backend.measured_torque_nm()
+        assert driving.shape == (8,) and np.isfinite(driving).all()
+        np.testing.assert_array_equal(driving, state.effort_nm)
+        assert np.abs(driving).sum() > 2 * np.abs(settled).sum(), (driving, settled)
+        assert np.abs(driving).sum() > 0.01, driving
 
     def test_travel_figures_are_finite_and_named(
         self, make_backend: Callable[[str], Backend]

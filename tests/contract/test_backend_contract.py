@@ -108,7 +108,10 @@ class TestDynamixelXM430(BackendContract):
 @pytest.mark.parametrize(
     ("case", "abilities"),
     [
-        (TestTwin, ("SensesBody", "SensesImu", "ChecksPhysics", "Resettable", "Simulated")),
+        (
+            TestTwin,
+            ("SensesBody", "SensesImu", "ChecksPhysics", "SensesTorque", "Resettable", "Simulated"),
+        ),
         (
             TestTwinWithCurrent,
             (
@@ -116,13 +119,14 @@ class TestDynamixelXM430(BackendContract):
                 "SensesImu",
                 "ChecksPhysics",
                 "SensesCurrent",
+                "SensesTorque",
                 "Resettable",
                 "Simulated",
             ),
         ),
         (TestSoftBody, ("SensesBody", "ChecksPhysics", "ReportsTravel", "Simulated")),
         (TestDynamixel, ("ReportsHealth", "OnBus")),
-        (TestDynamixelXM430, ("ReportsHealth", "SensesCurrent", "OnBus")),
+        (TestDynamixelXM430, ("ReportsHealth", "SensesCurrent", "SensesTorque", "OnBus")),
     ],
 )
 def test_each_backend_claims_what_it_has(

@@ -168,6 +168,7 @@ class ServoChainBackend(Backend):
         self._decoder = StateDecoder(robot, self.bus.table, self.converter, read_current)
         if self._decoder.measures_current:
             self.present_current_a = self._present_current_a  # SensesCurrent: this model
+            self.measured_torque_nm = self._measured_torque_nm  # SensesTorque: kt * current
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
         self._goal_plan: SyncWritePlan | None = self.bus.sync_write_plan("goal_position", self.ids)
         self.unloaded: set[int] = set()
@@ -457,6 +458,14 @@ class ServoChainBackend(Backend):
         self._health["temperature_c"] = temps * table["present_temperature"].scale
         self.stats.extra["max_temperature_c"] = float(self._health["temperature_c"].max())
         self.stats.extra["min_input_voltage_v"] = float(self._health["input_voltage_v"].min())
+
+    def _measured_torque_nm(self) -> np.ndarray:
+        """Output torque per joint (N,) N*m from the last cycle's Present Current (torque
+        constant = stall torque / stall current, from the servo file); zeros before the first."""
+        state = self.last_state
+        if state is None:
+            return np.zeros(self.joint_count)
+        return state.effort_nm.copy()
 
     def _present_current_a(self) -> np.ndarray:
         """Present Current per joint (N,) A, in the joints' sense, from the last cycle read

@@ -417,6 +417,14 @@ class TwinBackend(Backend):
         self._require_connected()
         return self._sensors.gyro_rad_s(self.data)
 
+    def measured_torque_nm(self) -> np.ndarray:
+        """SensesTorque: each servo's output torque (N,) N*m as of the last ``read_state`` (the
+        servo model's, what a Present Current register would read); zeros before the first."""
+        state = self.last_state
+        if state is None:
+            return np.zeros(self.joint_count)
+        return state.effort_nm.copy()
+
     def _present_current_a(self) -> np.ndarray:
         """Each servo's current (N,) A, signed as its output torque: the torque over the
         torque constant (stall torque / ``stall_current_a``), the electrical model's draw."""
