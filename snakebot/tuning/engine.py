@@ -21,7 +21,7 @@ import numpy as np
 from mujoco import batch as mj_batch
 
 from snakebot.backends.twin import GroundFriction, TwinBackend
-from snakebot.backends.twin.friction.scale import FrictionModel
+from snakebot.backends.twin.friction.scale import FrictionModel, ready_for_batch
 from snakebot.backends.twin.model_builder import hold_ctrl_history, joint_name, link_name
 from snakebot.backends.twin.readouts import (
     WARNING_NUMBER,
@@ -97,6 +97,7 @@ class TwinBatch:
             robot, friction=friction, terrain=terrain, friction_model=friction_model
         )
         self.twin.connect()
+        ready_for_batch()  # a numpy scale-friction callback left in this process stops a batch
         model, data = self.twin.model, self.twin.data
         self.model = model
         self.initial_state = np.empty(mujoco.mj_stateSize(model, _STATE))

@@ -10,6 +10,11 @@ import pytest
 from snakebot.backends.twin import GroundFriction, TwinBackend
 from snakebot.backends.twin.friction import scale_c
 from snakebot.config import load_robot
+from snakebot.errors import ConfigError
+from snakebot.gaits import make_gait
+from snakebot.tuning.commands import GaitCommands
+from snakebot.tuning.engine import TwinBatch
+from snakebot.tuning.trace import summarise
 from tests.integration.twin.terrain_runs import play
 
 FLAT_FIELD = "rough:roughness_m=0"
@@ -127,3 +132,33 @@ def test_without_a_compiler_numpy_takes_over_with_a_warning(
         twin.close()
     assert moved > 0.3  # friction still acts: lateral undulation works
     assert not (tmp_path / "cache").exists() or not any((tmp_path / "cache").iterdir())
+
+
+def test_a_batch_runs_after_a_numpy_twin_in_the_same_process(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A twin on numpy scale friction leaves its Python callback installed process-wide, which
+    ``mujoco.batch`` refuses; a tuning batch made after it swaps in the C callback (the same
+    forces) and runs, here on the plane (a model with no scale friction of its own), and the
+    numpy twin still feels its friction."""
+    robot = load_robot("snake8")
+    monkeypatch.setenv("SNAKEBOT_SCALE_FRICTION", "numpy")
+    numpy_twin = TwinBackend(robot, terrain=FLAT_FIELD)
+    numpy_twin.connect()
+    try:
+        monkeypatch.delenv("SNAKEBOT_SCALE_FRICTION")
+        batch = TwinBatch(robot)
+        gait = make_gait("serpenoid", robot.joint_count, {})
+        (trace,) = batch.run(GaitCommands([gait], robot), 2.0, 100.0)
+        assert float(summarise(trace, robot, gait.period_s)["distance_m"]) > 0.1
+        moved = float(play(numpy_twin, robot, "serpenoid", 2.0).summary["distance_m"])
+        assert moved > 0.1  # friction still acts on the first twin's model
+    finally:
+        numpy_twin.close()
+
+
+def test_a_batch_refuses_numpy_scale_friction_by_name(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("SNAKEBOT_SCALE_FRICTION", "numpy")
+    with pytest.raises(ConfigError, match="SNAKEBOT_SCALE_FRICTION") as caught:
+        TwinBatch(load_robot("snake8"), terrain=FLAT_FIELD)
+    assert "C" in str(caught.value)

@@ -1,5 +1,6 @@
 """`snakebot run --comply`: gait-based compliance per run, its figures in the summary, and a
-clear refusal (a flag these servos cannot serve: exit 2, nothing energised) on servos that cannot measure current."""
+clear refusal on servos that cannot measure current (a flag these servos cannot serve: exit 2,
+nothing energised)."""
 
 from __future__ import annotations
 

@@ -144,6 +144,34 @@ def install(implementation: Implementation | None = None) -> Implementation:
     return "numpy"
 
 
+def ready_for_batch() -> None:
+    """Make the installed sensor callback one ``mujoco.batch`` can run: batches take only C
+    callbacks, and the callback is process-wide, so a numpy one left by an earlier twin (even
+    for a model with no scale friction of its own) would stop every batch. It is swapped for the
+    C callback, which computes the same forces for every model that carries them.
+
+    ConfigError if that cannot be: $SNAKEBOT_SCALE_FRICTION asks for numpy, or C does not
+    compile here.
+    """
+    if mujoco.get_mjcb_sensor() is not numpy_callback:
+        return
+    if os.environ.get(_ENV_IMPLEMENTATION) == "numpy":
+        raise ConfigError(
+            _ENV_IMPLEMENTATION,
+            "numpy",
+            "batched runs (tune, sysid) compute scale friction only in C: unset it or set c",
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # replaced by the error below
+        if install("c") != "c":
+            raise ConfigError(
+                "scale friction",
+                "",
+                "batched runs (tune, sysid) compute it only in C, which did not compile here: "
+                "install a C compiler (cc, gcc or clang) or set $CC",
+            )
+
+
 @contextlib.contextmanager
 def python_callback_paused() -> Iterator[None]:
     """Lift the numpy callback while MuJoCo compiles: compiling runs the new model once, and
