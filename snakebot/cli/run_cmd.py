@@ -223,7 +223,9 @@ def run(args: argparse.Namespace) -> int:
     if args.comply:
         robot = snake.robot
         check_torque_sensing(
-            snake.backend, servo=robot.servo.name if isinstance(robot, RobotConfig) else ""
+            snake.backend,
+            where="--comply",
+            servo=robot.servo.name if isinstance(robot, RobotConfig) else "",
         )
         if not isinstance(snake.robot, RobotConfig):
             raise ConfigError("--comply", "", "compliance needs a servo robot, not a soft body")

@@ -226,7 +226,7 @@ class StallMeter:
         return {"servo_stall_s": self.stall_s, "peak_servo_torque_nm": self.peak_torque_nm}
 
 
-def check_torque_sensing(backend: object, where: str = "--comply", servo: str = "") -> None:
+def check_torque_sensing(backend: object, where: str = "compliance", servo: str = "") -> None:
     """Raise ConfigError (naming ``where``, and the servo model ``servo`` when given) unless
     ``backend`` measures its joints' torque (``SensesTorque``)."""
     if isinstance(backend, SensesTorque):
