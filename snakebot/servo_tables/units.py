@@ -82,6 +82,8 @@ def to_raw(register: Register, unit: Unit | None, value: float, table: ServoTabl
             raise UnitError(f"{register.key} takes a whole raw register value, got {value}")
         return int(value)
     si = value * unit.si_per_unit
+    if not math.isfinite(si / register.scale):  # 1e307 rad: no register holds it
+        raise UnitError(f"{register.key}: {value} {unit.symbol} is far outside the register")
     return _centre(register, table) + register.from_si(si)
 
 

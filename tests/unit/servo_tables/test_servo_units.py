@@ -62,3 +62,10 @@ def test_raw_values_must_be_whole() -> None:
         to_raw(register, unit, 52.5, TABLE)
     assert to_raw(register, unit, 52.0, TABLE) == 52
     assert math.isclose(from_raw(register, unit, 52, TABLE), 52.0)
+
+
+def test_a_value_no_register_can_hold_is_a_unit_error_not_an_overflow() -> None:
+    # Found by the config fuzz: min_position_limit_rad = 1.58e307 raised OverflowError (exit 3).
+    register, unit = parse_key(TABLE, "min_position_limit_rad")
+    with pytest.raises(UnitError, match=r"min_position_limit.*far outside"):
+        to_raw(register, unit, 1.5800037318125823e307, TABLE)
