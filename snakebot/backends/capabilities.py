@@ -28,6 +28,7 @@ __all__ = [
     "CAPABILITIES",
     "BusReport",
     "ChecksPhysics",
+    "LimitsTorque",
     "OnBus",
     "ReportsHealth",
     "ReportsTravel",
@@ -38,6 +39,7 @@ __all__ = [
     "SensesTorque",
     "Simulated",
     "claimed",
+    "torque_caps",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -111,6 +113,23 @@ class SensesTorque(Protocol):
 
     def measured_torque_nm(self) -> FloatArray:
         """Output torque per joint (N,) N*m as of the last ``read_state`` (its ``effort_nm``)."""
+        ...
+
+
+@runtime_checkable
+class LimitsTorque(Protocol):
+    """Caps each servo's output torque while it still follows its position goals: a servo
+    model with current-based position control (Dynamixel Operating Mode 5: Goal Current, the
+    cap over the torque constant from the servo file, bounds the drive current), or the rigid
+    twin (its actuators' force range). A joint held away from its goal pushes with no more than
+    its cap and gives way beyond it, so the snake's shape yields to what holds it."""
+
+    def limit_torque(self, torque_nm: FloatArray) -> None:
+        """Cap each joint's torque at ``torque_nm`` (N,) N*m (> 0; values above the servo's
+        stall torque mean no cap). Before connect it takes effect when the backend connects,
+        before any torque comes on; after connect at once. ValueError for a wrong shape or a
+        value that is not > 0; a chain raises ServoSettingsError (naming the servo IDs) at
+        connect where a servo is not in current-based position mode."""
         ...
 
 
@@ -204,12 +223,22 @@ CAPABILITIES: tuple[type, ...] = (
     ChecksPhysics,
     SensesCurrent,
     SensesTorque,
+    LimitsTorque,
     ReportsTravel,
     Resettable,
     Simulated,
     OnBus,
 )
 """Every optional ability, in the order ``claimed`` lists them."""
+
+
+def torque_caps(torque_nm: npt.ArrayLike, joint_count: int) -> FloatArray:
+    """``LimitsTorque.limit_torque``'s argument checked: a scalar (every joint) or (N,) N*m,
+    each finite and > 0, as a (N,) float array. ValueError naming what is wrong."""
+    caps = np.broadcast_to(np.asarray(torque_nm, dtype=float), (joint_count,)).copy()
+    if not (np.isfinite(caps).all() and (caps > 0).all()):
+        raise ValueError(f"torque limits must be finite and > 0 N*m, got {caps.tolist()}")
+    return caps
 
 
 def claimed(backend: object) -> tuple[str, ...]:

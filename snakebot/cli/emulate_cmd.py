@@ -27,8 +27,9 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any
 
 from snakebot.cli.common import add_robot_option, baud_arg, print_json, robot_name
+from snakebot.cli.terrain_options import add_terrain_options, refuse_friction_model, twin_ground
 from snakebot.config import RobotConfig, load_robot
-from snakebot.errors import ConfigError
+from snakebot.errors import ConfigError, UsageError
 from snakebot.servo import FACTORY_BAUD
 
 if TYPE_CHECKING:
@@ -76,6 +77,7 @@ def add_parser(subparsers: Any) -> None:
         help="back the servos with the MuJoCo twin in real time (goals, torque and Position P/D "
         "gains from their registers); print its summary on exit",
     )
+    add_terrain_options(parser)
     parser.add_argument("--pty", action="store_true", required=True, help="serve on a pty")
     parser.add_argument("--json", action="store_true", help='print {"port": ...} and JSON summary')
     parser.add_argument(
@@ -217,13 +219,17 @@ def _bench(
         raise ConfigError(
             "--fresh", "", "--fresh starts with no robot chain: drop --physics and --scramble"
         )
+    if not args.physics:
+        if args.terrain:
+            raise UsageError("--terrain needs --physics: without it no twin runs under the servos")
+        refuse_friction_model(args, "needs --physics: without it no twin runs under the servos")
     motion = None
     if args.fresh:
         chain = EmulatedChain(baud=FACTORY_BAUD)
     elif args.physics:
         from snakebot.emulation.physics import make_twin_chain
 
-        chain, motion = make_twin_chain(robot, baud)
+        chain, motion = make_twin_chain(robot, baud, **twin_ground(args, robot))
         for serial, servo in enumerate(chain.servos, start=1):
             servo.serial_number = serial
     else:

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import Simulated
+from snakebot.backends.capabilities import SensesTorque, Simulated
 from snakebot.cli.backend_options import (
     add_backend_argument,
     add_option_flags,
@@ -37,6 +37,7 @@ from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, terrain_help
 from snakebot.config import RobotConfig
 from snakebot.control.compliance import CompliantGait, StallMeter, check_torque_sensing
 from snakebot.control.cycle import CycleRecord
+from snakebot.control.torque_limit import limit_servo_torque
 from snakebot.errors import ConfigError, OutputError, UsageError
 from snakebot.estimation import ChassisOdometry
 from snakebot.estimation.goto import STEERABLE_GAITS, GoToPoint
@@ -119,6 +120,14 @@ def add_parser(subparsers: Any) -> None:
         help="gait-based compliance: the gait's amplitude and offset give way, window by "
         "window along the body, where the servos measure a hard push (docs/compliance.md); "
         "needs servos that measure current, or the twin",
+    )
+    parser.add_argument(
+        "--torque-limit",
+        type=float,
+        metavar="NM",
+        help="cap every servo's torque at NM N*m while it follows the gait: current-based "
+        "position control (Dynamixel Operating Mode 5, Goal Current = NM / kt) on servos that "
+        "have it, the twin's actuator force range on the twin (docs/compliance.md)",
     )
     add_backend_argument(parser)
     parser.add_argument(
@@ -219,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
         odometry = odometry_for(snake.robot) if args.odometry else None
         gait_name, gait = policy_gait(snake.robot, snake.backend, args, pose=odometry)
         observers.extend([] if odometry is None else [odometry])
-    compliance: tuple[CompliantGait, StallMeter] | None = None
+    compliance: CompliantGait | None = None
     if args.comply:
         robot = snake.robot
         check_torque_sensing(
@@ -229,9 +238,14 @@ def run(args: argparse.Namespace) -> int:
         )
         if not isinstance(snake.robot, RobotConfig):
             raise ConfigError("--comply", "", "compliance needs a servo robot, not a soft body")
+        gait = compliance = CompliantGait(gait, snake.robot.servo.physics.stall_torque_nm)
+    # Where the servos measure their torque, every run reports how long they stalled.
+    stall: StallMeter | None = None
+    if isinstance(snake.backend, SensesTorque) and isinstance(snake.robot, RobotConfig):
         physics = snake.robot.servo.physics
-        gait = CompliantGait(gait, physics.stall_torque_nm)
-        compliance = gait, StallMeter(physics.stall_torque_nm, physics.no_load_speed_rad_s)
+        stall = StallMeter(physics.stall_torque_nm, physics.no_load_speed_rad_s)
+    if args.torque_limit is not None:
+        limit_servo_torque(snake.backend, snake.robot, args.torque_limit, "--torque-limit")
     if (args.video or args.viewer) and spec.hardware:
         raise ConfigError(
             "--video" if args.video else "--viewer",
@@ -287,9 +301,10 @@ def run(args: argparse.Namespace) -> int:
         for estimator in observers:  # a pose before the first cycle's gait asks for one
             estimator.start(snake.read_state())
         hooks = _cycle_hooks(stack, snake.backend, args)
-        cycle_observers: list[Callable[[CycleRecord], None]] = (
-            [] if compliance is None else [compliance[0].observe, compliance[1]]
-        )
+        cycle_observers: list[Callable[[CycleRecord], None]] = [
+            *([] if compliance is None else [compliance.observe]),
+            *([] if stall is None else [stall]),
+        ]
         summary = snake.run(
             gait,
             duration_s=args.duration,
@@ -301,7 +316,11 @@ def run(args: argparse.Namespace) -> int:
         )
     goal = {} if steering is None else steering_summary(steering)
     if compliance is not None:
-        goal["compliance"] = {**compliance[0].summary(), **compliance[1].summary()}
+        goal["compliance"] = compliance.summary()
+    if stall is not None:
+        goal.update(stall.summary())
+    if args.torque_limit is not None:
+        goal["torque_limit_nm"] = args.torque_limit
     summary = replace(
         summary,
         gait=gait_name,

@@ -103,7 +103,8 @@ class ProfileMotion:
     """Kinematic servo: follows the goal along the velocity/acceleration profile, without load.
 
     Sub-steps of at most `step_s`; the reported effort is a small viscous load so Present Load and
-    Present Current move with speed.
+    Present Current move with speed. In current-based position control (Operating Mode 5) Goal
+    Current caps that load's current, so it caps the speed too.
     """
 
     def __init__(self, *, step_s: float = STEP_S, viscous_effort: float = 0.1) -> None:
@@ -121,10 +122,11 @@ class ProfileMotion:
         if holding and velocity == 0.0 and position == command.goal_position_rad:
             return
         remaining = dt_s
+        stall_a = servo.table.specs.stall_current_a
         while remaining > 1e-12:
             h = min(self.step_s, remaining)
             remaining -= h
-            target = self._target_velocity(command, position, velocity, h)
+            target = self._target_velocity(command, position, velocity, h, stall_a)
             accel = command.max_acceleration_rad_s2
             velocity = target if accel is None else _toward(velocity, target, accel * h)
             position += velocity * h
@@ -137,15 +139,18 @@ class ProfileMotion:
             position, velocity, effort, current, state.input_voltage_v, state.temperature_c
         )
 
-    @staticmethod
     def _target_velocity(
-        command: ServoCommand, position: float, velocity: float, h: float
+        self, command: ServoCommand, position: float, velocity: float, h: float, stall_a: float
     ) -> float:
         if not command.torque_enabled:
             return 0.0
         v_max = command.max_velocity_rad_s
         mode = command.operating_mode
         if mode in OperatingMode.POSITION_MODES:
+            if mode == OperatingMode.CURRENT_BASED_POSITION and self.viscous_effort * stall_a > 0:
+                # Goal Current caps the drive: no faster than that current turns the load.
+                fraction = abs(command.goal_current_a) / stall_a
+                v_max = min(v_max, fraction / self.viscous_effort * command.no_load_speed_rad_s)
             error = command.goal_position_rad - position
             accel = command.max_acceleration_rad_s2
             if accel is not None:

@@ -1,16 +1,18 @@
 """Hardware in the loop without hardware: emulated servos whose shafts are the twin's joints.
 
-Goal Position, Torque Enable and the Position P/D Gain registers, read from each virtual servo's
-control table, drive the MuJoCo twin of the same robot (its joint stiffness and damping follow
-the registers through the servo's `GainMapping`, as on the real chain; the twin has no I term,
-so Position I Gain is ignored);
-Present Position/Velocity/Load come back from the twin. Time is the chain's: a pty server advances
-the chain by wall-clock time, so the twin runs in real time.
+Goal Position, Torque Enable, the Position P/D Gain registers and, in current-based position control
+(Operating Mode 5), Goal Current (the twin's actuator force capped at kt * |Goal Current|), read
+from each virtual servo's control table, drive the MuJoCo twin of the same robot (its joint
+stiffness and damping follow the registers through the servo's `GainMapping`, as on the real chain;
+the twin has no I term, so Position I Gain is ignored); Present Position/Velocity/Load come back
+from the twin. Time is the chain's: a pty server advances the chain by wall-clock time, so the twin
+runs in real time.
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,8 +22,12 @@ from snakebot.config.schema import RobotConfig
 from snakebot.control.metrics import RunMetrics, cycle_work_j
 from snakebot.emulation.alarms import Fault
 from snakebot.emulation.chain import EmulatedChain, make_chain_for_ids
-from snakebot.emulation.motion import MotorState, ServoCommand
+from snakebot.emulation.motion import MotorState, OperatingMode, ServoCommand
 from snakebot.emulation.virtual_servo import VirtualServo
+
+if TYPE_CHECKING:
+    from snakebot.backends.twin.friction.scale import FrictionModel
+    from snakebot.backends.twin.terrain import Terrain
 
 
 class TwinMotion:
@@ -48,6 +54,10 @@ class TwinMotion:
         self._servos: dict[int, VirtualServo] = {}
         self.steps = 0
         self._latched: set[int] = set()  # joints whose servo latched the twin's overload
+        # Current-based position (Operating Mode 5): Goal Current caps the torque, kt * |I|.
+        physics = robot.servo.physics
+        self._stall_nm = physics.stall_torque_nm
+        self._cap_nm = np.full(robot.joint_count, physics.stall_torque_nm)
 
     def attach(self, chain: EmulatedChain) -> None:
         """Remember the chain's servos (by joint), make the twin follow their registers from the
@@ -107,7 +117,7 @@ class TwinMotion:
 
     def _read_tables(self) -> None:
         """Apply the goals, torque flags and gains of every servo whose table changed."""
-        goals_changed = torque_changed = False
+        goals_changed = torque_changed = caps_changed = False
         new_gains: dict[tuple[int, ...], list[int]] = {}
         gain_keys = self.robot.servo.gain_keys  # P/I/D or Compliance Slope, as the model has
         for index, servo in self._servos.items():
@@ -123,6 +133,13 @@ class TwinMotion:
             if command.torque_enabled != self._torque[index]:
                 self._torque[index] = command.torque_enabled
                 torque_changed = True
+            cap = self._stall_nm
+            if command.operating_mode == OperatingMode.CURRENT_BASED_POSITION:
+                stall_a = servo.table.specs.stall_current_a
+                cap = min(cap, abs(command.goal_current_a) / stall_a * self._stall_nm)
+            if cap != self._cap_nm[index]:
+                self._cap_nm[index] = cap
+                caps_changed = True
             gains = tuple(servo.memory.get(key) for key in gain_keys)
             if gains != self._gains.get(index):
                 self._gains[index] = gains
@@ -130,6 +147,9 @@ class TwinMotion:
         for values, joints in new_gains.items():
             gains_si = self.robot.servo.gains_from(dict(zip(gain_keys, values, strict=True)))
             self.twin.set_joint_gains(joints, gains_si)
+        if caps_changed:
+            # A Goal Current of 0 still holds a little (one register unit's worth, not none).
+            self.twin.limit_torque(np.maximum(self._cap_nm, 1e-3 * self._stall_nm))
         if torque_changed:
             self.twin.set_joint_torque(self._torque)
         if goals_changed:
@@ -166,11 +186,25 @@ class TwinMotion:
         return out
 
 
-def make_twin_chain(robot: RobotConfig, baud: int) -> tuple[EmulatedChain, TwinMotion]:
-    """The robot's servo chain at ``baud``, every servo backed by one connected twin."""
+def make_twin_chain(
+    robot: RobotConfig,
+    baud: int,
+    *,
+    terrain: Terrain | str | None = None,
+    friction_model: FrictionModel | None = None,
+) -> tuple[EmulatedChain, TwinMotion]:
+    """The robot's servo chain at ``baud``, every servo backed by one connected twin on
+    ``terrain`` (a Terrain or its spec, e.g. ``"pegs:density=100,seed=1"``; None: the flat
+    floor) with ``friction_model`` (None: the robot file's). ConfigError for a bad terrain."""
     # The servo latches an overload instead; a bus keeps answering whatever the physics does,
     # so physics health is reported in the summary, never raised.
-    twin = TwinBackend(robot, raise_on_overload=False, health=HealthLimits(hard=False))
+    twin = TwinBackend(
+        robot,
+        raise_on_overload=False,
+        health=HealthLimits(hard=False),
+        terrain=terrain,
+        friction_model=friction_model,
+    )
     twin.connect()
     motion = TwinMotion(robot, twin)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud, motion=motion)

@@ -29,7 +29,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakebot.backends.chain.checks import check_settings, shutdown_name
+from snakebot.backends.chain.checks import check_settings, current_position_mode, shutdown_name
 from snakebot.backends.chain.ticks import TickConverter
 from snakebot.config import load_robot
 from snakebot.config.schema import JointConfig, RobotConfig
@@ -200,6 +200,7 @@ def refusals(
         TickConverter.for_robot(robot),
         watchdog=has_watchdog(chain),
         position_mode=chain.table.specs.position_mode,
+        current_position_mode=current_position_mode(chain.table),
         shutdown_register=shutdown_name(chain.table),
     )
     return [f"{e}: widen the Position Limits in the settings" for e in errors]

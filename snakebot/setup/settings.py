@@ -16,6 +16,7 @@ from snakebot.backends.chain.checks import (
     LIMIT_KEYS,
     SETTINGS_KEYS,
     check_settings,
+    current_position_mode,
     shutdown_name,
 )
 from snakebot.backends.chain.ticks import TickConverter
@@ -132,6 +133,7 @@ def _checked(
         TickConverter.for_robot(chain.robot),
         watchdog=watchdog,
         position_mode=chain.table.specs.position_mode,
+        current_position_mode=current_position_mode(chain.table),
         shutdown_register=shutdown_name(chain.table),
     )
     if errors:

@@ -31,6 +31,7 @@ import pytest
 from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import (
     ChecksPhysics,
+    LimitsTorque,
     OnBus,
     ReportsHealth,
     ReportsTravel,
@@ -300,6 +301,40 @@ class BackendContract:
         np.testing.assert_array_equal(driving, state.effort_nm)
         assert np.abs(driving).sum() > 2 * np.abs(settled).sum(), (driving, settled)
         assert np.abs(driving).sum() > 0.01, driving
+
+    def test_torque_limit_caps_the_push_and_the_joints_still_follow(
+        self, make_backend: Callable[[str], Backend]
+    ) -> None:
+        """LimitsTorque: capped (before connect) at a quarter of what the servos push to drive
+        a step, they push with no more than the cap and still move towards the goal; a bad
+        cap is a ValueError. Needs SensesTorque to see the push."""
+        free, capped = make_backend("snake8"), make_backend("snake8")
+        if not isinstance(capped, LimitsTorque):
+            pytest.skip(_not_claimed(capped, LimitsTorque))
+        if not isinstance(capped, SensesTorque):
+            pytest.skip(f"{type(capped).__name__} claims LimitsTorque but cannot show the push")
+        for bad in (0.0, -1.0, float("nan"), np.ones(3)):
+            with pytest.raises(ValueError):
+                capped.limit_torque(bad)
+        step = np.full(8, 0.4)
+
+        def drive(backend: Backend) -> tuple[float, np.ndarray]:
+            peak = 0.0
+            backend.send_command(JointCommand(step))
+            for _ in range(round(self.settle_s / 0.01)):
+                backend.advance(0.01)
+                peak = max(peak, float(np.abs(backend.read_state().effort_nm).max()))
+            return peak, backend.read_state().position_rad
+
+        with free:
+            full_push, _ = drive(free)
+        cap = full_push / 4
+        capped.limit_torque(np.full(8, cap))
+        with capped:
+            push, position = drive(capped)
+        assert full_push > 0.01, full_push
+        assert push <= 1.15 * cap, (push, cap, full_push)
+        assert float(np.mean(position)) > 0.1, position  # it still follows the goal
 
     def test_travel_figures_are_finite_and_named(
         self, make_backend: Callable[[str], Backend]

@@ -81,8 +81,9 @@ class TestTwinWithCurrent(BackendContract):
 
 
 class TestDynamixelXM430(BackendContract):
-    """An XM430 chain over the emulator: the model reports Present Current, so the backend
-    senses current; on the emulator's virtual clock."""
+    """An XM430 chain over the emulator, set up for current-based position control (Operating
+    Mode 5): the model reports Present Current, so the backend senses current and torque, and
+    can cap its torque; on the emulator's virtual clock."""
 
     @contextlib.contextmanager
     def backends(self) -> Iterator[RobotFactory]:
@@ -96,6 +97,8 @@ class TestDynamixelXM430(BackendContract):
                 robot = load_robot(path)
                 assert robot.servo.name == "XM430-W350"
                 chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud=robot.bus.baud)
+                for servo in chain.servos:
+                    servo.poke("operating_mode", 5)  # as `snakebot config apply` leaves them
                 url = stack.enter_context(registered(chain))
                 return make_backend(
                     robot, "dynamixel", port=url, port_handler_factory=EmulatedPortHandler,
@@ -110,7 +113,15 @@ class TestDynamixelXM430(BackendContract):
     [
         (
             TestTwin,
-            ("SensesBody", "SensesImu", "ChecksPhysics", "SensesTorque", "Resettable", "Simulated"),
+            (
+                "SensesBody",
+                "SensesImu",
+                "ChecksPhysics",
+                "SensesTorque",
+                "LimitsTorque",
+                "Resettable",
+                "Simulated",
+            ),
         ),
         (
             TestTwinWithCurrent,
@@ -120,13 +131,17 @@ class TestDynamixelXM430(BackendContract):
                 "ChecksPhysics",
                 "SensesCurrent",
                 "SensesTorque",
+                "LimitsTorque",
                 "Resettable",
                 "Simulated",
             ),
         ),
         (TestSoftBody, ("SensesBody", "ChecksPhysics", "ReportsTravel", "Simulated")),
         (TestDynamixel, ("ReportsHealth", "OnBus")),
-        (TestDynamixelXM430, ("ReportsHealth", "SensesCurrent", "SensesTorque", "OnBus")),
+        (
+            TestDynamixelXM430,
+            ("ReportsHealth", "SensesCurrent", "SensesTorque", "LimitsTorque", "OnBus"),
+        ),
     ],
 )
 def test_each_backend_claims_what_it_has(

@@ -21,14 +21,19 @@ import warnings
 from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from snakebot.backends.base import Backend
+from snakebot.backends.capabilities import torque_caps
 from snakebot.backends.chain.bus import ServoBus
 from snakebot.backends.chain.checks import (
+    CURRENT_POSITION_MODE,
     LIMIT_KEYS,
     chain_error,
     chain_report,
     check_settings,
+    current_position_mode,
+    has_current_position,
     latency_warning,
     settings_keys,
     shutdown_name,
@@ -169,6 +174,9 @@ class ServoChainBackend(Backend):
         if self._decoder.measures_current:
             self.present_current_a = self._present_current_a  # SensesCurrent: this model
             self.measured_torque_nm = self._measured_torque_nm  # SensesTorque: kt * current
+        self._torque_cap_nm: np.ndarray | None = None
+        if has_current_position(self.bus.table):
+            self.limit_torque = self._limit_torque  # LimitsTorque: current-based position
         self._state_plan = self.bus.sync_read_plan(self._decoder.keys, self.ids)
         self._goal_plan: SyncWritePlan | None = self.bus.sync_write_plan("goal_position", self.ids)
         self.unloaded: set[int] = set()
@@ -218,6 +226,8 @@ class ServoChainBackend(Backend):
             if self.capabilities.hardware_error_status:
                 self.check_faults()
             self._check_settings()
+            if self._torque_cap_nm is not None:
+                self._write_goal_current()  # torque still off: capped from the first push
             if not self.capabilities.hardware_error_status:
                 self.check_faults()  # the pings' status bytes, against each Alarm Shutdown
             self.write_watchdog(0)  # clears a trip left by a dead session (where there is one)
@@ -347,6 +357,7 @@ class ServoChainBackend(Backend):
             self.converter,
             watchdog=self.capabilities.bus_watchdog,
             position_mode=self.bus.table.specs.position_mode,
+            current_position_mode=current_position_mode(self.bus.table),
             shutdown_register=shutdown_name(self.bus.table),
         )
         self._position_limits = [
@@ -361,6 +372,42 @@ class ServoChainBackend(Backend):
             notes += [note] if note else []
         for note in notes:
             warnings.warn(note, ServoSettingsWarning, stacklevel=4)
+
+    def _limit_torque(self, torque_nm: npt.ArrayLike) -> None:
+        """LimitsTorque: cap each joint's torque at ``torque_nm`` (a scalar or (N,) N*m, > 0)
+        by its servo's Goal Current (torque / kt, kt = stall torque / stall current from the
+        servo file, at most the servo's Current Limit) in current-based position control.
+        Before connect it is written at connect, before torque comes on. ValueError for a bad
+        value; ServoSettingsError naming the servos not in Operating Mode 5."""
+        self._torque_cap_nm = torque_caps(torque_nm, self.joint_count)
+        if self.connected:
+            self._write_goal_current()
+
+    def _write_goal_current(self) -> None:
+        assert self._torque_cap_nm is not None
+        modes = self.bus.sync_read("operating_mode", self.ids)
+        wrong = [i for i in self.ids if modes[i]["operating_mode"] != CURRENT_POSITION_MODE]
+        if wrong:
+            raise ServoSettingsError(
+                self.port,
+                [
+                    f"servo {i}: Operating Mode is {modes[i]['operating_mode']}; a torque limit "
+                    f"needs {CURRENT_POSITION_MODE} (current-based position control): set "
+                    f"operating_mode = {CURRENT_POSITION_MODE} in the robot file's [settings]"
+                    for i in wrong
+                ],
+            )
+        table = self.bus.table
+        kt = self.robot.servo.physics.stall_torque_nm / table.specs.stall_current_a
+        limits = self.bus.sync_read("current_limit", self.ids)
+        per_tick = table["goal_current"].scale
+        goal = {
+            servo_id: min(
+                max(1, round(float(cap) / kt / per_tick)), limits[servo_id]["current_limit"]
+            )
+            for servo_id, cap in zip(self.ids, self._torque_cap_nm, strict=True)
+        }
+        self.bus.sync_write("goal_current", goal)
 
     def _probe_fast_read(self) -> None:
         if not self.capabilities.fast_sync_read:

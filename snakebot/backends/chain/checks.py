@@ -1,13 +1,14 @@
 """Connect-time checks: is the bus the configured chain, do EEPROM settings fit, what caps the rate.
 
 Policy: settings that make the backend wrong or unsafe are errors (:class:`ServoSettingsError`):
-Operating Mode other than 3 (position), the Drive Mode reverse bit (direction lives in the config),
-Min/Max Position Limits that do not cover a joint's configured range (on AX/MX: CW/CCW Angle Limit,
-both 0 = wheel mode), and, on a model without a Bus Watchdog, an Alarm Shutdown that does not turn
-torque off on overload and overheating (all that protects it when the host dies). Settings that
-only cost loop rate are warnings (:class:`ServoSettingsWarning`): Return Delay Time above 0, a
-USB latency timer above 1 ms, and the Drive Mode profile/torque-on-goal bits. Registers a model
-does not have (AX: no Operating or Drive Mode) are not checked.
+Operating Mode other than 3 (position) or, where the model has it, 5 (current-based position:
+position control under Goal Current, what a torque limit uses), the Drive Mode reverse bit
+(direction lives in the config), Min/Max Position Limits that do not cover a joint's configured
+range (on AX/MX: CW/CCW Angle Limit, both 0 = wheel mode), and, on a model without a Bus Watchdog,
+an Alarm Shutdown that does not turn torque off on overload and overheating (all that protects it
+when the host dies). Settings that only cost loop rate are warnings (:class:`ServoSettingsWarning`):
+Return Delay Time above 0, a USB latency timer above 1 ms, and the Drive Mode profile/torque-on-goal
+bits. Registers a model does not have (AX: no Operating or Drive Mode) are not checked.
 """
 
 from __future__ import annotations
@@ -25,6 +26,9 @@ SETTINGS_KEYS = ("return_delay_time", "drive_mode", "operating_mode")
 """The settings every X-series servo is checked for (:func:`settings_keys` per model)."""
 LIMIT_KEYS = ("max_position_limit", "min_position_limit")
 POSITION_MODE = 3
+CURRENT_POSITION_MODE = 5
+"""Dynamixel current-based position control: follows Goal Position with the current bounded by
+Goal Current (e-Manual, Operating Mode). It ignores Min/Max Position Limit (multi-turn)."""
 SHUTDOWN_NEEDED = 0x24
 """Alarm Shutdown bits 2 (overheating) and 5 (overload): torque off when either happens."""
 SYSFS_USB_SERIAL = Path("/sys/bus/usb-serial/devices")
@@ -110,6 +114,22 @@ def chain_error(
     )
 
 
+def has_current_position(table: ServoTable) -> bool:
+    """Whether the model has current-based position control (Operating Mode 5 with Goal
+    Current and Current Limit registers: XM430, XM540, XH430, XL330, MX-64/106 2.0)."""
+    return (
+        CURRENT_POSITION_MODE in table.specs.operating_modes
+        and "goal_current" in table
+        and "current_limit" in table
+    )
+
+
+def current_position_mode(table: ServoTable) -> int | None:
+    """The model's Operating Mode of current-based position control (5), None where it has
+    none: what ``check_settings`` accepts beside position control."""
+    return CURRENT_POSITION_MODE if has_current_position(table) else None
+
+
 def settings_keys(table: ServoTable) -> tuple[str, ...]:
     """The registers of :data:`SETTINGS_KEYS` that model ``table`` has."""
     return tuple(key for key in SETTINGS_KEYS if key in table)
@@ -130,6 +150,7 @@ def check_settings(
     *,
     watchdog: bool = True,
     position_mode: int = POSITION_MODE,
+    current_position_mode: int | None = None,
     shutdown_register: str = SHUTDOWN_DEFAULT_NAME,
 ) -> tuple[list[str], list[str]]:
     """(errors, warnings) for EEPROM ``settings`` ({id: {key: value}}) against the joints.
@@ -139,7 +160,9 @@ def check_settings(
     Alarm Shutdown (``shutdown``; Feetech's Unload Condition, the same bits) without the
     overload and overheating bits an error, the register named ``shutdown_register``
     (:func:`shutdown_name` of the model). ``position_mode`` is the Operating Mode of
-    position control on the model (``table.specs.position_mode``: 3 Dynamixel, 0 Feetech STS).
+    position control on the model (``table.specs.position_mode``: 3 Dynamixel, 0 Feetech STS);
+    ``current_position_mode`` (5 where the model has current-based position control) is
+    accepted too.
     """
     errors: list[str] = []
     warnings: list[str] = []
@@ -147,10 +170,15 @@ def check_settings(
     for joint, servo_id in enumerate(ids):
         values = settings[servo_id]
         mode, drive = values.get("operating_mode", position_mode), values.get("drive_mode", 0)
-        if mode != position_mode:
+        if mode != position_mode and mode != current_position_mode:
+            also = (
+                ""
+                if current_position_mode is None
+                else f" or {current_position_mode} (current-based position control)"
+            )
             errors.append(
                 f"servo {servo_id}: Operating Mode is {mode}, needs {position_mode} "
-                "(position control)"
+                f"(position control){also}"
             )
         shutdown = values.get("shutdown")
         if not watchdog and shutdown is not None and shutdown & SHUTDOWN_NEEDED != SHUTDOWN_NEEDED:
@@ -184,6 +212,13 @@ def check_settings(
                 f"joint {joint}'s range {converter.lower_rad[joint]:.3f}.."
                 f"{converter.upper_rad[joint]:.3f} rad ({want_low}..{want_high} ticks)"
             )
+    current_based = [i for i in ids if settings[i].get("operating_mode") == current_position_mode]
+    if current_based and current_position_mode is not None:
+        warnings.append(
+            f"servo(s) {', '.join(map(str, current_based))} in Operating Mode "
+            f"{current_position_mode} (current-based position control) ignore their Min/Max "
+            "Position Limit: only snakebot's joint limits (lower_rad/upper_rad) bound the goals"
+        )
     if slow:
         delay_us = max(2 * settings[i]["return_delay_time"] for i in slow)
         warnings.append(

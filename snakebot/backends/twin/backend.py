@@ -8,9 +8,10 @@ from collections.abc import Sequence
 
 import mujoco
 import numpy as np
+import numpy.typing as npt
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import Simulated
+from snakebot.backends.capabilities import Simulated, torque_caps
 from snakebot.backends.pacing import Pacer
 from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.health import DEFAULT_LIMITS, HealthLimits, HealthMonitor
@@ -59,8 +60,9 @@ class TwinBackend(Backend):
     ``raise_on_overload`` is False, e.g. under the emulator, which latches it) and encoder and
     IMU noise drawn from ``seed``.
 
-    Abilities (``backends.capabilities``): SensesBody, SensesImu, ChecksPhysics, Resettable,
-    Simulated; SensesCurrent where the servo file models the current (``stall_current_a``).
+    Abilities (``backends.capabilities``): SensesBody, SensesImu, ChecksPhysics, SensesTorque,
+    LimitsTorque, Resettable, Simulated; SensesCurrent where the servo file models the current
+    (``stall_current_a``).
     """
 
     def __init__(
@@ -99,6 +101,7 @@ class TwinBackend(Backend):
         self._work_j = np.zeros(self.joint_count)  # positive work per joint since connect/reset
         if robot.servo.physics.extras.stall_current_a is not None:
             self.present_current_a = self._present_current_a  # SensesCurrent: this servo file
+        self._torque_cap_nm: np.ndarray | None = None  # LimitsTorque: per joint, N*m
 
     # -- lifecycle ---------------------------------------------------------------------------
     def _connect(self) -> None:
@@ -161,7 +164,10 @@ class TwinBackend(Backend):
             self.electrics = ServoElectrics(
                 physics, self.joint_count, servo.torque_limit_nm, servo.no_load_speed_rad_s
             )
-            self._force_limit = self.model.actuator_forcerange.copy()
+        self._force_full = self.model.actuator_forcerange.copy()  # (N, 2): the servo's own
+        self._force_limit = self._force_full.copy()  # under the torque caps, if any
+        if self._torque_cap_nm is not None:
+            self._apply_torque_caps()
         self.reset_physics_health()
 
     def reset(self, position_rad: np.ndarray | None = None) -> JointState:
@@ -305,12 +311,38 @@ class TwinBackend(Backend):
                 kp, kv = kp * ratio, kv * ratio
                 self.model.actuator_forcerange[:] = self._force_limit * ratio
         kp = np.where(mask, kp, 0.0)
-        self.model.actuator_gainprm[:, 0] = kp
-        self.model.actuator_biasprm[:, 1] = -kp
-        self.model.actuator_biasprm[:, 2] = -np.where(mask, kv, 0.0)
         # With torque off the H-bridge is open: no back-EMF braking, only gear friction remains.
         limp = self.robot.servo.physics.viscous_damping_nms
-        self.model.dof_damping[self._dof_index] = np.where(mask, self._damping, limp)
+        damping = np.where(mask, self._damping, limp)
+        kv = np.where(mask, kv, 0.0)
+        if self._torque_cap_nm is not None:  # the damping inside the capped drive
+            kv = kv + np.where(mask, damping, 0.0)
+            damping = np.where(mask, 0.0, damping)
+        self.model.actuator_gainprm[:, 0] = kp
+        self.model.actuator_biasprm[:, 1] = -kp
+        self.model.actuator_biasprm[:, 2] = -kv
+        self.model.dof_damping[self._dof_index] = damping
+
+    def limit_torque(self, torque_nm: npt.ArrayLike) -> None:
+        """LimitsTorque: cap each servo's output torque at ``torque_nm`` (a scalar or (N,)
+        N*m, > 0), as current-based position control caps its current: the servo still follows
+        its goal, pushing with at most the cap (a cap above the stall torque changes nothing).
+        Before connect it applies at connect. ValueError for a bad value.
+
+        Uncapped, the output torque is the actuator's force less the joint's back-EMF damping
+        at its speed. Capped, that damping is part of the actuator (its velocity gain), so the
+        force range bounds the output torque itself: a current loop holds the current, and so
+        the torque, at the cap whatever the speed, a joint driven backwards included."""
+        self._torque_cap_nm = torque_caps(torque_nm, self.joint_count)
+        if self.connected:
+            self._apply_torque_caps()
+
+    def _apply_torque_caps(self) -> None:
+        cap = self._torque_cap_nm
+        assert cap is not None
+        self._force_limit = np.clip(self._force_full, -cap[:, None], cap[:, None])
+        self.model.actuator_forcerange[:] = self._force_limit
+        self._apply_gains()  # the damping moves into the capped drive (and the sag scales it)
 
     def send_command_unchecked(self, position_rad: np.ndarray) -> None:
         """Set goals (rad, (N,)) without the shape check: the emulator bridge's hot path."""

@@ -163,3 +163,40 @@ def test_an_ax_twin_takes_its_stiffness_from_the_compliance_slope_registers() ->
     assert factory == pytest.approx(np.full(12, robot.gains.kp_nm_per_rad))  # slope 32
     assert kp[2] == pytest.approx(stiff.kp_nm_per_rad) == pytest.approx(2 * factory[2])
     assert np.all(np.delete(kp, 2) == np.delete(factory, 2))
+
+
+def _xm430_twin_bus(**ground: object) -> tuple[EmulatedChain, TwinMotion]:
+    robot = load_robot("snake8-xm430")
+    return make_twin_chain(robot, BAUD, **ground)  # type: ignore[arg-type]
+
+
+def test_goal_current_in_current_based_position_caps_the_twins_torque() -> None:
+    """Operating Mode 5 written through the SDK: Goal Current caps the joint's push at
+    kt * |Goal Current|, and the joint still turns towards its goal; mode 3 pushes as it
+    always did."""
+    chain, motion = _xm430_twin_bus()
+    robot = motion.robot
+    stall = robot.servo.physics.stall_torque_nm
+    table = chain.servos[0].table
+    kt = stall / table.specs.stall_current_a
+    with registered(chain) as url:
+        port = EmulatedPortHandler(url)
+        assert port.openPort() and port.setBaudRate(BAUD)
+        bus = Bus(chain, port)
+        for servo_id in (2, 7):
+            bus.write(servo_id, "operating_mode", 5)  # EEPROM: torque still off
+        cap_ticks = round(0.3 / kt / table["goal_current"].scale)
+        bus.write(2, "goal_current", cap_ticks)  # 0.3 N*m on joint 1; joint 6 at its limit
+        errors = step_errors(bus, {2: 800, 7: 800}, step_ticks=300, after_s=0.05)
+        state = motion.twin.read_state()
+        port.closePort()
+    capped, full = abs(state.effort_nm[1]), abs(state.effort_nm[6])
+    assert capped <= 1.05 * cap_ticks * table["goal_current"].scale * kt, state.effort_nm
+    assert full > 2 * capped, state.effort_nm
+    assert 0 < errors[1] < errors[0] < 300  # the capped joint lags, yet moves
+
+
+def test_the_twin_under_the_bus_stands_on_the_terrain_asked_for() -> None:
+    chain, motion = _xm430_twin_bus(terrain="pegs:density=100,seed=1")
+    assert motion.twin.terrain is not None and motion.twin.terrain.name == "pegs"
+    assert motion.twin.model.ngeom > _xm430_twin_bus()[1].twin.model.ngeom  # the pegs are there

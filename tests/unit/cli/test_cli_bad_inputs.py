@@ -130,6 +130,9 @@ CASES = [
     # emulate (refused before it serves)
     bad("emulate", "--pty", "--robot", "{heavy}", names=("{heavy}", "link.mass_kg")),
     bad("emulate", "--pty", "--robot", "{binary}", names=("{binary}", "not UTF-8")),
+    bad("emulate", "--pty", "--terrain", "pegs", code=2, names=("--terrain", "--physics")),
+    bad("emulate", "--pty", "--physics", "--terrain", "pegs:bogus=1", code=2, names=("bogus",)),
+    bad("run", "--torque-limit", "9", code=2, names=("--torque-limit", "stall torque")),
     # scan
     bad("scan", "--port", "socket://127.0.0.1:9", code=2, names=("socket://127.0.0.1:9",)),
     bad("scan", "--port", "{blocker}", names=("{blocker}",)),

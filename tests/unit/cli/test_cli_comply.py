@@ -22,8 +22,8 @@ def test_comply_on_the_twin_reports_how_far_the_gait_gave_way(
     assert compliance["windows"] == 4
     # Flat ground: locomotion's torque stays inside the dead band, so the gait is the gait.
     assert compliance["lowest_amplitude_scale"] == [1.0] * 4
-    assert compliance["servo_stall_s"] == 0.0
-    assert 0.05 < compliance["peak_servo_torque_nm"] < 1.5
+    assert summary["servo_stall_s"] == 0.0  # every run on torque-sensing servos has it
+    assert 0.05 < summary["peak_servo_torque_nm"] < 1.5
     assert summary["max_abs_command_rad"] == pytest.approx(0.4, abs=1e-6)
 
 

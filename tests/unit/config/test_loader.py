@@ -19,6 +19,9 @@ def test_shipped_robots_load_by_name() -> None:
     assert [j.axis for j in snake12.joints[:4]] == ["yaw", "pitch", "yaw", "pitch"]
     assert snake12.servo_ids == tuple(range(1, 13))
     assert snake12.servo.name == "XL430-W250"
+    xm430 = load_robot("snake8-xm430")  # snake8 on current-sensing, mode-5-capable servos
+    assert xm430.servo.name == "XM430-W350" and xm430.servo_ids == snake8.servo_ids
+    assert xm430.servo.physics.stall_torque_nm > snake8.servo.physics.stall_torque_nm
 
 
 def test_robot_loads_by_path(config_dir: Path) -> None:

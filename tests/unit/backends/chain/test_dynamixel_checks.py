@@ -105,6 +105,25 @@ def test_settings_that_break_the_backend_are_errors(converter: TickConverter) ->
     assert "snakebot config apply" in message and "servo 5" in message
 
 
+def test_current_based_position_passes_only_where_the_model_has_it(
+    converter: TickConverter,
+) -> None:
+    settings = good_settings()
+    settings[2]["operating_mode"] = 5
+    errors, _ = check_settings(settings, IDS, converter)  # XL430: no mode 5
+    assert errors == ["servo 2: Operating Mode is 5, needs 3 (position control)"]
+    errors, notes = check_settings(settings, IDS, converter, current_position_mode=5)
+    assert errors == []
+    assert len(notes) == 1 and notes[0].startswith("servo(s) 2 in Operating Mode 5")
+    assert "ignore their Min/Max Position Limit" in notes[0]
+    settings[3]["operating_mode"] = 4
+    errors, _ = check_settings(settings, IDS, converter, current_position_mode=5)
+    assert errors == [
+        "servo 3: Operating Mode is 4, needs 3 (position control) or 5 (current-based "
+        "position control)"
+    ]
+
+
 def test_settings_that_cost_rate_are_warnings(converter: TickConverter) -> None:
     settings = good_settings()
     settings[1]["return_delay_time"] = 250
