@@ -124,12 +124,12 @@ class LimitsTorque(Protocol):
     twin (its actuators' force range). A joint held away from its goal pushes with no more than
     its cap and gives way beyond it, so the snake's shape yields to what holds it."""
 
-    def limit_torque(self, torque_nm: FloatArray) -> None:
-        """Cap each joint's torque at ``torque_nm`` (N,) N*m (> 0; values above the servo's
-        stall torque mean no cap). Before connect it takes effect when the backend connects,
-        before any torque comes on; after connect at once. ValueError for a wrong shape or a
-        value that is not > 0; a chain raises ServoSettingsError (naming the servo IDs) at
-        connect where a servo is not in current-based position mode."""
+    def limit_torque(self, torque_nm: npt.ArrayLike) -> None:
+        """Cap each joint's torque at ``torque_nm`` (a scalar or (N,) N*m, > 0; values above
+        the servo's stall torque mean no cap). Before connect it takes effect when the backend
+        connects, before any torque comes on; after connect at once. ValueError for a wrong
+        shape or a value that is not > 0; a chain raises ServoSettingsError (naming the servo
+        IDs) at connect where a servo is not in current-based position mode."""
         ...
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import sys
 import time
@@ -35,7 +36,12 @@ from snakebot.cli.goto_options import odometry_for, steered_gait, steering_summa
 from snakebot.cli.telemetry_options import add_telemetry_options, check_outputs, open_telemetry
 from snakebot.cli.terrain_options import FRICTION_MODEL_HELP, terrain_help
 from snakebot.config import RobotConfig
-from snakebot.control.compliance import CompliantGait, StallMeter, check_torque_sensing
+from snakebot.control.compliance import (
+    ComplianceSettings,
+    CompliantGait,
+    StallMeter,
+    check_torque_sensing,
+)
 from snakebot.control.cycle import CycleRecord
 from snakebot.control.torque_limit import limit_servo_torque
 from snakebot.errors import ConfigError, OutputError, UsageError
@@ -120,6 +126,13 @@ def add_parser(subparsers: Any) -> None:
         help="gait-based compliance: the gait's amplitude and offset give way, window by "
         "window along the body, where the servos measure a hard push (docs/compliance.md); "
         "needs servos that measure current, or the twin",
+    )
+    parser.add_argument(
+        "--comply-phase",
+        type=float,
+        metavar="GAIN",
+        help="with --comply: the gait's phase yields too, at GAIN 1/s (docs/compliance.md "
+        "measures 2: better on some peg fields, worse on others; default: off)",
     )
     parser.add_argument(
         "--torque-limit",
@@ -228,6 +241,10 @@ def run(args: argparse.Namespace) -> int:
         odometry = odometry_for(snake.robot) if args.odometry else None
         gait_name, gait = policy_gait(snake.robot, snake.backend, args, pose=odometry)
         observers.extend([] if odometry is None else [odometry])
+    if args.comply_phase is not None and not args.comply:
+        raise UsageError("--comply-phase goes with --comply")
+    if args.comply_phase is not None and not (0 <= args.comply_phase < math.inf):
+        raise UsageError(f"--comply-phase: expected a gain >= 0 1/s, got {args.comply_phase}")
     compliance: CompliantGait | None = None
     if args.comply:
         robot = snake.robot
@@ -238,7 +255,11 @@ def run(args: argparse.Namespace) -> int:
         )
         if not isinstance(snake.robot, RobotConfig):
             raise ConfigError("--comply", "", "compliance needs a servo robot, not a soft body")
-        gait = compliance = CompliantGait(gait, snake.robot.servo.physics.stall_torque_nm)
+        settings = ComplianceSettings(
+            phase_gain=0.0 if args.comply_phase is None else args.comply_phase
+        )
+        stall_nm = snake.robot.servo.physics.stall_torque_nm
+        gait = compliance = CompliantGait(gait, stall_nm, settings)
     # Where the servos measure their torque, every run reports how long they stalled.
     stall: StallMeter | None = None
     if isinstance(snake.backend, SensesTorque) and isinstance(snake.robot, RobotConfig):

@@ -4,19 +4,32 @@ After Rollinson et al., "Gait-based compliant control for snake robots" (IROS 20
 making each joint soft, the measured joint torques are mapped onto a few parameters of the gait
 and those parameters, not the joints, behave like a spring-damper. Here the parameters are an
 amplitude scale and an offset for each of ``windows`` overlapping Gaussian windows along the
-body (head to tail), so the wave flattens and bends away locally, where a peg or a wall holds
-it, and springs back to the gait as it was once the push stops:
+body (head to tail), and a phase for each window, so the wave flattens, bends away and runs
+early or late locally, where a peg or a wall holds it, and springs back to the gait as it was
+once the push stops:
 
-    target_i(t) = gait_i(t) * (G s)_i + (G o)_i
-    ds/dt = -(s - 1) / T - k_s * G^T (gait(t) * e)
-    do/dt = -o / T - k_o * G^T e
+    target_i(t) = gait_i(t + delta_i) * (G s)_i + (G o)_i,   delta = G phi * P / (2 pi)
+    ds/dt   = -(s - 1) / T - k_s   * G^T (gait(t + delta) * e)
+    do/dt   = -o / T       - k_o   * G^T e
+    dphi/dt = -phi / T     - k_phi * G^T (gait'(t + delta) * e)
 
 with ``G`` (N, W) the windows (rows summing to 1), ``e`` the torques beyond a dead band, each as
 a fraction of the servo's stall torque (``e_i = sign(tau_i) max(|tau_i|/tau_stall - d, 0)``),
-``T`` the return time. A servo's torque pushes its joint towards its command; moving the
-parameters against the projected torque moves the command towards where the joint is held,
-so the push eases. The dead band keeps the torque of ordinary locomotion (driving the body
-against the ground) from bending the gait.
+``T`` the return time. ``phi`` (rad) is a phase of the gait's cycle of period ``P`` (s), so
+joint ``i`` plays the gait ``delta_i`` s early; ``gait' = d gait / d(phase) = gait_dot * P/(2 pi)``
+(rad per rad, from a central difference in time), the change of the target per unit of phase,
+as ``gait`` is per unit of amplitude scale and 1 per unit of offset. A servo's torque pushes
+its joint towards its command; moving each parameter against the torque projected on its own
+derivative moves the command towards where the joint is held, so the push eases. The dead band
+keeps the torque of ordinary locomotion (driving the body against the ground) from bending the
+gait.
+
+Only a gait that is a function of time can be played early or late: one whose
+``uses_measured_pose`` is true (its targets follow the servos: keyframes advanced on error, a
+policy, a live driver) or whose ``period_s`` is None keeps its phase at 0, and only its
+amplitude and offset yield. The phase is off by default (``phase_gain`` 0): measured on the
+twin's peg fields it helped a little on the XL430 snake8 and halved the XM430 snake's speed on
+two of three layouts (docs/compliance.md).
 
 The torque is what the servos measure: a chain whose model has a Present Current register
 (torque = kt * current, the torque constant from the servo file), or the twin's servo model
@@ -54,11 +67,14 @@ STALL_SPEED_FRACTION = 0.05
 class ComplianceSettings:
     """How the gait yields.
 
-    ``windows``: amplitude/offset windows along the body (>= 1). ``dead_band``: torque, as a
-    fraction of stall torque, that bends nothing (0..1). ``amplitude_gain`` (1/(s*rad)) and
-    ``offset_gain`` (rad/s) per unit of projected torque fraction; ``return_s`` (s): how fast
-    the parameters spring back. ``amplitude_range`` bounds the amplitude scales,
-    ``offset_limit_rad`` the offsets (rad).
+    ``windows``: amplitude/offset/phase windows along the body (>= 1). ``dead_band``: torque,
+    as a fraction of stall torque, that bends nothing (0..1). ``amplitude_gain`` (1/(s*rad)),
+    ``offset_gain`` (rad/s) and ``phase_gain`` (1/s: rad of phase per s per rad-per-rad of
+    projected torque fraction) per unit of projected torque fraction; 0 turns that parameter
+    off. ``return_s`` (s): how fast the parameters spring back. ``amplitude_range`` bounds the
+    amplitude scales, ``offset_limit_rad`` the offsets (rad), ``phase_limit_rad`` the phases
+    (rad of the gait's cycle, at most pi: half a cycle). A bad value raises ConfigError
+    naming the field.
     """
 
     windows: int = 4
@@ -68,6 +84,8 @@ class ComplianceSettings:
     return_s: float = 0.3
     amplitude_range: tuple[float, float] = (0.2, 1.5)
     offset_limit_rad: float = 0.5
+    phase_gain: float = 0.0
+    phase_limit_rad: float = math.pi / 4
 
     def __post_init__(self) -> None:
         checks = (
@@ -82,6 +100,8 @@ class ComplianceSettings:
                 "(low, high) with low <= 1 <= high",
             ),
             ("offset_limit_rad", self.offset_limit_rad >= 0.0, ">= 0 rad"),
+            ("phase_gain", self.phase_gain >= 0.0, ">= 0"),
+            ("phase_limit_rad", 0.0 <= self.phase_limit_rad <= math.pi, "from 0 to pi rad"),
         )
         for name, ok, expected in checks:
             value = getattr(self, name)
@@ -104,11 +124,14 @@ def windows_matrix(joint_count: int, windows: int) -> FloatArray:
 
 
 class CompliantGait(Gait):
-    """``gait`` whose amplitude and offset yield, window by window, to the measured torques.
+    """``gait`` whose amplitude, offset and phase yield, window by window, to the measured
+    torques.
 
     Targets come from the parameters as they are; ``observe`` (a cycle observer: add it to the
     run's observers) moves them with each cycle's record. ``stall_torque_nm`` is the servos'
-    stall torque (N*m). ``reset`` puts the parameters back to the gait as it was.
+    stall torque (N*m); ConfigError when it is not > 0. ``reset`` puts the parameters back to
+    the gait as it was. ``shifts_phase`` says whether the phase can move at all (a gait of time
+    with a period, and ``phase_gain`` > 0); otherwise it stays 0.
     """
 
     def __init__(
@@ -124,15 +147,30 @@ class CompliantGait(Gait):
         self.stall_torque_nm = float(stall_torque_nm)
         self.windows = windows_matrix(self.joint_count, self.settings.windows)
         count = self.windows.shape[1]
+        period = gait.period_s
+        self.shifts_phase = bool(
+            self.settings.phase_gain > 0.0
+            and not gait.uses_measured_pose
+            and period is not None
+            and math.isfinite(period)
+            and period > 0.0
+        )
+        """True when the phase can move: the gait is a function of time with a period."""
+        self._seconds_per_rad = (period or 0.0) / (2.0 * math.pi) if self.shifts_phase else 0.0
         self.amplitude_scale = np.ones(count)
         """Each window's amplitude scale now (W,), 1 = the gait's own."""
         self.offset_rad = np.zeros(count)
         """Each window's offset now (W,) rad, 0 = the gait's own."""
+        self.phase_rad = np.zeros(count)
+        """Each window's phase now (W,), rad of the gait's cycle, > 0 = early, 0 = the gait's."""
         self.lowest_scale = np.ones(count)
         """The smallest amplitude scale each window reached (W,)."""
         self.largest_offset_rad = np.zeros(count)
         """The largest |offset| each window reached (W,) rad."""
+        self.largest_phase_rad = np.zeros(count)
+        """The largest |phase| each window reached (W,) rad."""
         self._raw: FloatArray | None = None
+        self._shifted_s: FloatArray | None = None  # each joint's gait time at the last command
 
     @property
     def period_s(self) -> float | None:
@@ -144,20 +182,56 @@ class CompliantGait(Gait):
         """True: the targets follow what the servos measure, never computed ahead."""
         return True  # its targets follow what the servos measured: never computed ahead
 
+    def shift_s(self) -> FloatArray:
+        """Each joint's time shift now (N,) s: it plays the gait this much early."""
+        shift: FloatArray = (self.windows @ self.phase_rad) * self._seconds_per_rad
+        return shift
+
     def _shaped(self, raw: FloatArray) -> FloatArray:
         shaped: FloatArray = raw * (self.windows @ self.amplitude_scale)
         shaped += self.windows @ self.offset_rad
         return shaped
 
+    def _diagonal(self, joint_times_s: FloatArray) -> FloatArray:
+        """The gait at each joint's own time: ``gait_i(joint_times_s[i])`` (N,) rad."""
+        everything = self.gait.targets(joint_times_s)  # (N, N): all joints at every time
+        diagonal: FloatArray = np.diagonal(everything).copy()
+        return diagonal
+
     def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
-        """The gait's targets (rad, (N,) or (T, N)) with the parameters as they are now."""
-        return self._shaped(self.gait.targets(time_s))
+        """The gait's targets (rad, (N,) or (T, N)) with the parameters as they are now.
+
+        Raises what the wrapped gait's ``targets`` raises (GaitError for bad times)."""
+        if not self.phase_rad.any():
+            return self._shaped(self.gait.targets(time_s))
+        shift = self.shift_s()
+        times = np.asarray(time_s, dtype=np.float64)
+        if times.ndim == 0:
+            return self._shaped(self._diagonal(float(times) + shift))
+        columns = [self.gait.targets(times + shift[i])[:, i] for i in range(self.joint_count)]
+        return self._shaped(np.stack(columns, axis=-1))
 
     def command(self, time_s: float, measured_rad: FloatArray | None = None) -> FloatArray:
-        """One cycle's targets (N,) rad; remembers the gait's own for the next ``observe``."""
-        raw = self.gait.command(time_s, measured_rad)
+        """One cycle's targets (N,) rad; remembers the gait's own for the next ``observe``.
+
+        With every phase at 0 it is the wrapped gait's ``command``, as the gait would play it."""
+        if self.phase_rad.any():
+            self._shifted_s = float(time_s) + self.shift_s()
+            raw = self._diagonal(self._shifted_s)
+        else:
+            self._shifted_s = np.full(self.joint_count, float(time_s))
+            raw = self.gait.command(time_s, measured_rad)
         self._raw = raw
         return self._shaped(raw)
+
+    def _phase_slope(self, joint_times_s: FloatArray) -> FloatArray:
+        """d gait_i / d(phase) at each joint's own time (N,), rad per rad of phase: the gait's
+        time derivative (a central difference) times P / (2 pi)."""
+        step = 1e-3 * self._seconds_per_rad  # 1 mrad of phase, in s
+        both = self.gait.targets(np.concatenate([joint_times_s + step, joint_times_s - step]))
+        n = self.joint_count
+        slope: FloatArray = (np.diagonal(both[:n]) - np.diagonal(both[n:])) / 2e-3
+        return slope
 
     def observe(self, record: CycleRecord) -> None:
         """Move the parameters by the cycle's measured torques over its period."""
@@ -177,15 +251,27 @@ class CompliantGait(Gait):
         np.clip(self.offset_rad, -s.offset_limit_rad, s.offset_limit_rad, out=self.offset_rad)
         np.minimum(self.lowest_scale, self.amplitude_scale, out=self.lowest_scale)
         np.maximum(self.largest_offset_rad, np.abs(self.offset_rad), out=self.largest_offset_rad)
+        if self.shifts_phase and self._shifted_s is not None:
+            push = -self.phase_rad / s.return_s
+            if excess.any():
+                on_phase = self.windows.T @ (self._phase_slope(self._shifted_s) * excess)
+                push -= s.phase_gain * on_phase
+            self.phase_rad += dt * push
+            limit = s.phase_limit_rad
+            np.clip(self.phase_rad, -limit, limit, out=self.phase_rad)
+            np.maximum(self.largest_phase_rad, np.abs(self.phase_rad), out=self.largest_phase_rad)
 
     def reset(self) -> None:
         """The wrapped gait reset, the parameters back to the gait as it was."""
         self.gait.reset()
         self.amplitude_scale[:] = 1.0
         self.offset_rad[:] = 0.0
+        self.phase_rad[:] = 0.0
         self.lowest_scale[:] = 1.0
         self.largest_offset_rad[:] = 0.0
+        self.largest_phase_rad[:] = 0.0
         self._raw = None
+        self._shifted_s = None
 
     def summary(self) -> dict[str, object]:
         """JSON-ready: the settings and how far each window yielded."""
@@ -194,6 +280,7 @@ class CompliantGait(Gait):
             "dead_band": self.settings.dead_band,
             "lowest_amplitude_scale": [round(float(v), 4) for v in self.lowest_scale],
             "largest_offset_rad": [round(float(v), 4) for v in self.largest_offset_rad],
+            "largest_phase_rad": [round(float(v), 4) for v in self.largest_phase_rad],
         }
 
 

@@ -197,6 +197,6 @@ def test_goal_current_in_current_based_position_caps_the_twins_torque() -> None:
 
 
 def test_the_twin_under_the_bus_stands_on_the_terrain_asked_for() -> None:
-    chain, motion = _xm430_twin_bus(terrain="pegs:density=100,seed=1")
+    _chain, motion = _xm430_twin_bus(terrain="pegs:density=100,seed=1")
     assert motion.twin.terrain is not None and motion.twin.terrain.name == "pegs"
     assert motion.twin.model.ngeom > _xm430_twin_bus()[1].twin.model.ngeom  # the pegs are there

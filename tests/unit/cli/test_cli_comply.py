@@ -59,3 +59,27 @@ def test_comply_on_servos_without_current_sensing_is_refused_before_anything_mov
     assert "Traceback" not in err
     assert not any(servo.torque_enabled for servo in chain.servos)
     assert [servo.peek("goal_position") for servo in chain.servos] == goals
+
+
+def test_comply_phase_lets_the_phase_yield_too(capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ["run", "--comply", "--terrain", "pegs:density=100,seed=1", "--duration", "3"]
+    assert main([*argv, "--json"]) == 0
+    without = json.loads(capsys.readouterr().out)["compliance"]
+    assert main([*argv, "--json", "--comply-phase", "2"]) == 0
+    with_phase = json.loads(capsys.readouterr().out)["compliance"]
+    assert without["largest_phase_rad"] == [0.0] * 4  # off unless asked for
+    assert max(with_phase["largest_phase_rad"]) > 0.01, with_phase
+
+
+@pytest.mark.parametrize(
+    ("flags", "says"),
+    [
+        (["--comply-phase", "2"], "goes with --comply"),
+        (["--comply", "--comply-phase", "-1"], ">= 0"),
+    ],
+)
+def test_comply_phase_misused_is_bad_usage(
+    capsys: pytest.CaptureFixture[str], flags: list[str], says: str
+) -> None:
+    assert main(["run", "--duration", "1", *flags]) == 2
+    assert says in capsys.readouterr().err

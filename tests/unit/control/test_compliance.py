@@ -4,6 +4,7 @@ hard, springs back once the push stops, and refuses a backend that cannot measur
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from snakebot.backends.chain import ServoChainBackend
@@ -19,6 +20,7 @@ from snakebot.control.compliance import (
 from snakebot.control.cycle import CycleRecord
 from snakebot.errors import ConfigError
 from snakebot.gaits import make_gait
+from snakebot.gaits.base import FloatArray, Gait
 from snakebot.types import JointState
 
 STALL_NM = 1.5
@@ -27,6 +29,30 @@ PERIOD_S = 0.01
 
 def _gait(joints: int = 8) -> CompliantGait:
     return CompliantGait(make_gait("serpenoid", joints, {}), STALL_NM)
+
+
+PHASE_ONLY = ComplianceSettings(amplitude_gain=0.0, offset_gain=0.0, phase_gain=30.0)
+
+
+def _phase_gait(settings: ComplianceSettings = PHASE_ONLY) -> CompliantGait:
+    return CompliantGait(make_gait("serpenoid", 8, {}), STALL_NM, settings)
+
+
+def _slope(gait: CompliantGait, t: float) -> np.ndarray:
+    """The wrapped gait's time derivative (N,) rad/s at ``t``."""
+    ahead, behind = gait.gait.targets(np.array([t + 1e-5, t - 1e-5]))
+    return (ahead - behind) / 2e-5  # type: ignore[no-any-return]
+
+
+def _lagging_push(gait: CompliantGait, seconds: float, where: slice, fraction: float) -> None:
+    """Cycles of the servos in ``where`` held back behind the travelling wave: each pushes
+    with ``fraction`` of stall torque the way its own target is moving (it lags it)."""
+    for k in range(round(seconds / PERIOD_S)):
+        t = k * PERIOD_S
+        gait.command(t)
+        effort = np.zeros(gait.joint_count)
+        effort[where] = fraction * STALL_NM * np.sign(_slope(gait, t)[where])
+        gait.observe(_record(effort, time_s=t))
 
 
 def _record(
@@ -109,6 +135,109 @@ def test_the_parameters_stay_inside_their_bounds_and_reset() -> None:
     np.testing.assert_allclose(gait.targets(np.array([0.0, 0.3])), gait.gait.targets([0.0, 0.3]))
 
 
+def test_a_joint_held_behind_the_wave_plays_its_window_late_and_springs_back() -> None:
+    gait = _phase_gait()
+    assert gait.shifts_phase
+    _lagging_push(gait, 1.0, slice(0, 2), 0.9)
+    head, tail = gait.phase_rad[0], gait.phase_rad[-1]
+    assert head < -0.05, gait.phase_rad  # the head runs late, towards where it is held
+    assert abs(tail) < 0.2 * abs(head), gait.phase_rad  # the far end keeps its timing
+    assert gait.shift_s()[0] < 0.0
+    for t in (0.3, 0.8, 1.23, 1.7):  # the head's command is behind its own target's motion
+        raw, shaped, slope = gait.gait.command(t), gait.command(t), _slope(gait, t)
+        assert (shaped[0] - raw[0]) * slope[0] < 0.0, (t, shaped, raw)
+    largest = gait.summary()["largest_phase_rad"]
+    assert largest[0] == pytest.approx(abs(head), abs=1e-3)  # type: ignore[index]
+    _lagging_push(gait, 2.0, slice(0, 2), 0.0)  # the push stops
+    np.testing.assert_allclose(gait.phase_rad, 0.0, atol=1e-2)
+    np.testing.assert_allclose(gait.command(0.7), gait.gait.command(0.7), atol=1e-2)
+    assert gait.summary()["largest_phase_rad"] == largest  # the record of how far it went
+
+
+def test_every_phase_step_moves_the_command_against_the_torque() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        gait = _phase_gait()
+        gait.phase_rad[:] = rng.uniform(-0.3, 0.3, gait.phase_rad.size)
+        t = float(rng.uniform(0.0, 4.0))
+        before = gait.command(t)
+        effort = rng.uniform(-1.0, 1.0, 8) * STALL_NM
+        gait.observe(_record(effort, time_s=t))
+        excess = np.sign(effort) * np.maximum(np.abs(effort) / STALL_NM - 0.3, 0.0)
+        moved = gait.command(t) - before
+        assert excess @ moved < 0.0  # the push eases: the command gives way to it
+
+
+def test_the_phase_stays_inside_its_bound_and_resets() -> None:
+    settings = ComplianceSettings(amplitude_gain=0.0, phase_gain=500.0, phase_limit_rad=0.2)
+    gait = _phase_gait(settings)
+    _lagging_push(gait, 3.0, slice(None), 3.0)  # far past stall, the whole body held back
+    assert np.abs(gait.phase_rad).max() <= 0.2
+    assert np.abs(gait.largest_phase_rad).max() == pytest.approx(0.2)
+    shift = gait.shift_s()
+    assert np.abs(shift).max() <= 0.2 / (2 * np.pi) * 2.0 + 1e-12  # serpenoid period 2 s
+    gait.reset()
+    np.testing.assert_array_equal(gait.phase_rad, 0.0)
+    assert gait.summary()["largest_phase_rad"] == [0.0] * 4
+    np.testing.assert_allclose(gait.command(0.4), gait.gait.command(0.4))
+
+
+def test_the_targets_of_a_shifted_gait_are_each_joint_played_early_or_late() -> None:
+    gait = _phase_gait()
+    gait.phase_rad[:] = [0.4, 0.1, -0.1, -0.4]
+    shift, times = gait.shift_s(), np.array([0.0, 0.37, 1.9])
+    expected = np.array([[gait.gait.targets(t + shift[i])[i] for i in range(8)] for t in times])
+    np.testing.assert_allclose(gait.targets(times), expected)
+    np.testing.assert_allclose(gait.targets(0.37), expected[1])
+    np.testing.assert_allclose(gait.command(0.37), expected[1])
+
+
+class _Wave(Gait):
+    """A travelling wave of time; ``periodic`` False: no period; ``closed_loop``: it follows
+    the measured pose (the targets depend on what the servos did)."""
+
+    def __init__(self, *, periodic: bool, closed_loop: bool) -> None:
+        self.joint_count = 8
+        self.periodic, self.closed_loop = periodic, closed_loop
+
+    @property
+    def period_s(self) -> float | None:
+        return 1.0 if self.periodic else None
+
+    @property
+    def uses_measured_pose(self) -> bool:
+        return self.closed_loop
+
+    def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
+        t = np.asarray(time_s, dtype=float)
+        wave: FloatArray = 0.5 * np.sin(2 * np.pi * t[..., None] - 0.7 * np.arange(8))
+        return wave
+
+
+@pytest.mark.parametrize(("periodic", "closed_loop"), [(False, False), (True, True)])
+def test_a_gait_that_cannot_be_shifted_keeps_its_phase_at_zero(
+    periodic: bool, closed_loop: bool
+) -> None:
+    base = _Wave(periodic=periodic, closed_loop=closed_loop)
+    gait = CompliantGait(base, STALL_NM, ComplianceSettings(phase_gain=100.0))
+    assert not gait.shifts_phase
+    for k in range(100):  # held behind the wave, as a peg would hold it
+        t = k * PERIOD_S
+        gait.command(t, np.zeros(8))
+        slope = base.targets(t + 1e-5) - base.targets(t - 1e-5)
+        gait.observe(_record(0.9 * STALL_NM * np.sign(slope), time_s=t))
+    np.testing.assert_array_equal(gait.phase_rad, 0.0)
+    assert gait.summary()["largest_phase_rad"] == [0.0] * 4
+    assert (gait.amplitude_scale != 1.0).any()  # amplitude and offset still yield
+    np.testing.assert_array_equal(gait.shift_s(), 0.0)
+
+
+def test_a_periodic_gait_of_time_can_be_shifted_and_no_phase_gain_turns_it_off() -> None:
+    base = _Wave(periodic=True, closed_loop=False)
+    assert CompliantGait(base, STALL_NM, ComplianceSettings(phase_gain=1.0)).shifts_phase
+    assert not CompliantGait(base, STALL_NM, ComplianceSettings(phase_gain=0.0)).shifts_phase
+
+
 @pytest.mark.parametrize(
     ("field", "value"),
     [
@@ -118,6 +247,10 @@ def test_the_parameters_stay_inside_their_bounds_and_reset() -> None:
         ("return_s", 0.0),
         ("amplitude_range", (1.1, 1.5)),
         ("offset_limit_rad", float("nan")),
+        ("phase_gain", -0.1),
+        ("phase_gain", float("inf")),
+        ("phase_limit_rad", -0.1),
+        ("phase_limit_rad", 4.0),
     ],
 )
 def test_bad_settings_name_the_field(field: str, value: object) -> None:
