@@ -33,6 +33,8 @@ from snakebot.errors import ConfigError, UsageError
 from snakebot.servo import FACTORY_BAUD
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from snakebot.emulation.bench import ServoBench
     from snakebot.emulation.chain import EmulatedChain
     from snakebot.emulation.physics import TwinMotion
@@ -78,6 +80,13 @@ def add_parser(subparsers: Any) -> None:
         "gains from their registers); print its summary on exit",
     )
     add_terrain_options(parser)
+    parser.add_argument(
+        "--wrap-on-pole",
+        metavar="GAIT[:KEY=VALUE,...]",
+        help="with --physics --terrain pole: start the twin coiled around the pole in GAIT's "
+        "t = 0 shape (e.g. rolling_helix:pole_radius_m=0.052,pitch_m_per_rad=0.03), the "
+        "servos holding it, as a snake wrapped by hand (docs/twin.md)",
+    )
     parser.add_argument("--pty", action="store_true", required=True, help="serve on a pty")
     parser.add_argument("--json", action="store_true", help='print {"port": ...} and JSON summary')
     parser.add_argument(
@@ -207,6 +216,33 @@ def _also(chain: EmulatedChain, groups: Sequence[AlsoServos], baud: int) -> None
             chain.add(servo)
 
 
+def _wrapped_pose(
+    args: argparse.Namespace, robot: RobotConfig, ground: dict[str, Any]
+) -> np.ndarray | None:
+    """``--wrap-on-pole GAIT[:KEY=VALUE,...]``: the gait's t = 0 pose (N,) rad, or None.
+    UsageError (exit 2) without a pole terrain or for a bad gait spec."""
+    if not args.wrap_on_pole:
+        return None
+    terrain = ground["terrain"]
+    if terrain is None or terrain.name != "pole":
+        raise UsageError("--wrap-on-pole needs the pole terrain: add --terrain pole[:...]")
+    from snakebot.errors import GaitError
+    from snakebot.gaits import make_gait, parse_set_options
+
+    name, _, options = str(args.wrap_on_pole).partition(":")
+    try:
+        items = [item for item in options.split(",") if item]
+        params = parse_set_options(name, items, source="--wrap-on-pole")
+        gait = make_gait(
+            name, robot.joint_count, params, lower_rad=robot.lower_rad, upper_rad=robot.upper_rad
+        )
+        pose: np.ndarray = gait.targets(0.0)
+        return pose
+    except (GaitError, ConfigError) as exc:
+        text = str(exc)
+        raise UsageError(text if "--wrap-on-pole" in text else f"--wrap-on-pole: {text}") from None
+
+
 def _bench(
     robot: RobotConfig, args: argparse.Namespace, baud: int
 ) -> tuple[ServoBench, TwinMotion | None]:
@@ -220,8 +256,9 @@ def _bench(
             "--fresh", "", "--fresh starts with no robot chain: drop --physics and --scramble"
         )
     if not args.physics:
-        if args.terrain:
-            raise UsageError("--terrain needs --physics: without it no twin runs under the servos")
+        if args.terrain or args.wrap_on_pole:
+            flag = "--terrain" if args.terrain else "--wrap-on-pole"
+            raise UsageError(f"{flag} needs --physics: without it no twin runs under the servos")
         refuse_friction_model(args, "needs --physics: without it no twin runs under the servos")
     motion = None
     if args.fresh:
@@ -229,7 +266,10 @@ def _bench(
     elif args.physics:
         from snakebot.emulation.physics import make_twin_chain
 
-        chain, motion = make_twin_chain(robot, baud, **twin_ground(args, robot))
+        ground = twin_ground(args, robot)
+        chain, motion = make_twin_chain(
+            robot, baud, **ground, wrapped_pose_rad=_wrapped_pose(args, robot, ground)
+        )
         for serial, servo in enumerate(chain.servos, start=1):
             servo.serial_number = serial
     else:

@@ -54,6 +54,7 @@ class TwinMotion:
         self._servos: dict[int, VirtualServo] = {}
         self.steps = 0
         self._latched: set[int] = set()  # joints whose servo latched the twin's overload
+        self._start_height_m = self._top_height_m = 0.0  # centre of mass, m (from attach)
         # Current-based position (Operating Mode 5): Goal Current caps the torque, kt * |I|.
         physics = robot.servo.physics
         self._stall_nm = physics.stall_torque_nm
@@ -72,8 +73,19 @@ class TwinMotion:
         self._gains.clear()
         self._read_tables()
         self._last_state = self.twin.read_state()
-        self.metrics.start(self._last_state.time_s, self.twin.body_state())
+        body = self.twin.body_state()
+        self.metrics.start(self._last_state.time_s, body)
+        self._start_height_m = self._top_height_m = float(body.com_m[2])
         self._publish()
+
+    def hold(self) -> None:
+        """The servos hold where the twin stands, as servos a person powered and wrapped by
+        hand: Torque Enable 1 and Goal Position = Present Position on every servo, taken up by
+        the twin before any physics step."""
+        for servo in self._servos.values():
+            servo.poke("goal_position", servo.peek("present_position"))
+            servo.poke("torque_enable", 1)
+        self._read_tables()
 
     def step(self, servo: VirtualServo, dt_s: float) -> None:
         """Advance the twin once per chain step (on the first servo's step); a closed twin
@@ -93,7 +105,9 @@ class TwinMotion:
         state = self.twin.read_state()
         work = cycle_work_j(self._last_state, state)
         self._last_state = state
-        self.metrics.add(self._goal, state, self.twin.body_state(), steps * timestep, work)
+        body = self.twin.body_state()
+        self.metrics.add(self._goal, state, body, steps * timestep, work)
+        self._top_height_m = max(self._top_height_m, float(body.com_m[2]))
         self._publish()
 
     def _latch_overloads(self) -> None:
@@ -180,6 +194,11 @@ class TwinMotion:
         out["achieved_rate_hz"] = self.steps / elapsed if elapsed > 0 else 0.0
         out["overruns"] = 0
         out["interrupted"] = False
+        # How high the centre of mass got above where it started (m, and in body lengths):
+        # a climb shows here, though a run's ramp-out lets the snake down again.
+        rise = self._top_height_m - self._start_height_m
+        out["max_rise_m"] = rise
+        out["max_rise_body_lengths"] = rise / self.robot.body_length_m
         physics = self.twin.physics_health()
         if physics is not None:
             out["physics"] = physics
@@ -192,10 +211,14 @@ def make_twin_chain(
     *,
     terrain: Terrain | str | None = None,
     friction_model: FrictionModel | None = None,
+    wrapped_pose_rad: np.ndarray | None = None,
 ) -> tuple[EmulatedChain, TwinMotion]:
     """The robot's servo chain at ``baud``, every servo backed by one connected twin on
     ``terrain`` (a Terrain or its spec, e.g. ``"pegs:density=100,seed=1"``; None: the flat
-    floor) with ``friction_model`` (None: the robot file's). ConfigError for a bad terrain."""
+    floor) with ``friction_model`` (None: the robot file's). With ``wrapped_pose_rad`` (N,) rad
+    the twin starts coiled in that pose around the pole terrain's pole (``wrap_on_pole``) and
+    the servos boot holding it (torque on, Goal Position where they stand), as CMU's snakes are
+    wrapped by hand. ConfigError for a bad terrain, or a wrapped start without a pole."""
     # The servo latches an overload instead; a bus keeps answering whatever the physics does,
     # so physics health is reported in the summary, never raised.
     twin = TwinBackend(
@@ -206,7 +229,13 @@ def make_twin_chain(
         friction_model=friction_model,
     )
     twin.connect()
+    if wrapped_pose_rad is not None:
+        from snakebot.backends.twin.pole_wrap import wrap_on_pole
+
+        wrap_on_pole(twin, wrapped_pose_rad)
     motion = TwinMotion(robot, twin)
     chain = make_chain_for_ids(robot.servo.name, robot.servo_ids, baud, motion=motion)
     motion.attach(chain)
+    if wrapped_pose_rad is not None:
+        motion.hold()
     return chain, motion

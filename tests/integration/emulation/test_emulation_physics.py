@@ -14,6 +14,8 @@ from snakebot.config.schema import GainRegisters
 from snakebot.emulation import EmulatedChain, registered
 from snakebot.emulation.physics import TwinMotion, make_twin_chain
 from snakebot.emulation.port import EmulatedPortHandler
+from snakebot.errors import ConfigError
+from snakebot.gaits import make_gait
 from snakebot.servo.dynamics import servo_dynamics
 from snakebot.types import PDGains
 
@@ -200,3 +202,20 @@ def test_the_twin_under_the_bus_stands_on_the_terrain_asked_for() -> None:
     _chain, motion = _xm430_twin_bus(terrain="pegs:density=100,seed=1")
     assert motion.twin.terrain is not None and motion.twin.terrain.name == "pegs"
     assert motion.twin.model.ngeom > _xm430_twin_bus()[1].twin.model.ngeom  # the pegs are there
+
+
+def test_a_wrapped_start_boots_the_servos_holding_the_coil_on_the_pole() -> None:
+    robot = load_robot("snake12")
+    gait = make_gait("rolling_helix", robot.joint_count, {"pole_radius_m": 0.052})
+    pose = gait.targets(0.0)
+    chain, motion = make_twin_chain(robot, BAUD, terrain="pole", wrapped_pose_rad=pose)
+    start = motion.twin.body_state().com_m[2]
+    assert start > 0.1  # coiled up the pole, not lying beside it
+    assert all(s.torque_enabled for s in chain.servos)
+    assert [s.peek("goal_position") for s in chain.servos] == [
+        s.peek("present_position") for s in chain.servos
+    ]
+    chain.advance(1.0)
+    assert motion.twin.body_state().com_m[2] > start - 0.02  # held there, not slumping off
+    with pytest.raises(ConfigError, match="pole"):
+        make_twin_chain(robot, BAUD, wrapped_pose_rad=pose)  # no pole on the flat floor

@@ -133,6 +133,15 @@ CASES = [
     bad("emulate", "--pty", "--terrain", "pegs", code=2, names=("--terrain", "--physics")),
     bad("emulate", "--pty", "--physics", "--terrain", "pegs:bogus=1", code=2, names=("bogus",)),
     bad("run", "--torque-limit", "9", code=2, names=("--torque-limit", "stall torque")),
+    bad(
+        "emulate",
+        "--pty",
+        "--physics",
+        "--wrap-on-pole",
+        "rolling_helix",
+        code=2,
+        names=("--wrap-on-pole", "pole terrain"),
+    ),
     # scan
     bad("scan", "--port", "socket://127.0.0.1:9", code=2, names=("socket://127.0.0.1:9",)),
     bad("scan", "--port", "{blocker}", names=("{blocker}",)),
