@@ -27,9 +27,9 @@ gait.
 Only a gait that is a function of time can be played early or late: one whose
 ``uses_measured_pose`` is true (its targets follow the servos: keyframes advanced on error, a
 policy, a live driver) or whose ``period_s`` is None keeps its phase at 0, and only its
-amplitude and offset yield. The phase is off by default (``phase_gain`` 0): measured on the
-twin's peg fields it helped a little on the XL430 snake8 and halved the XM430 snake's speed on
-two of three layouts (docs/compliance.md).
+amplitude and offset yield. The phase is off by default (``phase_gain`` 0): swept over 15 of
+the twin's peg fields, no gain (1 to 3) helped reliably, and some slowed the XM430 snake to a
+crawl on a layout that does not jam (docs/compliance.md).
 
 The torque is what the servos measure: a chain whose model has a Present Current register
 (torque = kt * current, the torque constant from the servo file), or the twin's servo model
