@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from snakebot.backends.capabilities import ReportsTravel, SensesBody
+from snakebot.backends.capabilities import ReportsTravel, SensesBody, SensesTorque
 from snakebot.backends.registry import BackendSpec, get_backend_spec
 from snakebot.config import RobotConfig
 from snakebot.config.body import BodyConfig
@@ -262,6 +262,14 @@ class Snake:
         robot = self.robot
         metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
         safety = SafetyLayer.for_robot(robot)
+        # Where the servos measure their torque, every run reports how long they stalled.
+        stall = None
+        if isinstance(self.backend, SensesTorque) and isinstance(robot, RobotConfig):
+            from snakebot.control.compliance import StallMeter
+
+            physics = robot.servo.physics
+            stall = StallMeter(physics.stall_torque_nm, physics.no_load_speed_rad_s)
+            observers = [*observers, stall]
         with self._open_log(log) as writer:
             result = run_gait(
                 self.backend,
@@ -281,6 +289,8 @@ class Snake:
         )
         if result.stopped_by:
             extra["stopped_by"] = result.stopped_by
+        if stall is not None:
+            extra.update(stall.summary())
         return RunSummary.from_run(
             robot=robot.name,
             gait=name,

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from snakebot.backends.base import Backend
-from snakebot.backends.capabilities import SensesTorque, Simulated
+from snakebot.backends.capabilities import Simulated
 from snakebot.cli.backend_options import (
     add_backend_argument,
     add_option_flags,
@@ -39,7 +39,6 @@ from snakebot.config import RobotConfig
 from snakebot.control.compliance import (
     ComplianceSettings,
     CompliantGait,
-    StallMeter,
     check_torque_sensing,
 )
 from snakebot.control.cycle import CycleRecord
@@ -260,11 +259,6 @@ def run(args: argparse.Namespace) -> int:
         )
         stall_nm = snake.robot.servo.physics.stall_torque_nm
         gait = compliance = CompliantGait(gait, stall_nm, settings)
-    # Where the servos measure their torque, every run reports how long they stalled.
-    stall: StallMeter | None = None
-    if isinstance(snake.backend, SensesTorque) and isinstance(snake.robot, RobotConfig):
-        physics = snake.robot.servo.physics
-        stall = StallMeter(physics.stall_torque_nm, physics.no_load_speed_rad_s)
     if args.torque_limit is not None:
         limit_servo_torque(snake.backend, snake.robot, args.torque_limit, "--torque-limit")
     if (args.video or args.viewer) and spec.hardware:
@@ -322,10 +316,9 @@ def run(args: argparse.Namespace) -> int:
         for estimator in observers:  # a pose before the first cycle's gait asks for one
             estimator.start(snake.read_state())
         hooks = _cycle_hooks(stack, snake.backend, args)
-        cycle_observers: list[Callable[[CycleRecord], None]] = [
-            *([] if compliance is None else [compliance.observe]),
-            *([] if stall is None else [stall]),
-        ]
+        cycle_observers: list[Callable[[CycleRecord], None]] = (
+            [] if compliance is None else [compliance.observe]
+        )
         summary = snake.run(
             gait,
             duration_s=args.duration,
@@ -338,8 +331,6 @@ def run(args: argparse.Namespace) -> int:
     goal = {} if steering is None else steering_summary(steering)
     if compliance is not None:
         goal["compliance"] = compliance.summary()
-    if stall is not None:
-        goal.update(stall.summary())
     if args.torque_limit is not None:
         goal["torque_limit_nm"] = args.torque_limit
     summary = replace(
