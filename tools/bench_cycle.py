@@ -34,9 +34,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import mujoco
-
-import snakebot.backends.twin.backend as twin_module
 from snakebot.backends.twin import TwinBackend
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.cycle import CycleRecord
@@ -86,16 +83,6 @@ class Clock:
         return timed
 
 
-class TimedMujoco:
-    """The mujoco module as the twin backend sees it, with ``mj_step`` timed."""
-
-    def __init__(self, clock: Clock) -> None:
-        self.mj_step = clock.wrap("mj_step", mujoco.mj_step)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(mujoco, name)
-
-
 class TimedSink:
     """A telemetry sink whose ``__call__`` (one record) is timed."""
 
@@ -143,39 +130,39 @@ def one_run(
 ) -> tuple[int, float, Clock]:
     """One run; returns the cycles, the wall seconds and the clock's stage times."""
     clock = Clock()
-    twin_module.mujoco = TimedMujoco(clock)  # type: ignore[assignment]
-    try:
-        backend = TwinBackend(robot)
-        gait = make_gait("serpenoid", robot.joint_count)
-        safety = SafetyLayer.for_robot(robot)
-        metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
-        with backend:
-            log: CsvTelemetryWriter | TimedSink | None = (
-                CsvTelemetryWriter(log_dir / "bench.csv", robot.joint_count)
-                if log_dir is not None
-                else None
-            )
-            if stages:
-                object.__setattr__(gait, "command", clock.wrap("gait", gait.command))
-                safety.filter = clock.wrap("safety", safety.filter)  # type: ignore[method-assign]
-                backend.send_command = clock.wrap("send", backend.send_command)  # type: ignore[method-assign]
-                backend.advance = clock.wrap("advance", backend.advance)  # type: ignore[method-assign]
-                backend.read_state = clock.wrap("read_state", backend.read_state)  # type: ignore[method-assign]
-                backend.body_state = clock.wrap("body_state", backend.body_state)  # type: ignore[method-assign]
-                metrics.add = clock.wrap("metrics", metrics.add)  # type: ignore[method-assign]
-                monitor = backend.physics_monitor
-                if monitor is not None:
-                    monitor.sample = clock.wrap("health", monitor.sample)  # type: ignore[method-assign]
-                if log is not None:
-                    log = TimedSink(log, clock.wrap("log", log.__call__))
-            plan = RunPlan(duration_s=seconds, rate_hz=RATE_HZ, ramp_out=False)
-            start = now_ns()
-            run_gait(backend, gait, safety, plan, metrics, log=log)
-            wall_ns = now_ns() - start
+    backend = TwinBackend(robot)
+    gait = make_gait("serpenoid", robot.joint_count)
+    safety = SafetyLayer.for_robot(robot)
+    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+    with backend:
+        # The period's physics steps (mj_step, with the work summed in C: work_c).
+        backend._step_integrating = clock.wrap(  # type: ignore[method-assign]
+            "mj_step", backend._step_integrating
+        )
+        log: CsvTelemetryWriter | TimedSink | None = (
+            CsvTelemetryWriter(log_dir / "bench.csv", robot.joint_count)
+            if log_dir is not None
+            else None
+        )
+        if stages:
+            object.__setattr__(gait, "command", clock.wrap("gait", gait.command))
+            safety.filter = clock.wrap("safety", safety.filter)  # type: ignore[method-assign]
+            backend.send_command = clock.wrap("send", backend.send_command)  # type: ignore[method-assign]
+            backend.advance = clock.wrap("advance", backend.advance)  # type: ignore[method-assign]
+            backend.read_state = clock.wrap("read_state", backend.read_state)  # type: ignore[method-assign]
+            backend.body_state = clock.wrap("body_state", backend.body_state)  # type: ignore[method-assign]
+            metrics.add = clock.wrap("metrics", metrics.add)  # type: ignore[method-assign]
+            monitor = backend.physics_monitor
+            if monitor is not None:
+                monitor.sample = clock.wrap("health", monitor.sample)  # type: ignore[method-assign]
             if log is not None:
-                log.close()
-    finally:
-        twin_module.mujoco = mujoco
+                log = TimedSink(log, clock.wrap("log", log.__call__))
+        plan = RunPlan(duration_s=seconds, rate_hz=RATE_HZ, ramp_out=False)
+        start = now_ns()
+        run_gait(backend, gait, safety, plan, metrics, log=log)
+        wall_ns = now_ns() - start
+        if log is not None:
+            log.close()
     return metrics.cycles, wall_ns / 1e9, clock
 
 

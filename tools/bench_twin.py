@@ -6,6 +6,12 @@ For 8, 16 and 32 servos, each round runs, back to back in one process and in shu
   snakebot+log   the same with the per-cycle CSV telemetry log
   bare_step      the exported MJCF, numpy ctrl every 10 ms, one mj_step() call per physics step
   bare_nstep     the same, one mj_step(m, d, nstep) call per control period
+  bare_replay    the twin's own compiled model from the twin's start state, replaying the ctrl
+                 sequence the snakebot run sent, one mj_step() call per physics step: the same
+                 physics as the run (checked: it ends in the run's state), so snakebot /
+                 bare_replay is what the controller costs and nothing else. bare_step plays
+                 another motion (an instant 0.5 Hz sine against the run's ramped serpenoid),
+                 whose contacts cost a different amount per step.
 Ratios are taken within each round, then the median over rounds is reported. ``--clock cpu``
 times each block by the thread's CPU time instead of the wall clock (on a loaded machine the
 time spent waiting for a core then does not count).
@@ -39,6 +45,7 @@ from snakebot.telemetry import CsvTelemetryWriter
 RATE_HZ = 100.0
 CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}
 now = CLOCKS["wall"]
+RATIOS = ("step", "facade_step", "nstep", "log_step", "replay", "log_replay")
 
 
 def robot_with(joints: int) -> RobotConfig:
@@ -70,6 +77,64 @@ def run_facade(robot: RobotConfig, seconds: float) -> float:
         wall = now() - start
         steps = round(seconds / snake.backend.model.opt.timestep)  # type: ignore[attr-defined]
     return steps / wall
+
+
+@dataclasses.dataclass(frozen=True)
+class Replay:
+    """A snakebot run's physics, to replay bare: the twin's model, its state when the run began,
+    the ctrl (C, N) sent each control period, and the state the run ended in."""
+
+    model: mujoco.MjModel
+    start_state: np.ndarray
+    ctrl: np.ndarray
+    end_state: np.ndarray
+    steps_per_cycle: int
+
+
+def record_replay(robot: RobotConfig, seconds: float) -> Replay:
+    """Run the snakebot path once, untimed, keeping what a bare loop needs to replay it."""
+    backend = TwinBackend(robot)
+    gait = make_gait("serpenoid", robot.joint_count)
+    metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+    plan = RunPlan(duration_s=seconds, rate_hz=RATE_HZ, ramp_out=False)
+    what = mujoco.mjtState.mjSTATE_INTEGRATION
+    with backend:
+        model, data = backend.model, backend.data
+        sent: list[np.ndarray] = []
+        stepping = backend._step_integrating
+
+        def step_and_keep(steps: int) -> np.ndarray:
+            sent.append(data.ctrl.copy())
+            return stepping(steps)
+
+        backend._step_integrating = step_and_keep  # type: ignore[method-assign]
+        start = np.empty(mujoco.mj_stateSize(model, what))
+        mujoco.mj_getState(model, data, start, what)
+        run_gait(backend, gait, SafetyLayer.for_robot(robot), plan, metrics)
+        end = np.empty_like(start)
+        mujoco.mj_getState(model, data, end, what)
+        steps = backend.steps_for(1.0 / RATE_HZ)
+    return Replay(model, start, np.array(sent), end, steps)
+
+
+def run_replay(replay: Replay) -> tuple[float, float]:
+    """Steps per second of the bare replay, and its largest difference from the run's end state."""
+    model = replay.model
+    data = mujoco.MjData(model)
+    what = mujoco.mjtState.mjSTATE_INTEGRATION
+    mujoco.mj_setState(model, data, replay.start_state, what)
+    mujoco.mj_forward(model, data)
+    per_cycle = replay.steps_per_cycle
+    ctrl = data.ctrl
+    start = now()
+    for command in replay.ctrl:
+        ctrl[:] = command
+        for _ in range(per_cycle):
+            mujoco.mj_step(model, data)
+    wall = now() - start
+    end = np.empty_like(replay.end_state)
+    mujoco.mj_getState(model, data, end, what)
+    return len(replay.ctrl) * per_cycle / wall, float(np.abs(end - replay.end_state).max())
 
 
 def run_bare(xml_path: Path, joints: int, seconds: float, nstep_call: bool) -> float:
@@ -105,21 +170,21 @@ def main() -> None:
     global now
     now = CLOCKS[args.clock]
     sizes = [int(s) for s in args.sizes.split(",")]
-    variants = ["snakebot", "facade", "snakebot+log", "bare_step", "bare_nstep"]
+    variants = ["snakebot", "facade", "snakebot+log", "bare_step", "bare_nstep", "bare_replay"]
     with tempfile.TemporaryDirectory() as tmp:
         tmp_path = Path(tmp)
-        robots, xml = {}, {}
+        robots, xml, replays = {}, {}, {}
+        mismatch = 0.0
         for n in sizes:
             robots[n] = robot_with(n)
+            replays[n] = record_replay(robots[n], args.seconds)
             spec = build_spec(robots[n])
             add_actuators(spec, robots[n])
             spec.compile()
             xml[n] = tmp_path / f"snake{n}.xml"
             xml[n].write_text(spec.to_xml())
         results: dict[tuple[int, str], list[float]] = {(n, v): [] for n in sizes for v in variants}
-        ratios: dict[tuple[int, str], list[float]] = {
-            (n, v): [] for n in sizes for v in ("step", "facade_step", "nstep", "log_step")
-        }
+        ratios: dict[tuple[int, str], list[float]] = {(n, v): [] for n in sizes for v in RATIOS}
         for _ in range(args.rounds):
             for n in sizes:
                 order = variants[:]
@@ -132,6 +197,9 @@ def main() -> None:
                         got[variant] = run_facade(robots[n], args.seconds)
                     elif variant == "snakebot+log":
                         got[variant] = run_snakebot(robots[n], args.seconds, tmp_path)
+                    elif variant == "bare_replay":
+                        got[variant], off = run_replay(replays[n])
+                        mismatch = max(mismatch, off)
                     else:
                         got[variant] = run_bare(
                             xml[n], n, args.seconds, nstep_call=variant == "bare_nstep"
@@ -141,24 +209,27 @@ def main() -> None:
                 ratios[(n, "facade_step")].append(got["facade"] / got["bare_step"])
                 ratios[(n, "nstep")].append(got["snakebot"] / got["bare_nstep"])
                 ratios[(n, "log_step")].append(got["snakebot+log"] / got["bare_step"])
+                ratios[(n, "replay")].append(got["snakebot"] / got["bare_replay"])
+                ratios[(n, "log_replay")].append(got["snakebot+log"] / got["bare_replay"])
 
     print(
         f"{args.rounds} rounds, {args.seconds:g} s simulated per block, control {RATE_HZ:g} Hz, "
-        f"{args.clock} clock\n"
+        f"{args.clock} clock; the bare replay ends {mismatch:.3g} from the run's state (largest "
+        "difference of any state variable: 0 = the same physics, bit for bit)\n"
     )
     print(
         "| servos | "
         + " | ".join(f"{v} steps/s" for v in variants)
         + " | snakebot / bare_step | facade / bare_step | snakebot / bare_nstep"
-        " | snakebot+log / bare_step |"
+        " | snakebot+log / bare_step | **snakebot / bare_replay** | snakebot+log / bare_replay |"
     )
-    print("|---" * (len(variants) + 5) + "|")
+    print("|---" * (len(variants) + 1 + len(RATIOS)) + "|")
     for n in sizes:
         cells = [f"{statistics.median(results[(n, v)]):,.0f}" for v in variants]
         cells += [
             f"{statistics.median(ratios[(n, k)]):.2f} "
             f"({min(ratios[(n, k)]):.2f}-{max(ratios[(n, k)]):.2f})"
-            for k in ("step", "facade_step", "nstep", "log_step")
+            for k in RATIOS
         ]
         print(f"| {n} | " + " | ".join(cells) + " |")
 
