@@ -10,12 +10,15 @@ Past a warning threshold the run's summary lists a warning; past a hard one the 
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from snakebot.backends.native_cache import CompileError
+from snakebot.backends.twin.health_c import ContactScan
 from snakebot.backends.twin.readouts import Capsules, as_slice, positive_power_w
 from snakebot.errors import PhysicsHealthError
 
@@ -54,6 +57,44 @@ DEFAULT_LIMITS = HealthLimits()
 _ROWS = 512  # cycles judged per vectorised pass at most
 
 
+class PythonScan:
+    """The per-cycle scan of MjData in Python: what health_c.ContactScan does in C, the
+    reference it is held to and the path without a compiler. ``scan(data)`` returns (floor
+    penetration m, module-module penetration m, grounded, lowest capsule point m or None when
+    grounded, fastest joint rad/s); the penetrations are -inf where there is no such contact."""
+
+    def __init__(self, capsules: Capsules, is_link: np.ndarray, dof_index: np.ndarray) -> None:
+        self._capsules = capsules
+        self._is_link: list[bool] = is_link.tolist()
+        self._dof = as_slice(dof_index)
+
+    def scan(self, data: mujoco.MjData) -> tuple[float, float, bool, float | None, float]:
+        """The scan of ``data`` now (see the class)."""
+        floor = other = -math.inf
+        grounded = False
+        ncon = data.ncon
+        if ncon:
+            # A few dozen contacts: a Python pass over them costs less than numpy's reductions.
+            contact = data.contact
+            is_link = self._is_link
+            for (first, second), dist in zip(
+                contact.geom[:ncon].tolist(), contact.dist[:ncon].tolist(), strict=True
+            ):
+                if is_link[first] and is_link[second]:
+                    if -dist > other:
+                        other = -dist
+                else:
+                    grounded = True
+                    if -dist > floor:
+                        floor = -dist
+        clearance = (
+            None if grounded else float(self._capsules.clearance_m(data.geom_xpos, data.geom_xmat))
+        )
+        dof = self._dof
+        velocity = data.qvel[dof]
+        return floor, other, grounded, clearance, max(map(abs, velocity.tolist()))
+
+
 class HealthMonitor:
     """Accumulates the health of one twin run; ``sample`` after every control period.
 
@@ -70,14 +111,17 @@ class HealthMonitor:
         no_load_speed_rad_s: float,
         torque_limit_nm: float,
         limits: HealthLimits = DEFAULT_LIMITS,
+        compiled: bool = True,
     ) -> None:
         self.limits = limits
         # At most 30 attributes: past that CPython 3.11 stops sharing the instance dict's keys
         # and every attribute read in ``sample`` gets slower (callgrind counted it).
         is_link = np.zeros(model.ngeom, dtype=bool)
         is_link[capsules.geoms] = True
-        self._link_flags: list[bool] = is_link.tolist()
-        self._capsules = capsules
+        self._scanner: ContactScan | PythonScan = PythonScan(capsules, is_link, dof_index)
+        if compiled:  # without a compiler, the Python pass: the same figures, a little slower
+            with contextlib.suppress(CompileError):
+                self._scanner = ContactScan(model, capsules, is_link, dof_index)
         self._radius = float(capsules.radius_m.max())
         self._dof = as_slice(dof_index)
         self._head = head_id
@@ -131,32 +175,12 @@ class HealthMonitor:
         _, qvel, head_quat = views
         self.cycles += 1
         self.time_s += dt_s
-        ncon = data.ncon
-        grounded = False
-        if ncon:
-            # A few dozen contacts: a Python pass over them costs less than numpy's reductions.
-            contact = data.contact
-            is_link = self._link_flags
-            floor = other = -math.inf
-            for (first, second), dist in zip(
-                contact.geom[:ncon].tolist(), contact.dist[:ncon].tolist(), strict=True
-            ):
-                if is_link[first] and is_link[second]:
-                    if -dist > other:
-                        other = -dist
-                else:
-                    grounded = True
-                    if -dist > floor:
-                        floor = -dist
-            if floor > self.max_floor_penetration_m:
-                self.max_floor_penetration_m = floor
-            if other > self.max_self_penetration_m:
-                self.max_self_penetration_m = other
-        if (
-            not grounded
-            and self._capsules.clearance_m(data.geom_xpos, data.geom_xmat)
-            > limits.contact_tolerance_m
-        ):
+        floor, other, grounded, clearance, speed = self._scanner.scan(data)
+        if floor > self.max_floor_penetration_m:
+            self.max_floor_penetration_m = floor
+        if other > self.max_self_penetration_m:
+            self.max_self_penetration_m = other
+        if not grounded and clearance is not None and clearance > limits.contact_tolerance_m:
             self._airborne_cycles += 1
         _, x, y, _ = head_quat.tolist()
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down
@@ -173,7 +197,6 @@ class HealthMonitor:
             self._work_rows[row] = work_j
         self._dt[row] = dt_s
         self._rows = row + 1
-        speed = max(map(abs, velocity.tolist()))
         if speed > self.max_speed_rad_s:
             self.max_speed_rad_s = speed
         self._window_s += dt_s

@@ -4,16 +4,20 @@ warning or a typed error, with the right time."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import subprocess
 import sys
 from pathlib import Path
 from typing import Any
 
+import mujoco
 import numpy as np
 import numpy.typing as npt
 import pytest
 
 from snakebot.backends.twin import TwinBackend
+from snakebot.backends.twin.health import HealthMonitor
+from snakebot.backends.twin.readouts import Capsules
 from snakebot.config import RobotConfig, load_robot
 from snakebot.control.metrics import RunMetrics
 from snakebot.control.runner import RunPlan, run_gait
@@ -177,3 +181,61 @@ def test_more_power_than_a_servo_has_for_a_second_is_a_typed_error() -> None:
         with pytest.raises(PhysicsHealthError, match=r"energy injected.*3\.00 W over 1 s"):
             for _ in range(100):
                 monitor.sample(twin.data, 0.01, torque)
+
+
+def test_the_compiled_scan_reads_every_cycle_what_the_python_pass_reads() -> None:
+    """health_c's C scan against the Python pass on the same MjData every cycle: grounded and
+    penetrating (a serpenoid), modules pressed into each other (self contacts), and a snake
+    falling from 0.2 m (no contact: the capsules' lowest point). Same numbers to the bit."""
+    from snakebot.backends.twin.health import PythonScan
+    from snakebot.backends.twin.health_c import ContactScan
+
+    robot = load_robot("snake8")
+    seen = {"grounded": 0, "airborne": 0, "self": 0}
+    serpenoid = make_gait("serpenoid", 8, {})
+    pressed = np.array([0, 1.5, 1.5, 1.5, 1.5, 1.5, 0, 0])
+    for case in ("serpenoid", "pressed", "falling"):
+        with TwinBackend(robot, health=None) as twin:  # the landing would stop a checked run
+            model, data = twin.model, twin.data
+            capsules = Capsules.of_modules(model, robot.link_count)
+            is_link = np.zeros(model.ngeom, dtype=bool)
+            is_link[capsules.geoms] = True
+            compiled = ContactScan(model, capsules, is_link, twin._dof_index)
+            python = PythonScan(capsules, is_link, twin._dof_index)
+            if case == "falling":
+                data.qpos[2] += 0.2
+                mujoco.mj_forward(model, data)
+            for k in range(150):
+                goal = pressed if case == "pressed" else serpenoid.targets(k * 0.01)
+                twin.send_command(JointCommand(0.5 * goal if case == "falling" else goal))
+                twin.advance(0.01)
+                got, want = compiled.scan(data), python.scan(data)
+                assert got == want, (case, k)
+                seen["grounded" if got[2] else "airborne"] += 1
+                seen["self"] += got[1] > -math.inf
+    assert all(count > 10 for count in seen.values()), seen
+
+
+def test_a_run_reports_the_same_health_with_the_scan_in_c_or_in_python() -> None:
+    robot = load_robot("snake8")
+    summaries = []
+    for compiled in (True, False):
+        metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
+        with TwinBackend(robot) as twin:
+            twin.physics_monitor = HealthMonitor(
+                twin.model,
+                Capsules.of_modules(twin.model, robot.link_count),
+                twin._dof_index,
+                twin._head_id,
+                no_load_speed_rad_s=5.969,
+                torque_limit_nm=1.4,
+                compiled=compiled,
+            )
+            kind = type(twin.physics_monitor._scanner).__name__
+            assert kind == ("ContactScan" if compiled else "PythonScan")
+            gait = make_gait("serpenoid", robot.joint_count, {})
+            plan = RunPlan(duration_s=3.0, rate_hz=100.0)
+            run_gait(twin, gait, SafetyLayer.for_robot(robot), plan, metrics)
+            summaries.append(twin.physics_monitor.summary())
+    assert summaries[0] == summaries[1]
+    assert summaries[0]["max_floor_penetration_mm"] > 0.0
