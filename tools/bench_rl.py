@@ -5,7 +5,13 @@ Env vs bare, per encoding, in one process, rounds in shuffled order:
          observation and the reward), resets included
   bare   the same compiled model, a sinusoid written to ctrl every control period and one
          mj_step(m, d, nstep) per period: the same control decimation, nothing else
-The ratio env/bare (goal >= 0.75) is taken within each round; medians over rounds. Both wall
+  replay the env's own model replaying the ctrl the env sent each control period, from the
+         state each stretch began in (the block's start, each reset): the same physics as the
+         env's block, bit for bit (its end state is checked), one mj_step(m, d, nstep) per
+         period. env/replay is what the env adds and nothing else; bare plays another motion,
+         whose contacts cost a different amount per step. Keeping the ctrl costs the env one
+         copy per period.
+The ratios (goal >= 0.85) are taken within each round; medians over rounds. Both wall
 time and process CPU time are reported: CPU time holds on a loaded machine, wall time does not.
 
 PPO: stable-baselines3 PPO (defaults, n_steps = 2048 / n_envs) learning for --ppo-steps on
@@ -36,15 +42,63 @@ from snakebot.rl.train import TrainSettings, train
 Clock = Callable[[], float]
 
 
-def env_block(env: Any, steps: int, rng: np.random.Generator) -> tuple[float, float]:
+STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+
+
+def state_of(model: Any, data: Any) -> np.ndarray:
+    state = np.empty(mujoco.mj_stateSize(model, STATE))
+    mujoco.mj_getState(model, data, state, STATE)
+    return state
+
+
+def env_block(
+    env: Any, steps: int, rng: np.random.Generator
+) -> tuple[float, float, list[tuple[np.ndarray, list[np.ndarray]]], np.ndarray]:
+    """Times ``steps`` env steps; also returns the stretches to replay (start state, the ctrl
+    of each period) and the state the block ended in."""
     dim = env.action_space.shape[0]
     actions = rng.uniform(-1, 1, (steps, dim)).astype(np.float32)
+    backend = env.loop.backend
+    model, data = backend.model, backend.data
+    stretches = [(state_of(model, data), [])]
+    sent = stretches[0][1]
+    stepping = backend.__class__._step_integrating
+
+    def keep_and_step(steps: int) -> np.ndarray:
+        sent.append(data.ctrl.copy())
+        result: np.ndarray = stepping(backend, steps)
+        return result
+
+    backend._step_integrating = keep_and_step
     wall, cpu = time.perf_counter(), time.process_time()
     for action in actions:
         _, _, terminated, truncated, _ = env.step(action)
         if terminated or truncated:
             env.reset()
-    return time.perf_counter() - wall, time.process_time() - cpu
+            sent = []
+            stretches.append((state_of(model, data), sent))
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    del backend._step_integrating
+    return wall, cpu, stretches, state_of(model, data)
+
+
+def replay_block(
+    model: Any, nstep: int, stretches: list[tuple[np.ndarray, list[np.ndarray]]], end: np.ndarray
+) -> tuple[float, float, float]:
+    """The env block's physics bare; returns wall and CPU seconds and the largest difference of
+    the end state from the env's (0: the same physics)."""
+    data = mujoco.MjData(model)
+    ctrl = data.ctrl
+    wall = cpu = 0.0
+    for start, sent in stretches:
+        mujoco.mj_setState(model, data, start, STATE)
+        mujoco.mj_forward(model, data)
+        w, c = time.perf_counter(), time.process_time()
+        for command in sent:
+            ctrl[:] = command
+            mujoco.mj_step(model, data, nstep)
+        wall, cpu = wall + time.perf_counter() - w, cpu + time.process_time() - c
+    return wall, cpu, float(np.abs(state_of(model, data) - end).max())
 
 
 def bare_block(
@@ -73,16 +127,34 @@ def bench_envs(rounds: int, steps: int, encodings: list[str]) -> dict[str, Any]:
     nstep = any_env.loop.backend.steps_for(any_env.loop.dt_s)
     joints = any_env.robot.joint_count
     rows: dict[str, dict[str, list[float]]] = {
-        e: {"env": [], "bare": [], "ratio_wall": [], "ratio_cpu": [], "env_cpu_ms": []}
+        e: {
+            "env": [],
+            "bare": [],
+            "ratio_wall": [],
+            "ratio_cpu": [],
+            "replay_ratio_wall": [],
+            "replay_ratio_cpu": [],
+            "env_cpu_ms": [],
+        }
         for e in encodings
     }
+    mismatch = 0.0
     for _ in range(rounds):
         order = list(encodings)
         random.shuffle(order)
         for encoding in order:
-            env_wall, env_cpu = env_block(envs[encoding], steps, rng)
-            bare_wall, bare_cpu = bare_block(model, cycles, nstep, steps, joints)
+            env_wall, env_cpu, stretches, end = env_block(envs[encoding], steps, rng)
+            first = [replay_block, bare_block]
+            random.shuffle(first)
+            for block in first:
+                if block is replay_block:
+                    replay_wall, replay_cpu, off = replay_block(model, nstep, stretches, end)
+                    mismatch = max(mismatch, off)
+                else:
+                    bare_wall, bare_cpu = bare_block(model, cycles, nstep, steps, joints)
             row = rows[encoding]
+            row["replay_ratio_wall"].append(replay_wall / env_wall)
+            row["replay_ratio_cpu"].append(replay_cpu / env_cpu)
             row["env"].append(steps / env_wall)
             row["bare"].append(steps / bare_wall)
             row["ratio_wall"].append(bare_wall / env_wall)
@@ -92,7 +164,11 @@ def bench_envs(rounds: int, steps: int, encodings: list[str]) -> dict[str, Any]:
         env.close()
     return {
         e: {key: round(statistics.median(values), 3) for key, values in row.items()}
-        | {"physics_steps_per_env_step": cycles * nstep}
+        | {
+            "physics_steps_per_env_step": cycles * nstep,
+            "replay_ratio_cpu_range": [min(row["replay_ratio_cpu"]), max(row["replay_ratio_cpu"])],
+            "replay_end_state_difference": mismatch,
+        }
         for e, row in rows.items()
     }
 
@@ -136,13 +212,17 @@ def main() -> None:
         return
     print(
         f"{'encoding':10s} {'env/s':>8s} {'bare/s':>8s} {'ratio wall':>11s} {'ratio cpu':>10s} "
-        f"{'CPU ms/step':>12s}"
+        f"{'CPU ms/step':>12s} {'replay cpu':>11s} {'(min-max)':>11s}"
     )
     for encoding, row in result["env_vs_bare"].items():
         print(
             f"{encoding:10s} {row['env']:8.0f} {row['bare']:8.0f} {row['ratio_wall']:11.2f} "
-            f"{row['ratio_cpu']:10.2f} {row['env_cpu_ms']:12.2f}"
+            f"{row['ratio_cpu']:10.2f} {row['env_cpu_ms']:12.2f} {row['replay_ratio_cpu']:11.2f} "
+            f"{row['replay_ratio_cpu_range'][0]:.2f}-{row['replay_ratio_cpu_range'][1]:.2f}"
         )
+    if result["env_vs_bare"]:
+        off = max(row["replay_end_state_difference"] for row in result["env_vs_bare"].values())
+        print(f"replay vs env end states: largest difference {off:.3g} (0 = the same physics)")
     for name, row in result.get("ppo", {}).items():
         print(
             f"PPO {name:10s} {row['steps_per_s']:7.1f} steps/s ({row['cpu_s']} CPU s, "

@@ -134,6 +134,6 @@ class PhasedGait(Gait):
                 f"{self.gait_label}: expected phases of shape ({count},) or (T, {count}) in rad, "
                 f"got shape {phases.shape}"
             )
-        if not np.all(np.isfinite(phases)):
+        if not np.isfinite(phases).all():
             raise GaitError(f"{self.gait_label}: phases must be finite")
         return shaped(self._at_phases(np.atleast_2d(phases)), phases.ndim == 1)

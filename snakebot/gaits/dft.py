@@ -37,7 +37,7 @@ def scale_into_limits(
     pose_rad: FloatArray, lower_rad: FloatArray, upper_rad: FloatArray
 ) -> FloatArray:
     """Scale each pose (..., N) uniformly about 0 just enough to fit [lower, upper] (N,) in rad."""
-    if np.all(pose_rad >= lower_rad) and np.all(pose_rad <= upper_rad):
+    if (pose_rad >= lower_rad).all() and (pose_rad <= upper_rad).all():
         return pose_rad.copy()  # the common case, and what the scaling below gives bit for bit
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         room = np.where(
@@ -64,6 +64,7 @@ class _FourierPose(PhasedGait):
     _spectrum: ComplexArray = field(init=False, repr=False, compare=False)
     _lower: FloatArray = field(init=False, repr=False, compare=False)
     _upper: FloatArray = field(init=False, repr=False, compare=False)
+    _bins: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         name = self.gait_name
@@ -92,6 +93,7 @@ class _FourierPose(PhasedGait):
         object.__setattr__(self, "_spectrum", spectrum)
         object.__setattr__(self, "_lower", lower)
         object.__setattr__(self, "_upper", upper)
+        object.__setattr__(self, "_bins", np.arange(bins, dtype=np.float64))
 
     @property
     def gait_label(self) -> str:
@@ -128,9 +130,15 @@ class DftGait(_FourierPose):
         """Empty: a static pose."""
         return np.zeros(0)
 
+    _pose: FloatArray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        # Synthesised once: the pose does not change with time.
+        object.__setattr__(self, "_pose", self._synthesise(self._spectrum[None, :]))
+
     def _at_phases(self, phases: FloatArray) -> FloatArray:
-        pose = self._synthesise(self._spectrum[None, :])
-        return np.repeat(pose, phases.shape[0], axis=0)
+        return np.repeat(self._pose, phases.shape[0], axis=0)
 
 
 @dataclass(frozen=True)
@@ -166,8 +174,7 @@ class DftShiftGait(_FourierPose):
         return np.array([2.0 * math.pi * self.shift0 / self.joint_count])
 
     def _at_phases(self, phases: FloatArray) -> FloatArray:
-        k = np.arange(self._spectrum.size, dtype=np.float64)
-        rotation = np.exp(-1j * np.outer(phases[:, 0], k))
+        rotation = np.exp(-1j * np.outer(phases[:, 0], self._bins))
         return self._synthesise(rotation * self._spectrum[None, :])
 
 
