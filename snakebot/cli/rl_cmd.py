@@ -92,7 +92,8 @@ def add_parser(subparsers: Any) -> None:
         "--baselines",
         choices=("on", "off"),
         default="on",
-        help="also run a zero and a random policy on the same seeds",
+        help="also run a zero and a random policy on the same seeds and, for a goal policy, "
+        "two serpenoids steered toward the goal (bearing, steered: docs/learning.md)",
     )
     evaluate.add_argument("--video", type=Path, help="render the first episode to an MP4")
     evaluate.add_argument("--json", action="store_true", help="print the results as JSON")
@@ -492,7 +493,8 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    """Evaluate a policy folder against zero and random policies on the same seeds."""
+    """Evaluate a policy folder against the baselines (zero, random, steered serpenoids) on the
+    same seeds."""
     from snakebot.rl.evaluate import evaluate_folder, print_table
 
     if args.video is not None:

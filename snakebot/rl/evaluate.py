@@ -1,9 +1,17 @@
-"""Evaluate a policy folder against a zero and a random policy on the same episode seeds.
+"""Evaluate a policy folder against baseline policies on the same episode seeds and goals.
 
-Goal task: success rate, time to goal (successful episodes), speed (COM path / time) and cost
-of transport (positive joint work / (m g path); none when the COM travelled under 1 mm per
-episode, three significant figures in the table). Velocity task: the commanded and the achieved
-speed and turn rate. Needs only the ``rl`` extra: the saved actor is plain numpy.
+Baselines: zero and random actions in the policy's own env; on the goal task also two steering
+rules on the sinusoid encoding (a serpenoid), the offset turned toward the goal in proportion to
+its bearing in the head's frame (offset = -3 x bearing, clipped to the encoding's range):
+``bearing`` at mid-range amplitude, frequency and lag (the one-line rule an audit found to
+match a 200k-step policy), and ``steered`` at the tuned open-loop serpenoid's amplitude,
+frequency and lag (docs/learning.md, "A tuned open-loop gait").
+
+Goal task: success rate, time to goal (successful episodes), speed (COM path / time), path
+efficiency (the distance closed toward the goal / the COM path) and cost of transport
+(positive joint work, integrated every physics step, / (m g path); none when the COM travelled
+under 1 mm per episode, three significant figures in the table). Velocity task: the commanded
+and the achieved speed and turn rate. Needs only the ``rl`` extra: the saved actor is plain numpy.
 """
 
 from __future__ import annotations
@@ -24,6 +32,14 @@ from snakebot.rl.settings import GOAL_ENV_ID
 
 Policy = Callable[[np.ndarray], FloatArray]
 MIN_PATH_M = 1e-3  # mean COM path per episode below which a policy did not travel
+BEARING_GAIN = 3.0
+"""Serpenoid offset (rad) per rad of goal bearing, against the bearing: the steering rule."""
+MID_RANGE_ACTION = (0.0, 0.0, 0.0)
+"""Sinusoid-encoding actions for amplitude, frequency and lag: the middle of each range
+(0.5 rad, 0.8 Hz, 0.7 rad)."""
+TUNED_SERPENOID_ACTION = (-0.2, 1.0, -0.46)
+"""The same three for the serpenoid `snakebot tune gait --method grid --budget 25` found on
+snake8 (docs/learning.md): 0.4 rad, 1.5 Hz, 0.47 rad."""
 
 
 @dataclass
@@ -37,6 +53,7 @@ class EpisodeStats:
     duration_s: float
     path_m: float
     positive_work_j: float
+    progress_m: float = math.nan
     speed_error_mps: float = math.nan
     command: tuple[float, float] | None = None
     achieved: tuple[float, float] | None = None
@@ -67,6 +84,7 @@ class EvalResult:
             "successes": len(successes),
             "time_to_goal_s": _mean([e.duration_s for e in successes]),
             "speed_mps": path / time_s if time_s > 0 else None,
+            "path_efficiency": _ratio([e.progress_m for e in eps], path, len(eps)),
             # A snake that stayed put has no cost of transport (work over numerical drift
             # gave 1.6e-21 for a zero policy): defined from MIN_PATH_M per episode on.
             "cost_of_transport": work / (self.mass_kg * GRAVITY_M_S2 * path)
@@ -77,6 +95,33 @@ class EvalResult:
             out["speed_error_mps"] = _mean([e.speed_error_mps for e in eps])
             out["commands"] = [{"command": e.command, "achieved": e.achieved} for e in eps]
         return out
+
+
+def _ratio(progress_m: list[float], path_m: float, episodes: int) -> float | None:
+    """Distance closed toward the goals over the COM path, all episodes together; None
+    without goals or a path."""
+    closed = [p for p in progress_m if math.isfinite(p)]
+    if not closed or path_m < MIN_PATH_M * episodes:
+        return None
+    return sum(closed) / path_m
+
+
+def bearing_steering(base_action: tuple[float, float, float], gain: float = BEARING_GAIN) -> Policy:
+    """A policy for SnakeGoal-v0's sinusoid encoding: ``base_action`` for amplitude, frequency
+    and lag, and the offset ``-gain`` x the goal's bearing (rad, from the observation's last
+    two entries: the goal in the head's frame), clipped to the encoding's offset range."""
+    from snakebot.rl.encodings import OFFSET_RAD
+
+    low, high = OFFSET_RAD
+    base = np.asarray(base_action, dtype=np.float64)
+
+    def policy(observation: np.ndarray) -> FloatArray:
+        bearing = math.atan2(float(observation[-1]), float(observation[-2]))
+        offset = min(max(-gain * bearing, low), high)
+        action: FloatArray = np.append(base, 2.0 * (offset - low) / (high - low) - 1.0)
+        return action
+
+    return policy
 
 
 def _mean(values: list[float]) -> float | None:
@@ -91,10 +136,12 @@ def run_episodes(
     result = EvalResult(name, float(env.unwrapped.robot.total_mass_kg))
     for index, seed in enumerate(seeds):
         obs, info = env.reset(seed=seed)
+        goal = info.get("goal_xy_m")
         total, steps, work, path = 0.0, 0, 0.0, 0.0
         speeds: list[float] = []
         turns: list[float] = []
         com = np.asarray(env.unwrapped.loop.body().com_m[:2])
+        start = com
         done, success = False, False
         while not done:
             obs, reward, terminated, truncated, info = env.step(policy(obs).astype(np.float32))
@@ -113,6 +160,9 @@ def run_episodes(
             done = terminated or truncated
         duration = steps / env.unwrapped.settings.action_hz
         stats = EpisodeStats(seed, total, steps, success, duration, path, work)
+        if goal is not None:
+            goal = np.asarray(goal, dtype=np.float64)
+            stats.progress_m = float(np.linalg.norm(goal - start) - np.linalg.norm(goal - com))
         if speeds:
             command = info["command"]
             skip = len(speeds) // 5  # the ramp-in and the first strides
@@ -126,8 +176,10 @@ def run_episodes(
 def evaluate_folder(
     folder: Path, *, episodes: int, seed: int, baselines: bool, video: Path | None
 ) -> dict[str, EvalResult]:
-    """The trained policy (and, with ``baselines``, zero and random actions) on seeds
-    ``seed..seed+episodes-1``. Velocity policies hold one command per episode, drawn by seed."""
+    """The trained policy (and, with ``baselines``, zero and random actions, and on the goal
+    task the ``bearing`` and ``steered`` serpenoids) on seeds ``seed..seed+episodes-1``: the
+    same start and goal per seed for every policy. Velocity policies hold one command per
+    episode, drawn by seed."""
     import gymnasium
 
     import snakebot.rl  # noqa: F401  (registers the envs)
@@ -150,6 +202,19 @@ def evaluate_folder(
             results["random"] = run_episodes(
                 env, lambda _obs: rng.uniform(-1.0, 1.0, dim), "random", seeds
             )
+            if policy_file.env_id == GOAL_ENV_ID:
+                kwargs = {**policy_file.env_kwargs, "encoding": "sinusoid"}
+                steering_env = gymnasium.make(GOAL_ENV_ID, **kwargs)
+                try:
+                    for name, base in (
+                        ("bearing", MID_RANGE_ACTION),
+                        ("steered", TUNED_SERPENOID_ACTION),
+                    ):
+                        results[name] = run_episodes(
+                            steering_env, bearing_steering(base), name, seeds
+                        )
+                finally:
+                    steering_env.close()
     finally:
         env.close()
     if video is not None and frames:
@@ -184,7 +249,7 @@ def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
 
     out.write(
         f"{'policy':8s} {'episodes':>8s} {'success':>8s} {'to goal':>9s} {'speed':>10s} "
-        f"{'CoT':>7s} {'return':>9s}\n"
+        f"{'path eff':>8s} {'CoT':>7s} {'return':>9s}\n"
     )
     for name, result in results.items():
         s = result.summary()
@@ -192,7 +257,7 @@ def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
         out.write(
             f"{name:8s} {s['episodes']:8d} {fmt(rate, '7.0f', '%')} "
             f"{fmt(s['time_to_goal_s'], '7.1f', ' s')} {fmt(s['speed_mps'], '6.3f', ' m/s')} "
-            f"{fmt(s['cost_of_transport'], '7.3g')} "
+            f"{fmt(s['path_efficiency'], '8.2f')} {fmt(s['cost_of_transport'], '7.3g')} "
             f"{fmt(s['mean_return'], '9.2f')}\n"
         )
         if "speed_error_mps" in s:

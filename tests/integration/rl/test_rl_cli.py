@@ -73,7 +73,7 @@ def test_ppo_smoke_trains_two_rollouts_saves_the_policy_and_evaluates_it(tmp_pat
     evaluated = cli("rl", "eval", str(out), "--episodes", "2", "--json")
     assert evaluated.returncode == 0, evaluated.stderr
     results = json.loads(evaluated.stdout)
-    assert set(results) == {"policy", "zero", "random"}
+    assert set(results) == {"policy", "zero", "random", "bearing", "steered"}
     assert all(r["episodes"] == 2 for r in results.values())
 
 
@@ -99,6 +99,34 @@ def test_eval_counts_goals_reached_against_zero_and_random(tmp_path: Path) -> No
     assert results["zero"]["success_rate"] == 0.0
     assert results["policy"]["cost_of_transport"] > 0
     assert video.stat().st_size > 1000
+
+
+def test_eval_sets_the_policy_beside_serpenoids_steered_toward_the_goal(tmp_path: Path) -> None:
+    # Goals to the side (0.6-1.2 rad off the head's heading): a policy holding one pose (the
+    # zero dft_shift action) gets nowhere; the bearing rule turns a serpenoid toward each goal,
+    # on the same seeds and so the same goals.
+    folder = constant_policy(
+        tmp_path / "still",
+        snakebot.rl.GOAL_ENV_ID,
+        [0, 0, 0, 0, 0],
+        2 * 8 + 2 + 2,
+        encoding="dft_shift",
+        episode_s=12,
+        goal_bearing_rad=(0.6, 1.2),
+        goal_distance_bl=(2.0, 2.5),
+    )
+    done = cli("rl", "eval", str(folder), "--episodes", "3", "--json")
+    assert done.returncode == 0, done.stderr
+    results = json.loads(done.stdout)
+    assert set(results) == {"policy", "zero", "random", "bearing", "steered"}
+    assert results["policy"]["success_rate"] == 0.0
+    bearing = results["bearing"]
+    assert bearing["success_rate"] == 1.0 and bearing["time_to_goal_s"] < 12
+    assert bearing["path_efficiency"] > 0.3
+    assert bearing["cost_of_transport"] > 0
+    table = cli("rl", "eval", str(folder), "--episodes", "1")
+    assert table.returncode == 0, table.stderr
+    assert "path eff" in table.stdout and "bearing" in table.stdout and "steered" in table.stdout
 
 
 def test_compare_draws_every_encoding_side_by_side(tmp_path: Path) -> None:
