@@ -56,6 +56,12 @@ def lerp(action: float, bounds: tuple[float, float]) -> float:
     return low + (float(action) + 1.0) * 0.5 * (high - low)
 
 
+def unlerp(value: float, bounds: tuple[float, float]) -> float:
+    """The action in [-1, 1] that ``lerp`` maps onto ``value`` in (low, high)."""
+    low, high = bounds
+    return 2.0 * (float(value) - low) / (high - low) - 1.0
+
+
 @dataclass(frozen=True)
 class Encoding:
     """How one action (d,) in [-1, 1] becomes a gait for N joints, and how many phases it turns.

@@ -110,7 +110,7 @@ def bearing_steering(base_action: tuple[float, float, float], gain: float = BEAR
     """A policy for SnakeGoal-v0's sinusoid encoding: ``base_action`` for amplitude, frequency
     and lag, and the offset ``-gain`` x the goal's bearing (rad, from the observation's last
     two entries: the goal in the head's frame), clipped to the encoding's offset range."""
-    from snakebot.rl.encodings import OFFSET_RAD
+    from snakebot.rl.encodings import OFFSET_RAD, unlerp
 
     low, high = OFFSET_RAD
     base = np.asarray(base_action, dtype=np.float64)
@@ -118,7 +118,7 @@ def bearing_steering(base_action: tuple[float, float, float], gain: float = BEAR
     def policy(observation: np.ndarray) -> FloatArray:
         bearing = math.atan2(float(observation[-1]), float(observation[-2]))
         offset = min(max(-gain * bearing, low), high)
-        action: FloatArray = np.append(base, 2.0 * (offset - low) / (high - low) - 1.0)
+        action: FloatArray = np.append(base, unlerp(offset, OFFSET_RAD))
         return action
 
     return policy

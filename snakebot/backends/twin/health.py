@@ -175,12 +175,12 @@ class HealthMonitor:
         _, qvel, head_quat = views
         self.cycles += 1
         self.time_s += dt_s
-        floor, other, grounded, clearance, speed = self._scanner.scan(data)
+        floor, other, _, clearance, speed = self._scanner.scan(data)
         if floor > self.max_floor_penetration_m:
             self.max_floor_penetration_m = floor
         if other > self.max_self_penetration_m:
             self.max_self_penetration_m = other
-        if not grounded and clearance is not None and clearance > limits.contact_tolerance_m:
+        if clearance is not None and clearance > limits.contact_tolerance_m:  # not grounded
             self._airborne_cycles += 1
         _, x, y, _ = head_quat.tolist()
         if 1.0 - 2.0 * (x * x + y * y) < -0.5:  # the head's up axis points down

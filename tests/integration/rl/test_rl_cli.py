@@ -77,19 +77,27 @@ def test_ppo_smoke_trains_two_rollouts_saves_the_policy_and_evaluates_it(tmp_pat
     assert all(r["episodes"] == 2 for r in results.values())
 
 
-def test_eval_counts_goals_reached_against_zero_and_random(tmp_path: Path) -> None:
-    # A policy that always swims ahead, on goals straight ahead: it reaches them all; a zero
-    # dft_shift action holds the snake straight and still.
-    folder = constant_policy(
-        tmp_path / "ahead",
+def dft_shift_goal_policy(
+    folder: Path, action: list[float], bearing_rad: tuple[float, float]
+) -> Path:
+    """A constant dft_shift goal policy for snake8: 12 s episodes, goals 2-2.5 body lengths away
+    at ``bearing_rad`` (low, high) from the start heading."""
+    return constant_policy(
+        folder,
         snakebot.rl.GOAL_ENV_ID,
-        [0, 1, 0, 0, 0],
+        action,
         2 * 8 + 2 + 2,
         encoding="dft_shift",
         episode_s=12,
-        goal_bearing_rad=(0.0, 0.0),
+        goal_bearing_rad=bearing_rad,
         goal_distance_bl=(2.0, 2.5),
     )
+
+
+def test_eval_counts_goals_reached_against_zero_and_random(tmp_path: Path) -> None:
+    # A policy that always swims ahead, on goals straight ahead: it reaches them all; a zero
+    # dft_shift action holds the snake straight and still.
+    folder = dft_shift_goal_policy(tmp_path / "ahead", [0, 1, 0, 0, 0], (0.0, 0.0))
     video = tmp_path / "first.mp4"
     done = cli("rl", "eval", str(folder), "--episodes", "3", "--json", "--video", str(video))
     assert done.returncode == 0, done.stderr
@@ -105,16 +113,7 @@ def test_eval_sets_the_policy_beside_serpenoids_steered_toward_the_goal(tmp_path
     # Goals to the side (0.6-1.2 rad off the head's heading): a policy holding one pose (the
     # zero dft_shift action) gets nowhere; the bearing rule turns a serpenoid toward each goal,
     # on the same seeds and so the same goals.
-    folder = constant_policy(
-        tmp_path / "still",
-        snakebot.rl.GOAL_ENV_ID,
-        [0, 0, 0, 0, 0],
-        2 * 8 + 2 + 2,
-        encoding="dft_shift",
-        episode_s=12,
-        goal_bearing_rad=(0.6, 1.2),
-        goal_distance_bl=(2.0, 2.5),
-    )
+    folder = dft_shift_goal_policy(tmp_path / "still", [0, 0, 0, 0, 0], (0.6, 1.2))
     done = cli("rl", "eval", str(folder), "--episodes", "3", "--json")
     assert done.returncode == 0, done.stderr
     results = json.loads(done.stdout)
