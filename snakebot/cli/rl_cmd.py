@@ -25,6 +25,8 @@ from snakebot.errors import ConfigError, UsageError
 
 ENV_CHOICES = ("snakebot/SnakeGoal-v0", "snakebot/SnakeVelocity-v0")
 ENCODING_CHOICES = ("simple", "sinusoid", "dft", "dft_shift", "compound")
+# snakebot.rl.tasks.GOAL_TASKS, named here so that building the parser imports no gymnasium.
+TASK_CHOICES = ("near", "seed")
 # PPO throughput measured on two cores with tools/bench_rl.py (docs/learning.md, "Which
 # vectorisation"): the fastest setting is the default.
 DEFAULT_N_ENVS = 2
@@ -118,6 +120,7 @@ def add_parser(subparsers: Any) -> None:
         metavar="KEY=VALUE",
         help="env setting for every run (repeatable)",
     )
+    _task_option(compare)
     compare.add_argument(
         "--steps",
         type=positive_int,
@@ -186,6 +189,17 @@ def _env_options(parser: argparse.ArgumentParser) -> None:
         "--set goal_distance_bl=2,3; see docs/learning.md",
     )
     parser.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
+    _task_option(parser)
+
+
+def _task_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--task",
+        choices=TASK_CHOICES,
+        help="goal-task preset: near (goals 2-4 body lengths from the COM, 30 s episodes) or "
+        "seed (the seed's task: goals 5-7 m from the head, -1 a step, +100 at the goal, 200 s "
+        "episodes, gamma 0.999); default near; --set and --ppo override it (docs/learning.md)",
+    )
 
 
 def _executor_options(parser: argparse.ArgumentParser) -> None:
@@ -354,8 +368,19 @@ def env_kwargs(args: argparse.Namespace, encoding: str) -> dict[str, Any]:
     from snakebot.rl.settings import GoalSettings, VelocitySettings, settings_dict, split_kwargs
 
     task = GoalSettings if "Goal" in args.env else VelocitySettings
-    kwargs = {"robot": args.robot, "encoding": encoding, **given}
+    preset = task_preset(args)
+    kwargs = {"robot": args.robot, "encoding": encoding, **preset.env, **given}
     return settings_dict(*split_kwargs(kwargs, task))
+
+
+def task_preset(args: argparse.Namespace) -> Any:
+    """The GoalTask of ``--task`` (near without one); UsageError for --task with the velocity
+    environment, which has no goals."""
+    if args.task is not None and "Goal" not in args.env:
+        raise UsageError(f"--task {args.task}: the goal task's presets need --env {ENV_CHOICES[0]}")
+    from snakebot.rl.tasks import goal_task
+
+    return goal_task(args.task or "near")
 
 
 def _check_robot(name: str) -> None:
@@ -405,7 +430,7 @@ def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
     ppo = parse_ppo(args.ppo)
     resume = None
     if args.resume is not None:
-        given = [f"--{key}" for key in DEFAULT_ENV if getattr(args, key) is not None]
+        given = [f"--{key}" for key in (*DEFAULT_ENV, "task") if getattr(args, key) is not None]
         given += ["--set"] if args.set else []
         if given:
             raise UsageError(
@@ -422,6 +447,7 @@ def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
         for key, default in DEFAULT_ENV.items():
             setattr(args, key, getattr(args, key) or default)
         env_id, kwargs = args.env, env_kwargs(args, args.encoding)
+        ppo = {**task_preset(args).ppo, **ppo}
         rollout = args.rollout or DEFAULT_ROLLOUT
         out = args.out or Path("rl-runs") / f"{args.env.split('/')[-1]}-{args.encoding}"
     _check_out(out)
@@ -541,7 +567,7 @@ def run_compare(args: argparse.Namespace) -> int:
     from snakebot.rl.sweep import SweepPlan, comparison_table
 
     runs = {e: env_kwargs(args, e) for e in encodings}
-    ppo, grid = parse_ppo(args.ppo), parse_grid(args.grid)
+    ppo, grid = {**task_preset(args).ppo, **parse_ppo(args.ppo)}, parse_grid(args.grid)
     executor = _ray_executor(args)
     seeds = tuple(range(args.seed, args.seed + args.seeds))
     plan = SweepPlan(
@@ -568,6 +594,8 @@ def run_compare(args: argparse.Namespace) -> int:
                 "steps": args.steps,
                 "out": str(args.out),
                 "executor": args.executor,
+                "env_kwargs": runs,
+                "ppo": ppo,
                 "trials": [t.name for t in plan.trials()],
             },
         )

@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from snakebot.backends.capabilities import Resettable
 from snakebot.backends.registry import make_backend
 from snakebot.backends.twin import TwinBackend
@@ -161,6 +163,10 @@ class TwinEpisode:
         xpos = self.backend.data.xpos
         dx, dy = (xpos[self._head_id, :2] - xpos[self._tail_id, :2]).tolist()
         return math.atan2(dy, dx)
+
+    def head_xy_m(self) -> FloatArray:
+        """The head module's centre (2,) in the world frame, m."""
+        return np.array(self.backend.data.xpos[self._head_id, :2], dtype=np.float64)
 
     def head_yaw_rad(self) -> float:
         """The head module's yaw in the world frame."""

@@ -56,9 +56,13 @@ class SnakeGoalEnv(SnakeEnv):
             self.goal_xy_m = np.asarray(options["goal_xy_m"], dtype=np.float64).reshape(2)
         else:
             g = self.goal_settings
-            distance = self.np_random.uniform(*g.goal_distance_bl) * self.loop.body_length_m
+            if g.goal_distance_m is None:
+                distance = self.np_random.uniform(*g.goal_distance_bl) * self.loop.body_length_m
+            else:
+                distance = self.np_random.uniform(*g.goal_distance_m)
             bearing = self.np_random.uniform(*g.goal_bearing_rad)
-            self.goal_xy_m = com + distance * np.array([math.cos(bearing), math.sin(bearing)])
+            origin = com if g.goal_from == "com" else self.loop.head_xy_m()
+            self.goal_xy_m = origin + distance * np.array([math.cos(bearing), math.sin(bearing)])
         self._last_distance_bl = self._distance_bl(com)
         return {"goal_xy_m": self.goal_xy_m.copy(), "distance_bl": self._last_distance_bl}
 

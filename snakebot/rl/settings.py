@@ -13,6 +13,7 @@ from snakebot.rl.encodings import ENCODINGS
 GOAL_ENV_ID = "snakebot/SnakeGoal-v0"
 VELOCITY_ENV_ID = "snakebot/SnakeVelocity-v0"
 ENV_IDS = (GOAL_ENV_ID, VELOCITY_ENV_ID)
+GOAL_ORIGINS = ("com", "head")
 # The largest clock settings that make sense for a twin episode: beyond them a policy folder (or a
 # --set) would ask for a day of simulation per episode or a step no servo can follow.
 MOST = {"action_hz": 1000.0, "control_hz": 10_000.0, "episode_s": 86_400.0, "phase_hz": 100.0}
@@ -92,14 +93,18 @@ class EnvSettings:
 class GoalSettings:
     """The goal task: where goals appear and what the reward pays.
 
-    Goals appear ``goal_distance_bl`` (low, high) body lengths from the centre of mass, at a
-    bearing in ``goal_bearing_rad`` (low, high) from the snake's starting heading (default: all
-    around). Reward per step = -step_cost + velocity_weight * (COM velocity toward the goal, body
+    Goals appear ``goal_distance_bl`` (low, high) body lengths from ``goal_from`` ("com": the
+    centre of mass; "head": the head module, as the seed measures), or ``goal_distance_m`` (low,
+    high) metres when that is set (the seed's 5-7 m; None: body lengths), at a bearing in
+    ``goal_bearing_rad`` (low, high) from the snake's starting heading (default: all around).
+    Reward per step = -step_cost + velocity_weight * (COM velocity toward the goal, body
     lengths/s) - distance_weight * (distance, body lengths) + goal_bonus on reaching the goal
     (within ``goal_radius_bl``), which ends the episode.
     """
 
     goal_distance_bl: tuple[float, float] = (2.0, 4.0)
+    goal_distance_m: tuple[float, float] | None = None
+    goal_from: str = "com"
     goal_bearing_rad: tuple[float, float] = (-math.pi, math.pi)
     goal_radius_bl: float = 0.5
     step_cost: float = 0.01
@@ -108,8 +113,13 @@ class GoalSettings:
     goal_bonus: float = 10.0
 
     def __post_init__(self) -> None:
-        _finite_fields(self)
+        if self.goal_from not in GOAL_ORIGINS:
+            expected = ", ".join(GOAL_ORIGINS)
+            raise ConfigError("goal_from", "", f"expected {expected}, got {self.goal_from!r}")
+        _finite_fields(self, skip=("goal_from", "goal_distance_m"))
         _range("goal_distance_bl", self.goal_distance_bl, 0.0)
+        if self.goal_distance_m is not None:
+            _range("goal_distance_m", self.goal_distance_m, 0.0)
         _range("goal_bearing_rad", self.goal_bearing_rad, -math.inf)
         _positive("goal_radius_bl", self.goal_radius_bl)
 
@@ -147,9 +157,12 @@ def _positive(key: str, value: object, most: float = math.inf) -> None:
         raise ConfigError(key, "", f"expected a positive number{bound}, got {value!r}")
 
 
-def _finite_fields(settings: object) -> None:
-    """ConfigError naming the first field that is not a finite number (or pair of them)."""
+def _finite_fields(settings: object, skip: tuple[str, ...] = ()) -> None:
+    """ConfigError naming the first field (but those in ``skip``, checked by their owner) that is
+    not a finite number (or pair of them)."""
     for item in dataclasses.fields(settings):  # type: ignore[arg-type]
+        if item.name in skip:
+            continue
         value = getattr(settings, item.name)
         values = value if isinstance(value, tuple | list) else (value,)
         if not all(
@@ -206,6 +219,7 @@ def settings_dict(*settings: object) -> dict[str, Any]:
 __all__ = [
     "ENV_IDS",
     "GOAL_ENV_ID",
+    "GOAL_ORIGINS",
     "MOST",
     "VELOCITY_ENV_ID",
     "EnvSettings",

@@ -161,6 +161,44 @@ def test_bad_rl_options_are_named(tmp_path: Path) -> None:
     assert cli("rl", "eval", str(tmp_path / "none")).returncode == 1
 
 
+def test_task_seed_trains_at_the_seeds_distances_reward_scale_and_discount(tmp_path: Path) -> None:
+    # --task seed: goals 5-7 m from the head, -1 a step and +100 at the goal, 200 s (2000-step)
+    # episodes, PPO's gamma 0.999; --set and --ppo still override the preset.
+    out = tmp_path / "out"
+    train = cli("rl", "train", "--task", "seed", "--out", str(out), "--dry-run", "--json")
+    assert train.returncode == 0, train.stderr
+    plan = json.loads(train.stdout)
+    kwargs = plan["env_kwargs"]
+    assert kwargs["goal_distance_m"] == [5.0, 7.0] and kwargs["goal_from"] == "head"
+    assert (kwargs["step_cost"], kwargs["goal_bonus"], kwargs["episode_s"]) == (1.0, 100.0, 200.0)
+    assert plan["ppo"] == {"gamma": 0.999}
+    near = json.loads(cli("rl", "train", "--dry-run", "--json", "--out", str(out)).stdout)
+    assert near["env_kwargs"]["goal_distance_m"] is None and near["ppo"] == {}
+    both = cli(
+        "rl", "compare", "--task", "seed", "--encodings", "sinusoid,dft", "--out", str(out),
+        "--set", "goal_bonus=50", "--ppo", "gamma=0.99", "--dry-run", "--json",
+    )  # fmt: skip
+    assert both.returncode == 0, both.stderr
+    plan = json.loads(both.stdout)
+    assert {r["goal_bonus"] for r in plan["env_kwargs"].values()} == {50.0}
+    assert {r["step_cost"] for r in plan["env_kwargs"].values()} == {1.0}
+    assert plan["ppo"] == {"gamma": 0.99}
+    velocity = cli("rl", "train", "--env", "snakebot/SnakeVelocity-v0", "--task", "seed",
+                   "--dry-run", "--out", str(out))  # fmt: skip
+    assert velocity.returncode == 2 and "--task seed" in velocity.stderr
+    assert cli("rl", "train", "--task", "far", "--dry-run").returncode == 2
+    resumed = cli("rl", "train", "--resume", str(tmp_path / "p"), "--task", "seed", "--dry-run")
+    assert resumed.returncode == 2 and "--task" in resumed.stderr  # the saved policy's task
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_cli_names_every_goal_task_preset() -> None:
+    from snakebot.cli.rl_cmd import TASK_CHOICES
+    from snakebot.rl.tasks import GOAL_TASKS
+
+    assert tuple(GOAL_TASKS) == TASK_CHOICES
+
+
 def test_dry_runs_check_the_settings_and_write_nothing(tmp_path: Path) -> None:
     out = tmp_path / "out"
     train = cli("rl", "train", "--out", str(out / "policy"), "--dry-run", "--json", *FAST)

@@ -97,6 +97,37 @@ def test_goals_are_drawn_all_around_at_the_configured_distance() -> None:
     assert max(bearings) > 2.0 and min(bearings) < -2.0  # ahead, behind, left and right
 
 
+def test_the_seeds_task_puts_goals_5_to_7_m_from_the_head_and_pays_its_reward_scale() -> None:
+    # The seed: "a random objective is created within 5 to 7 meters from the snake's head
+    # position"; -1 a step, +100 at the goal. The task preset `rl train --task seed` sets these.
+    from snakebot.rl.tasks import goal_task
+
+    seed_task = goal_task("seed").env
+    env = gymnasium.make(GOAL, encoding="dft", **seed_task)
+    loop = env.unwrapped.loop
+    from_head, from_com = [], []
+    for seed in range(20):
+        _, info = env.reset(seed=seed)
+        from_head.append(float(np.linalg.norm(info["goal_xy_m"] - loop.head_xy_m())))
+        from_com.append(float(np.linalg.norm(info["goal_xy_m"] - loop.body().com_m[:2])))
+    assert min(from_head) >= 5.0 - 1e-9 and max(from_head) <= 7.0 + 1e-9
+    assert max(from_head) - min(from_head) > 1.0  # drawn across the range
+    assert max(abs(h - c) for h, c in zip(from_head, from_com, strict=True)) > 0.1  # not the COM
+    _, reward, _, _, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    assert info["reward_terms"]["step"] == -1.0 and reward < -1.0  # held still: no velocity pay
+    assert env.unwrapped.settings.max_steps == 2000  # the seed's max path length
+    env.close()
+
+
+def test_goal_settings_name_a_bad_origin_or_distance() -> None:
+    with pytest.raises(ConfigError, match=r"goal_from.*com, head.*'tail'"):
+        gymnasium.make(GOAL, goal_from="tail")
+    with pytest.raises(ConfigError, match=r"goal_distance_m.*low <= high"):
+        gymnasium.make(GOAL, goal_distance_m=(7.0, 5.0))
+    with pytest.raises(ConfigError, match=r"goal_distance_m.*low <= high"):
+        gymnasium.make(GOAL, goal_distance_m=(-1.0, 5.0))
+
+
 def test_episodes_truncate_at_episode_s() -> None:
     env = gymnasium.make(VELOCITY, encoding="dft", episode_s=1.0, action_hz=10, control_hz=50)
     env.reset(seed=0)
