@@ -82,7 +82,14 @@ def add_parser(subparsers: Any) -> None:
     train.set_defaults(handler=run_train, writes=True)
 
     evaluate = sub.add_parser("eval", help="evaluate a trained policy (and zero/random ones)")
-    evaluate.add_argument("policy", type=Path, help="policy folder from `rl train`")
+    evaluate.add_argument(
+        "policy",
+        type=Path,
+        nargs="+",
+        help="policy folder from `rl train`; several: training seeds of one configuration "
+        "(rl compare --seeds writes OUT/ENCODING/seed-S), shown as one row with 95%% "
+        "intervals over them",
+    )
     evaluate.add_argument(
         "--episodes",
         type=positive_int,
@@ -526,15 +533,15 @@ def run_eval(args: argparse.Namespace) -> int:
     if args.video is not None:
         refuse_replacing(args.video, "video", force=args.force)
     if args.dry_run:
-        from snakebot.rl.policy_file import load_policy
+        from snakebot.rl.evaluate import load_policies
 
-        policy = load_policy(args.policy)
+        policy = load_policies(args.policy)[0]
         if args.video is not None:
             _check_out(args.video.parent)
         return report_dry_run(
             args,
             {
-                "policy": str(args.policy),
+                "policy": [str(folder) for folder in args.policy],
                 "env": policy.env_id,
                 "episodes": args.episodes,
                 "seed": args.seed,

@@ -26,8 +26,10 @@ from typing import Any
 import numpy as np
 
 from snakebot.control.metrics import GRAVITY_M_S2
+from snakebot.errors import ConfigError
 from snakebot.gaits.base import FloatArray
-from snakebot.rl.policy_file import load_policy
+from snakebot.rl.intervals import across_seeds, bootstrap_intervals, replace_episodes
+from snakebot.rl.policy_file import PolicyFile, load_policy
 from snakebot.rl.settings import GOAL_ENV_ID
 
 Policy = Callable[[np.ndarray], FloatArray]
@@ -68,6 +70,16 @@ class EvalResult:
     episodes: list[EpisodeStats] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
+        """``figures()`` and their 95 % intervals over the episodes (``interval95``: figure ->
+        (low, high) or None; ``snakebot.rl.intervals``), JSON-ready."""
+        out = self.figures()
+        out["interval95"] = bootstrap_intervals(
+            self.episodes, lambda picked: replace_episodes(self, picked).figures()
+        )
+        out["interval_over"] = "episodes"
+        return out
+
+    def figures(self) -> dict[str, Any]:
         """Means over episodes, JSON-ready (None where undefined)."""
         eps = self.episodes
         successes = [e for e in eps if e.success]
@@ -173,18 +185,62 @@ def run_episodes(
     return result
 
 
+@dataclass
+class SeedsResult:
+    """The evaluations of several policies of one configuration (training seeds), as one row."""
+
+    name: str
+    folders: list[Path]
+    results: list[EvalResult]
+
+    def summary(self) -> dict[str, Any]:
+        """Each figure's mean over the policies with its Student's t 95 % interval over them
+        (``snakebot.rl.intervals.across_seeds``), and ``policies``: each one's own summary."""
+        out = across_seeds([r.figures() for r in self.results])
+        out["policies"] = [
+            {"folder": str(folder), **result.summary()}
+            for folder, result in zip(self.folders, self.results, strict=True)
+        ]
+        return out
+
+
+def load_policies(folders: list[Path]) -> list[PolicyFile]:
+    """Policy folders of one configuration (the same env and settings: training seeds);
+    ConfigError naming the folder and the first setting that differs from the first one's."""
+    policies = [load_policy(folder) for folder in folders]
+    first = policies[0]
+    for other in policies[1:]:
+        keys = sorted(set(first.env_kwargs) | set(other.env_kwargs))
+        differ = [k for k in keys if first.env_kwargs.get(k) != other.env_kwargs.get(k)]
+        if other.env_id != first.env_id:
+            differ = ["env_id"]
+        if differ:
+            key = differ[0]
+            mine = other.env_id if key == "env_id" else other.env_kwargs.get(key)
+            theirs = first.env_id if key == "env_id" else first.env_kwargs.get(key)
+            raise ConfigError(
+                other.folder / "policy.json",
+                key if key == "env_id" else f"env_kwargs.{key}",
+                f"is {mine!r} where {first.folder} has {theirs!r}: several folders are "
+                "evaluated together only as training seeds of one configuration",
+            )
+    return policies
+
+
 def evaluate_folder(
-    folder: Path, *, episodes: int, seed: int, baselines: bool, video: Path | None
-) -> dict[str, EvalResult]:
+    folder: Path | list[Path], *, episodes: int, seed: int, baselines: bool, video: Path | None
+) -> dict[str, EvalResult | SeedsResult]:
     """The trained policy (and, with ``baselines``, zero and random actions, and on the goal
     task the ``bearing`` and ``steered`` serpenoids) on seeds ``seed..seed+episodes-1``: the
     same start and goal per seed for every policy. Velocity policies hold one command per
-    episode, drawn by seed."""
+    episode, drawn by seed. Several folders (``load_policies``: training seeds of one
+    configuration) make the ``policy`` row a SeedsResult; the video shows the first one's."""
     import gymnasium
 
     import snakebot.rl  # noqa: F401  (registers the envs)
 
-    policy_file = load_policy(folder)
+    policies = load_policies(folder if isinstance(folder, list) else [folder])
+    policy_file = policies[0]
     render = "rgb_array" if video is not None else None
     env = gymnasium.make(policy_file.env_id, render_mode=render, **policy_file.env_kwargs)
     if policy_file.env_id != GOAL_ENV_ID:
@@ -194,7 +250,15 @@ def evaluate_folder(
     seeds = list(range(seed, seed + episodes))
     frames: list[np.ndarray] | None = [] if video is not None else None
     try:
-        results = {"policy": run_episodes(env, policy_file.actor, "policy", seeds, frames=frames)}
+        played = [
+            run_episodes(env, p.actor, "policy", seeds, frames=frames if i == 0 else None)
+            for i, p in enumerate(policies)
+        ]
+        results: dict[str, EvalResult | SeedsResult] = {
+            "policy": played[0]
+            if len(played) == 1
+            else SeedsResult("policy", [p.folder for p in policies], played)
+        }
         if baselines:
             dim = int(np.prod(env.action_space.shape or (1,)))
             rng = np.random.default_rng(seed)
@@ -238,8 +302,8 @@ def write_video(path: Path, frames: list[np.ndarray], fps: int) -> None:
             writer.append(frame)
 
 
-def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
-    """One line per policy."""
+def print_table(results: dict[str, EvalResult | SeedsResult], out: Any = sys.stdout) -> None:
+    """One line per policy, then each one's 95 % intervals (``snakebot.rl.intervals``)."""
 
     def fmt(value: object, spec: str, unit: str = "") -> str:
         if value is None:  # "n/a", right-aligned where the number and its unit would stand
@@ -247,12 +311,12 @@ def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
             return "n/a".rjust(width)
         return format(value, spec) + unit
 
+    summaries = {name: result.summary() for name, result in results.items()}
     out.write(
         f"{'policy':8s} {'episodes':>8s} {'success':>8s} {'to goal':>9s} {'speed':>10s} "
         f"{'path eff':>8s} {'CoT':>7s} {'return':>9s}\n"
     )
-    for name, result in results.items():
-        s = result.summary()
+    for name, s in summaries.items():
         rate = None if s["success_rate"] is None else 100 * s["success_rate"]
         out.write(
             f"{name:8s} {s['episodes']:8d} {fmt(rate, '7.0f', '%')} "
@@ -262,3 +326,30 @@ def print_table(results: dict[str, EvalResult], out: Any = sys.stdout) -> None:
         )
         if "speed_error_mps" in s:
             out.write(f"{'':8s} mean |speed - command| {fmt(s['speed_error_mps'], '.3f')} m/s\n")
+    seeds = [s["training_seeds"] for s in summaries.values() if "training_seeds" in s]
+    over = (
+        f"the policy over {seeds[0]} training seeds, the rest bootstrap over episodes"
+        if seeds
+        else "bootstrap over episodes"
+    )
+    out.write(f"95% intervals ({over})\n")
+    columns = (
+        ("success %", "success_rate", ".0f", 100.0),
+        ("to goal s", "time_to_goal_s", ".1f", 1.0),
+        ("speed m/s", "speed_mps", ".3f", 1.0),
+        ("path eff", "path_efficiency", ".2f", 1.0),
+        ("CoT", "cost_of_transport", ".3g", 1.0),
+        ("return", "mean_return", ".2f", 1.0),
+    )
+    out.write(f"{'policy':8s}" + "".join(f" {title:>16s}" for title, *_ in columns) + "\n")
+    for name, s in summaries.items():
+        cells = []
+        for _, key, spec, scale in columns:
+            interval = s["interval95"].get(key)
+            cell = (
+                "n/a"
+                if interval is None
+                else f"[{format(interval[0] * scale, spec)}, {format(interval[1] * scale, spec)}]"
+            )
+            cells.append(f" {cell:>16s}")
+        out.write(f"{name:8s}" + "".join(cells) + "\n")

@@ -128,6 +128,27 @@ def test_eval_sets_the_policy_beside_serpenoids_steered_toward_the_goal(tmp_path
     assert "path eff" in table.stdout and "bearing" in table.stdout and "steered" in table.stdout
 
 
+def test_eval_of_training_seeds_shows_one_row_with_intervals_over_them(tmp_path: Path) -> None:
+    # Two policies of one configuration (as rl compare --seeds writes them): one swims ahead,
+    # one holds still, on goals straight ahead; the row is their mean (50 % of goals) with a t
+    # interval over the two, each one's own figures kept under "policies".
+    ahead = dft_shift_goal_policy(tmp_path / "seed-0", [0, 1, 0, 0, 0], (0.0, 0.0))
+    still = dft_shift_goal_policy(tmp_path / "seed-1", [0, 0, 0, 0, 0], (0.0, 0.0))
+    done = cli("rl", "eval", str(ahead), str(still), "--episodes", "2", "--json")
+    assert done.returncode == 0, done.stderr
+    results = json.loads(done.stdout)
+    policy = results["policy"]
+    assert policy["training_seeds"] == 2 and policy["success_rate"] == 0.5
+    low, high = policy["interval95"]["success_rate"]
+    assert low < 0.0 and high > 1.0  # two seeds this far apart: t(0.975, 1) = 12.7
+    assert [p["success_rate"] for p in policy["policies"]] == [1.0, 0.0]
+    assert results["bearing"]["interval_over"] == "episodes"
+    other = dft_shift_goal_policy(tmp_path / "far", [0, 1, 0, 0, 0], (0.6, 1.2))
+    mixed = cli("rl", "eval", str(ahead), str(other), "--episodes", "1")
+    assert mixed.returncode == 1
+    assert "goal_bearing_rad" in mixed.stderr and str(other) in mixed.stderr
+
+
 def test_compare_draws_every_encoding_side_by_side(tmp_path: Path) -> None:
     out = tmp_path / "compare"
     done = cli(
