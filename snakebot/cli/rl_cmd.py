@@ -75,6 +75,14 @@ def add_parser(subparsers: Any) -> None:
         help="go on training the policy in DIR (its env and PPO settings) for "
         "--steps more steps; writes into DIR unless --out names another folder",
     )
+    train.add_argument(
+        "--checkpoints",
+        type=int,
+        default=10,
+        metavar="N",
+        help="actor snapshots kept in OUT/checkpoints, evenly spaced over the run, for "
+        "`rl curve` (default 10; 0: none)",
+    )
     train.add_argument("--out", type=Path, help="policy folder (default rl-runs/ENV-ENCODING)")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_force_option(train)
@@ -109,6 +117,29 @@ def add_parser(subparsers: Any) -> None:
     add_force_option(evaluate)
     add_dry_run(evaluate, "no episodes, no video")
     evaluate.set_defaults(handler=run_eval, writes=True)  # --video
+
+    curve = sub.add_parser(
+        "curve",
+        help="learning curve from deterministic evaluations of a policy's saved checkpoints",
+    )
+    curve.add_argument(
+        "policy",
+        type=Path,
+        nargs="+",
+        help="policy folder(s) from `rl train`; several: training seeds of one configuration, "
+        "averaged with 95%% intervals",
+    )
+    curve.add_argument(
+        "--episodes",
+        type=positive_int,
+        default=10,
+        help="episodes per checkpoint, on seeds SEED..SEED+N-1 (default 10)",
+    )
+    curve.add_argument("--seed", type=int, default=1000, help="first episode seed")
+    curve.add_argument("--json", action="store_true", help="print the curve as JSON")
+    add_force_option(curve)
+    add_dry_run(curve, "no episodes, no eval_curve files")
+    curve.set_defaults(handler=run_curve, writes=True)
 
     compare = sub.add_parser("compare", help="train every encoding, plot the curves together")
     compare.add_argument("--env", choices=ENV_CHOICES, default=ENV_CHOICES[0])
@@ -472,6 +503,7 @@ def _train_plan(args: argparse.Namespace) -> tuple[Any, Path, bool]:
         rollout_steps=rollout,
         ppo=ppo,
         resume=resume,
+        checkpoints=args.checkpoints,
     )
     return settings, out, in_place
 
@@ -559,6 +591,48 @@ def run_eval(args: argparse.Namespace) -> int:
         print_json({name: r.summary() for name, r in results.items()})
     else:
         print_table(results)
+    return 0
+
+
+def run_curve(args: argparse.Namespace) -> int:
+    """Evaluate every saved checkpoint of each folder; eval_curve.csv and .png into each."""
+    from snakebot.rl.curve import (
+        EVAL_CURVE_FILE,
+        EVAL_CURVE_PLOT,
+        across_seeds,
+        checkpoints,
+        evaluate_checkpoints,
+        print_curve,
+        write_curve,
+    )
+    from snakebot.rl.evaluate import load_policies
+
+    load_policies(args.policy)  # one configuration, every folder readable: checked first
+    for folder in args.policy:
+        checkpoints(folder)
+        _check_out(folder)
+        names = (EVAL_CURVE_FILE, EVAL_CURVE_PLOT)
+        refuse_replacing_in(folder, names, "evaluation curve", force=args.force)
+    if args.dry_run:
+        return report_dry_run(
+            args,
+            {
+                "policy": [str(folder) for folder in args.policy],
+                "checkpoints": {str(f): [s for s, _ in checkpoints(f)] for f in args.policy},
+                "episodes": args.episodes,
+                "seed": args.seed,
+            },
+        )
+    curves = {}
+    for folder in args.policy:
+        curves[folder] = evaluate_checkpoints(folder, episodes=args.episodes, seed=args.seed)
+        write_curve(folder, curves[folder])
+    rows = across_seeds(curves)
+    if args.json:
+        print_json({"curve": rows, "folders": [str(folder) for folder in args.policy]})
+    else:
+        print_curve(rows)
+        print(f"{EVAL_CURVE_FILE} and {EVAL_CURVE_PLOT} in each policy folder")
     return 0
 
 

@@ -241,12 +241,7 @@ def evaluate_folder(
 
     policies = load_policies(folder if isinstance(folder, list) else [folder])
     policy_file = policies[0]
-    render = "rgb_array" if video is not None else None
-    env = gymnasium.make(policy_file.env_id, render_mode=render, **policy_file.env_kwargs)
-    if policy_file.env_id != GOAL_ENV_ID:
-        # One command per episode: evaluation asks how well a command is followed.
-        velocity_env: Any = env.unwrapped
-        velocity_env.task = _hold_commands(velocity_env.task)
+    env = make_eval_env(policy_file, render=video is not None)
     seeds = list(range(seed, seed + episodes))
     frames: list[np.ndarray] | None = [] if video is not None else None
     try:
@@ -284,6 +279,21 @@ def evaluate_folder(
     if video is not None and frames:
         write_video(video, frames, env.unwrapped.metadata["render_fps"])
     return results
+
+
+def make_eval_env(policy_file: PolicyFile, *, render: bool = False) -> Any:
+    """The policy's env as evaluation plays it: its saved settings, and on the velocity task
+    one command held per episode (evaluation asks how well a command is followed)."""
+    import gymnasium
+
+    import snakebot.rl  # noqa: F401  (registers the envs)
+
+    mode = "rgb_array" if render else None
+    env = gymnasium.make(policy_file.env_id, render_mode=mode, **policy_file.env_kwargs)
+    if policy_file.env_id != GOAL_ENV_ID:
+        velocity_env: Any = env.unwrapped
+        velocity_env.task = _hold_commands(velocity_env.task)
+    return env
 
 
 def _hold_commands(task: Any) -> Any:

@@ -44,7 +44,16 @@ CURVE_FIELDS = (
     "steps_per_s",
 )
 # Every file `rl train` writes into its folder: what a second run there would replace.
-TRAIN_FILES = (SETTINGS_FILE, ACTOR_FILE, MODEL_FILE, CURVE_FILE, "learning_curve.png")
+CHECKPOINT_DIR = "checkpoints"
+"""Where training keeps its actor snapshots: actor-STEPS.npz (``checkpoint_name``)."""
+TRAIN_FILES = (
+    SETTINGS_FILE,
+    ACTOR_FILE,
+    MODEL_FILE,
+    CURVE_FILE,
+    "learning_curve.png",
+    CHECKPOINT_DIR,
+)
 FORMAT = 1
 ACTIVATIONS = ("tanh", "relu")
 
@@ -94,6 +103,19 @@ class NumpyActor:
             if i < last:
                 h = np.tanh(h) if self.activation == "tanh" else np.maximum(h, 0.0)
         return np.clip(h, -1.0, 1.0)
+
+
+def checkpoint_name(steps: int) -> str:
+    """The file name of the actor snapshot taken at ``steps`` env steps."""
+    return f"actor-{steps:010d}.npz"
+
+
+def checkpoint_steps(path: Path) -> int | None:
+    """The env steps of a snapshot file named by ``checkpoint_name``; None for another name."""
+    stem = path.name.removeprefix("actor-").removesuffix(".npz")
+    if not stem.isdigit() or path.name != checkpoint_name(int(stem)):
+        return None
+    return int(stem)
 
 
 def save_actor(actor: NumpyActor, path: Path) -> None:

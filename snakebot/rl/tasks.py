@@ -49,12 +49,12 @@ GOAL_TASKS: MappingProxyType[str, GoalTask] = MappingProxyType(
 
 
 def goal_task(name: str) -> GoalTask:
-    """The preset called ``name``; ConfigError naming --task and listing the presets."""
+    """The preset called ``name``; ConfigError naming the task and listing the presets."""
     try:
         return GOAL_TASKS[name]
     except KeyError:
         raise ConfigError(
-            "--task", name, f"unknown goal task; expected one of {', '.join(GOAL_TASKS)}"
+            "task", name, f"unknown goal task; expected one of {', '.join(GOAL_TASKS)}"
         ) from None
 
 

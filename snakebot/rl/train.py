@@ -25,10 +25,12 @@ from snakebot.errors import ConfigError, OutputError
 from snakebot.rl.deps import require
 from snakebot.rl.policy_file import (
     ACTOR_FILE,
+    CHECKPOINT_DIR,
     CURVE_FIELDS,
     CURVE_FILE,
     MODEL_FILE,
     NumpyActor,
+    checkpoint_name,
     save_actor,
     write_settings,
 )
@@ -39,6 +41,9 @@ VECTORISATIONS = ("dummy", "subproc")
 
 ROLLOUT_STEPS = 2048
 """PPO's rollout length in env steps when none is given (stable-baselines3's default)."""
+CHECKPOINTS = 10
+"""Actor snapshots a run keeps in CHECKPOINT_DIR, evenly spaced over its steps (``rl curve``
+evaluates them deterministically)."""
 
 
 @dataclass(frozen=True)
@@ -57,8 +62,15 @@ class TrainSettings:
     algo: str = "ppo"
     ppo: dict[str, Any] = field(default_factory=dict)
     resume: ResumePoint | None = None
+    checkpoints: int = CHECKPOINTS
 
     def __post_init__(self) -> None:
+        if isinstance(self.checkpoints, bool) or not (
+            isinstance(self.checkpoints, int) and self.checkpoints >= 0
+        ):
+            raise ConfigError(
+                "checkpoints", "", f"expected a whole number >= 0, got {self.checkpoints!r}"
+            )
         if self.algo != "ppo":
             raise ConfigError("algo", "", f"expected ppo, got {self.algo!r}")
         if self.vec not in VECTORISATIONS:
@@ -283,9 +295,14 @@ def train(
             tracker.on_step(self.locals["rewards"], self.locals["dones"], self.locals["infos"])
             return True
 
+        def _on_rollout_start(self) -> None:
+            # PPO has just updated on every step so far: the actor trained on num_timesteps
+            snapshots.after_update(self.model)
+
         def _on_rollout_end(self) -> None:
             tracker.on_rollout(int(self.num_timesteps))
 
+    snapshots = _Snapshots(folder / CHECKPOINT_DIR, start_steps, settings)
     interrupted = False
     workers_cpu = 0.0
     try:
@@ -318,6 +335,7 @@ def train(
     steps = int(model.num_timesteps)
     model.save(folder / MODEL_FILE)
     save_actor(actor_from_sb3(model), folder / ACTOR_FILE)
+    snapshots.final(model)
     last = tracker.curve[-1] if tracker.curve else None
     meta = {
         "algo": settings.algo,
@@ -349,6 +367,43 @@ def train(
             title=f"{settings.env_id} ({settings.env_kwargs.get('encoding', '')})",
         )
     return result
+
+
+class _Snapshots:
+    """The run's actor snapshots: after the first update at or past each of ``checkpoints``
+    evenly spaced marks of this run's steps (named by the steps it was trained on), and the
+    last one at the end. A new run (not a
+    resumed one) starts an empty folder: another run's snapshots would mix into its curve."""
+
+    def __init__(self, folder: Path, start_steps: int, settings: TrainSettings) -> None:
+        self.folder = folder
+        self.every = settings.steps / settings.checkpoints if settings.checkpoints else math.inf
+        self.next_due = start_steps + self.every
+        self.start_steps = start_steps
+        self.saved: set[int] = set()
+        if settings.checkpoints and settings.resume is None and folder.is_dir():
+            for old in folder.glob("actor-*.npz"):  # the CLI refused this without --force
+                old.unlink()
+
+    def after_update(self, model: Any) -> None:
+        steps = int(model.num_timesteps)
+        if steps >= self.next_due:
+            self._save(model, steps)
+            while self.next_due <= steps:
+                self.next_due += self.every
+
+    def final(self, model: Any) -> None:
+        steps = int(model.num_timesteps)
+        if math.isfinite(self.every) and steps > self.start_steps and steps not in self.saved:
+            self._save(model, steps)
+
+    def _save(self, model: Any, steps: int) -> None:
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(self.folder, f"cannot write the checkpoints: {exc.strerror}") from exc
+        save_actor(actor_from_sb3(model), self.folder / checkpoint_name(steps))
+        self.saved.add(steps)
 
 
 def _load_weights(model: Any, path: Path) -> None:

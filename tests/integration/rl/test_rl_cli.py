@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -13,7 +14,7 @@ import numpy as np
 import pytest
 
 import snakebot.rl
-from snakebot.rl.policy_file import load_policy
+from snakebot.rl.policy_file import CHECKPOINT_DIR, checkpoint_name, load_policy
 from tests.integration.rl.policies import constant_policy
 
 pytestmark = pytest.mark.slow
@@ -147,6 +148,43 @@ def test_eval_of_training_seeds_shows_one_row_with_intervals_over_them(tmp_path:
     mixed = cli("rl", "eval", str(ahead), str(other), "--episodes", "1")
     assert mixed.returncode == 1
     assert "goal_bearing_rad" in mixed.stderr and str(other) in mixed.stderr
+
+
+def with_checkpoints(folder: Path, actions: dict[int, list[float]]) -> Path:
+    """Actor snapshots as training keeps them (checkpoints/actor-STEPS.npz), each a constant
+    action, beside the folder's own actor."""
+    snapshots = folder / CHECKPOINT_DIR
+    snapshots.mkdir()
+    for steps, action in actions.items():
+        source = folder.parent / f"{folder.name}-{steps}"
+        constant_policy(source, snakebot.rl.GOAL_ENV_ID, action, 20)
+        (source / "actor.npz").rename(snapshots / checkpoint_name(steps))
+        shutil.rmtree(source)
+    return folder
+
+
+def test_curve_evaluates_every_checkpoint_on_the_same_goals(tmp_path: Path) -> None:
+    # Two snapshots of one run: at 100 steps it held still, at 200 it swam ahead; on goals
+    # straight ahead the curve goes from no goal to every goal, the same seeds for both points.
+    folder = with_checkpoints(
+        dft_shift_goal_policy(tmp_path / "run", [0, 1, 0, 0, 0], (0.0, 0.0)),
+        {100: [0, 0, 0, 0, 0], 200: [0, 1, 0, 0, 0]},
+    )
+    done = cli("rl", "curve", str(folder), "--episodes", "2", "--json")
+    assert done.returncode == 0, done.stderr
+    rows = json.loads(done.stdout)["curve"]
+    assert [(r["steps"], r["success_rate"]) for r in rows] == [(100, 0.0), (200, 1.0)]
+    with (folder / "eval_curve.csv").open() as f:
+        written = list(csv.DictReader(f))
+    assert [(r["steps"], float(r["success_rate"])) for r in written] == [("100", 0.0), ("200", 1.0)]
+    assert (folder / "eval_curve.png").stat().st_size > 1000
+    again = cli("rl", "curve", str(folder), "--episodes", "1")
+    assert again.returncode == 1 and "--force" in again.stderr  # the curve is kept
+    assert len((folder / "eval_curve.csv").read_text().splitlines()) == 3
+    bare = dft_shift_goal_policy(tmp_path / "bare", [0, 1, 0, 0, 0], (0.0, 0.0))
+    none = cli("rl", "curve", str(bare))
+    assert none.returncode == 1 and "checkpoints" in none.stderr
+    assert not (bare / "eval_curve.csv").exists()
 
 
 def test_compare_draws_every_encoding_side_by_side(tmp_path: Path) -> None:

@@ -55,20 +55,55 @@ def curve_steps(folder: Path) -> list[int]:
 
 def test_a_trained_policy_is_replaced_only_with_force(tmp_path: Path) -> None:
     out = trained(tmp_path / "policy")
-    before = {name: (out / name).read_bytes() for name in TRAIN_FILES}
+    before = contents(out)
+    assert set(before) == {*TRAIN_FILES[:-1], "checkpoints/actor-0000000128.npz",
+                           "checkpoints/actor-0000000256.npz"}  # fmt: skip
     for extra in ([], ["--dry-run"]):
         again = cli("rl", "train", "--out", str(out), "--steps", "128", *TINY, *FAST, *extra)
         assert again.returncode == 1, again.stderr
         assert (
-            f"{out}: holds the trained policy files actor.npz, learning_curve.csv, "
+            f"{out}: holds the trained policy files actor.npz, checkpoints, learning_curve.csv, "
             "learning_curve.png, policy.json, policy.zip, which would be replaced: pass "
             "--force" in again.stderr
         )
-        assert {name: (out / name).read_bytes() for name in TRAIN_FILES} == before
+        assert contents(out) == before
     forced = cli("rl", "train", "--out", str(out), "--steps", "128", *TINY, *FAST, "--force")
     assert forced.returncode == 0, forced.stderr
     assert json.loads((out / "policy.json").read_text())["steps"] == 128
     assert curve_steps(out) == [128]  # a new policy, not a continued one
+    # its snapshots only: the replaced run's 256-step one would read as this run's
+    assert sorted(p.name for p in (out / "checkpoints").iterdir()) == ["actor-0000000128.npz"]
+
+
+def contents(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` by its relative path."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_training_keeps_evenly_spaced_actor_snapshots_and_the_last(tmp_path: Path) -> None:
+    # 640 steps in 128-step rollouts, 2 snapshots: after the rollouts at or past 320 and 640
+    # steps; a resumed run counts on and keeps the first run's. The last snapshot is the actor.
+    out = tmp_path / "policy"
+    done = cli("rl", "train", "--out", str(out), "--steps", "640", "--checkpoints", "2",
+               *TINY, *FAST)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    names = sorted(p.name for p in (out / "checkpoints").iterdir())
+    assert names == ["actor-0000000384.npz", "actor-0000000640.npz"]
+    with np.load(out / "checkpoints" / "actor-0000000640.npz") as last:
+        assert {k: last[k].tolist() for k in last.files} == {
+            k: v.tolist() for k, v in weights(out).items()
+        }
+    more = cli("rl", "train", "--resume", str(out), "--steps", "256", "--checkpoints", "1",
+               "--n-envs", "1", "--vec", "dummy")  # fmt: skip
+    assert more.returncode == 0, more.stderr
+    names = sorted(p.name for p in (out / "checkpoints").iterdir())
+    assert names == ["actor-0000000384.npz", "actor-0000000640.npz", "actor-0000000896.npz"]
+    none = cli("rl", "train", "--out", str(tmp_path / "bare"), "--steps", "128",
+               "--checkpoints", "0", *TINY, *FAST)  # fmt: skip
+    assert none.returncode == 0, none.stderr
+    assert not (tmp_path / "bare" / "checkpoints").exists()
+    bad = cli("rl", "train", "--checkpoints", "-1", "--dry-run", "--out", str(tmp_path / "x"))
+    assert bad.returncode == 2 and "--checkpoints: expected a whole number" in bad.stderr
 
 
 def test_resume_goes_on_from_the_saved_weights_and_counts_on(tmp_path: Path) -> None:

@@ -41,7 +41,7 @@ def required_argv(parser: argparse.ArgumentParser, tmp_path: Path) -> list[str]:
     argv = [
         VALUES.get(a.dest, str(tmp_path / f"{a.dest}.csv"))
         for a in parser._actions
-        if not a.option_strings and a.required and a.nargs is None  # a positional file, say
+        if not a.option_strings and a.required and a.nargs in (None, "+")  # a positional file
     ]
     wanted = [a for a in parser._actions if a.required and a.option_strings]
     wanted += [g._group_actions[0] for g in parser._mutually_exclusive_groups if g.required]
