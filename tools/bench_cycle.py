@@ -4,13 +4,17 @@
 safety layer, the twin's divergence and physics-health checks, read_state, body state, run
 metrics), so every part of the cycle a user pays for is in it. What is timed:
 
-- ``cycle``: wall time per control cycle minus the time inside ``mujoco.mj_step`` (the physics
-  itself), i.e. what snakebot's Python adds to a bare loop; the only instrumentation in this pass
-  is one timer around each ``mj_step`` call.
+- ``cycle``: wall time per control cycle minus the physics (``mj_step``), i.e. what snakebot
+  adds to a bare loop; the only instrumentation in this pass is one timer around each call of
+  the twin's compiled period (period_c: the period's ``mj_step`` calls, the work integral and
+  the period's readouts in one C call). The readouts' share of that call is measured on its own
+  (the same call with no physics step, ``--readout-calls`` times after each run) and counted
+  as snakebot's, not the physics'.
 - per stage (a second pass with a timer around each stage, their own cost calibrated and taken
   off): ``gait`` (gait.command), ``safety`` (SafetyLayer.filter), ``send`` (send_command),
   ``health`` (the physics-health sample), ``advance other`` (the rest of ``advance`` around
-  ``mj_step``: the divergence check, the step count), ``read_state``, ``body_state``,
+  the compiled period, and the period's C readouts: the divergence check, the step count, the
+  work, torque, body and health-scan readouts), ``read_state``, ``body_state``,
   ``metrics`` (RunMetrics.add), ``log`` (the CSV writer, with ``--log``) and ``loop`` (what is
   left: the loop's own bookkeeping, the schedule).
 
@@ -80,6 +84,7 @@ class Clock:
                 ns[stage] += clock() - start
                 calls[stage] += 1
 
+        timed.__wrapped__ = function  # type: ignore[attr-defined]
         return timed
 
 
@@ -125,20 +130,40 @@ def robot_with(joints: int) -> RobotConfig:
     return dataclasses.replace(base, joints=chain)
 
 
+def readout_ns(backend: TwinBackend, calls: int) -> float:
+    """What one call of the compiled period costs with no physics step: its readouts alone
+    (positions, speeds, torques, work totals, COM, head orientation and rate, health scan)."""
+    period = getattr(backend, "_period", None)
+    if period is None:  # a tree from before period_c: its C stepped and summed work only
+        return 0.0
+    model, data, pointer = period._pointers
+    function = period._function
+    start = now_ns()
+    for _ in range(calls):
+        function(model, data, pointer, 0, 1)
+    return (now_ns() - start) / calls
+
+
 def one_run(
     robot: RobotConfig, seconds: float, log_dir: Path | None, stages: bool
 ) -> tuple[int, float, Clock]:
-    """One run; returns the cycles, the wall seconds and the clock's stage times."""
+    """One run; returns the cycles, the wall seconds and the clock's stage times (with
+    ``readout`` the C readouts' cost per period, ns, in ``clock.ns``)."""
     clock = Clock()
     backend = TwinBackend(robot)
     gait = make_gait("serpenoid", robot.joint_count)
     safety = SafetyLayer.for_robot(robot)
     metrics = RunMetrics(robot.joint_count, robot.body_length_m, robot.total_mass_kg)
     with backend:
-        # The period's physics steps (mj_step, with the work summed in C: work_c).
-        backend._step_integrating = clock.wrap(  # type: ignore[method-assign]
-            "mj_step", backend._step_integrating
-        )
+        # The period in C (period_c): its mj_step calls, the work integral and the readouts;
+        # in a tree from before period_c (PYTHONPATH=<other tree>), its C work stepper.
+        period = getattr(backend, "_period", None)
+        if period is not None:
+            period._function = clock.wrap("mj_step", period._function)
+        else:
+            backend._step_integrating = clock.wrap(  # type: ignore[method-assign]
+                "mj_step", backend._step_integrating
+            )
         log: CsvTelemetryWriter | TimedSink | None = (
             CsvTelemetryWriter(log_dir / "bench.csv", robot.joint_count)
             if log_dir is not None
@@ -163,6 +188,9 @@ def one_run(
         wall_ns = now_ns() - start
         if log is not None:
             log.close()
+        if period is not None:
+            period._function = period._function.__wrapped__
+        clock.ns["readout"] = round(readout_ns(backend, 2000))
     return metrics.cycles, wall_ns / 1e9, clock
 
 
@@ -185,15 +213,20 @@ def main() -> None:
     overhead = wrapper_overhead_ns()
     own_us: list[float] = []
     physics_us: list[float] = []
+    readout_us: list[float] = []
     stage_us: dict[str, list[float]] = {s: [] for s in STAGES}
     with tempfile.TemporaryDirectory() as tmp:
         log_dir = Path(tmp) if args.log else None
         for _ in range(args.repeats):
             cycles, wall, clock = one_run(robot, args.seconds, log_dir, stages=False)
-            step_ns = clock.ns["mj_step"] - overhead * clock.calls["mj_step"]
+            readouts = clock.ns.pop("readout") * clock.calls["mj_step"]
+            step_ns = clock.ns["mj_step"] - overhead * clock.calls["mj_step"] - readouts
             own_us.append((wall * 1e9 - step_ns) / cycles / 1e3)
             physics_us.append(step_ns / cycles / 1e3)
+            readout_us.append(readouts / cycles / 1e3)
             cycles, wall, clock = one_run(robot, args.seconds, log_dir, stages=True)
+            readouts = clock.ns.pop("readout") * clock.calls["mj_step"]
+            clock.ns["mj_step"] -= readouts  # the readouts count in "advance other"
             net = {k: clock.ns[k] - overhead * clock.calls[k] for k in clock.ns}
             # advance holds mj_step and the health sample, each timed on its own (with its timer).
             inside = clock.calls["mj_step"] + clock.calls.get("health", 0)
@@ -209,7 +242,8 @@ def main() -> None:
         f"{args.joints} joints, {args.repeats} x {args.seconds:g} s at {RATE_HZ:g} Hz"
         f"{' with the CSV log' if args.log else ''}, {args.clock} clock: snakebot's own cost "
         f"{own:.1f} us/cycle median (min {min(own_us):.1f}, max {max(own_us):.1f}); "
-        f"mj_step {statistics.median(physics_us):.0f} us/cycle; "
+        f"mj_step {statistics.median(physics_us):.0f} us/cycle; the period's C readouts "
+        f"{statistics.median(readout_us):.1f} us/cycle (in snakebot's own); "
         f"timer overhead {overhead:.0f} ns/call subtracted"
     )
     print("| stage | us/cycle (median) | min-max |")

@@ -62,14 +62,25 @@ def env_block(
     model, data = backend.model, backend.data
     stretches = [(state_of(model, data), [])]
     sent = stretches[0][1]
-    stepping = backend.__class__._step_integrating
+    period = getattr(backend, "_period", None)  # the twin's compiled period (period_c)
+    if period is not None:
+        stepping = period.advance
 
-    def keep_and_step(steps: int) -> np.ndarray:
-        sent.append(data.ctrl.copy())
-        result: np.ndarray = stepping(backend, steps)
-        return result
+        def keep_and_step(steps: int, scan: bool) -> np.ndarray:
+            sent.append(data.ctrl.copy())
+            result: np.ndarray = stepping(steps, scan)
+            return result
 
-    backend._step_integrating = keep_and_step
+        period.advance = keep_and_step
+    else:  # a tree from before period_c (PYTHONPATH=<other tree>): its work stepper
+        integrating = backend.__class__._step_integrating
+
+        def keep_integrating(steps: int) -> np.ndarray:
+            sent.append(data.ctrl.copy())
+            result: np.ndarray = integrating(backend, steps)
+            return result
+
+        backend._step_integrating = keep_integrating
     wall, cpu = time.perf_counter(), time.process_time()
     for action in actions:
         _, _, terminated, truncated, _ = env.step(action)
@@ -78,7 +89,10 @@ def env_block(
             sent = []
             stretches.append((state_of(model, data), sent))
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    del backend._step_integrating
+    if period is not None:
+        del period.advance
+    else:
+        del backend._step_integrating
     return wall, cpu, stretches, state_of(model, data)
 
 

@@ -101,13 +101,23 @@ def record_replay(robot: RobotConfig, seconds: float) -> Replay:
     with backend:
         model, data = backend.model, backend.data
         sent: list[np.ndarray] = []
-        stepping = backend._step_integrating
+        period = getattr(backend, "_period", None)  # the compiled period (period_c)
+        if period is not None:
+            stepping = period.advance
 
-        def step_and_keep(steps: int) -> np.ndarray:
-            sent.append(data.ctrl.copy())
-            return stepping(steps)
+            def step_and_keep(steps: int, scan: bool) -> np.ndarray:
+                sent.append(data.ctrl.copy())
+                return stepping(steps, scan)
 
-        backend._step_integrating = step_and_keep  # type: ignore[method-assign]
+            period.advance = step_and_keep  # type: ignore[method-assign]
+        else:  # a tree from before period_c (PYTHONPATH=<other tree>): its work stepper
+            integrating = backend._step_integrating
+
+            def keep_integrating(steps: int) -> np.ndarray:
+                sent.append(data.ctrl.copy())
+                return integrating(steps)
+
+            backend._step_integrating = keep_integrating  # type: ignore[method-assign]
         start = np.empty(mujoco.mj_stateSize(model, what))
         mujoco.mj_getState(model, data, start, what)
         run_gait(backend, gait, SafetyLayer.for_robot(robot), plan, metrics)

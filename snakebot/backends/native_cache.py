@@ -1,11 +1,12 @@
 """Small C helpers linked against MuJoCo: compiled at first use, cached, loaded with ctypes.
 
-The twin's scale friction (twin/friction/scale_c.py), its work integral (twin/work_c.py) and the
-soft body's friction loop (softbody/friction_c.py) each keep their C source as a string, so the
-wheel needs no package data. This module turns such a source into a loaded library: the shared
-object is cached under the user cache folder (never the directory the program runs from), named
-``{stem}_{hash}.so`` with the hash of the source, MuJoCo's version and the libmujoco it links,
-so a new source or a new MuJoCo compiles afresh and two versions never share an object.
+The twin's scale friction (twin/friction/scale_c.py), its control period (twin/period_c.py: steps,
+work, readouts) and the soft body's friction loop (softbody/friction_c.py) each keep their C source
+as a string, so the wheel needs no package data. This module turns such a source into a loaded
+library: the shared object is cached under the user cache folder (never the directory the program
+runs from), named ``{stem}_{hash}.so`` with the hash of the source, MuJoCo's version and the
+libmujoco it links, so a new source or a new MuJoCo compiles afresh and two versions never share an
+object.
 """
 
 from __future__ import annotations

@@ -113,11 +113,17 @@ class PhasedGait(Gait):
     def targets(self, time_s: float | npt.ArrayLike) -> FloatArray:
         """Joint angles in rad: (N,) for a scalar time in s, (T, N) for times (T,)."""
         if type(time_s) is float and math.isfinite(time_s):  # the control loop's case
-            row = self.phase0_rad + time_s * self.phase_rates_rad_s  # the same floats as below
-            return shaped(self._at_phases(row[None, :]), True)
+            return self._at_time(time_s)
         t, scalar = as_times(self.gait_label, time_s)
         phases = self.phase0_rad + t[:, None] * self.phase_rates_rad_s
         return shaped(self._at_phases(phases), scalar)
+
+    def _at_time(self, time_s: float) -> FloatArray:
+        """Targets (N,) in rad at one finite time in s, once a control cycle: the floats of
+        ``targets`` at times (T,). A gait may override it with fewer numpy calls that give the
+        same bits (tests/unit/gaits hold each to its array path)."""
+        row = self.phase0_rad + time_s * self.phase_rates_rad_s  # the same floats as (T,)
+        return shaped(self._at_phases(row[None, :]), True)
 
     def targets_at_phase(self, phase_rad: npt.ArrayLike) -> FloatArray:
         """Joint angles in rad at explicit phases: (P,) -> (N,), (T, P) -> (T, N).

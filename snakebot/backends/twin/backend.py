@@ -13,6 +13,7 @@ import numpy.typing as npt
 from snakebot.backends.base import Backend
 from snakebot.backends.capabilities import Simulated, torque_caps
 from snakebot.backends.pacing import Pacer
+from snakebot.backends.twin import period_c
 from snakebot.backends.twin.friction.scale import FrictionModel
 from snakebot.backends.twin.health import DEFAULT_LIMITS, HealthLimits, HealthMonitor
 from snakebot.backends.twin.imu import TwinSensors
@@ -23,15 +24,16 @@ from snakebot.backends.twin.model_builder import (
     joint_name,
     link_name,
 )
+from snakebot.backends.twin.period_c import CompileError, PeriodStepper
 from snakebot.backends.twin.readouts import (
     Capsules,
     StepCheck,
     as_slice,
+    diverged_error,
     servo_torque_nm,
     step_work_j,
 )
 from snakebot.backends.twin.terrain import Terrain, as_terrain
-from snakebot.backends.twin.work_c import CompileError, WorkStepper
 from snakebot.config.schema import RobotConfig
 from snakebot.errors import ConfigError, ServoFaultError
 from snakebot.servo.dynamics import servo_dynamics
@@ -97,6 +99,11 @@ class TwinBackend(Backend):
         self._pacer: Pacer | None = None
         self._torque_now: np.ndarray | None = None  # servo torque (N,) at _torque_time_s
         self._torque_time_s = math.nan
+        # The last period's readouts (period_c.Layout) at _period_time_s, for read_state and
+        # body_state to hand over once each (no two states share one array).
+        self._period_state: np.ndarray | None = None
+        self._period_body: np.ndarray | None = None
+        self._period_time_s = math.nan
         self._steps_per_period: dict[float, int] = {}
         self._work_j = np.zeros(self.joint_count)  # positive work per joint since connect/reset
         if robot.servo.physics.extras.stall_current_a is not None:
@@ -134,16 +141,24 @@ class TwinBackend(Backend):
         # Each physics step's actuator forces and joint speeds of one control period, (S, N).
         self._step_force = np.zeros((0, self.joint_count))
         self._step_velocity = np.zeros((0, self.joint_count))
-        self._work_j = np.zeros(self.joint_count)
-        self._work_stepper: WorkStepper | None = None
+        self._period: PeriodStepper | None = None
         try:
-            self._work_stepper = WorkStepper(self.model, self.data, self._dof_index)
+            self._period = PeriodStepper(
+                self.model,
+                self.data,
+                self._qpos_index,
+                self._dof_index,
+                self._head_id,
+                Capsules.of_modules(self.model, self.robot.link_count),
+            )
         except CompileError as exc:
             warnings.warn(
-                f"the twin integrates its work in Python, 10-17 % slower than in C: {exc}",
+                f"the twin steps and reads its periods in Python, about 20 % slower: {exc}",
                 RuntimeWarning,
                 stacklevel=2,
             )
+        self._layout = period_c.Layout(self.joint_count)
+        self._restart_work()
         # Per joint: kp, kv and joint damping with torque on, and whether torque is on.
         self._kp, self._kv, self._damping = (np.zeros(self.joint_count) for _ in range(3))
         self._torque_mask = np.ones(self.joint_count, dtype=bool)
@@ -180,6 +195,7 @@ class TwinBackend(Backend):
         model, data = self.model, self.data
         mujoco.mj_resetData(model, data)
         self._torque_now = None
+        self._period_state = self._period_body = None
         if position_rad is not None:
             pose = np.asarray(position_rad, dtype=float)
             if pose.shape != (self.joint_count,):
@@ -192,7 +208,7 @@ class TwinBackend(Backend):
             data.ctrl[:] = 0.0
         hold_ctrl_history(model, data, data.ctrl)
         mujoco.mj_forward(model, data)
-        self._work_j = np.zeros(self.joint_count)
+        self._restart_work()
         if self.electrics is not None:
             physics = self.robot.servo.physics
             servo = servo_dynamics(physics, self.robot.gains)
@@ -205,6 +221,13 @@ class TwinBackend(Backend):
         if self._pacer is not None:
             self._pacer = Pacer(self.stats)
         return self.read_state()
+
+    def _restart_work(self) -> None:
+        """Count each joint's positive work from zero; no period's readouts are current."""
+        self._work_j = np.zeros(self.joint_count)
+        if self._period is not None:
+            self._period.restart(self._work_j)
+        self._period_state = self._period_body = None
 
     def reset_physics_health(self, limits: HealthLimits | None = None) -> None:
         """Start the physics-health account afresh (a learning environment's new episode), with
@@ -244,6 +267,21 @@ class TwinBackend(Backend):
 
     def _read_state(self) -> JointState:
         data = self.data
+        out = self._period_state
+        if out is not None:  # the last period's readouts, if nothing has changed since
+            self._period_state = None  # handed over once: no two states share one array
+            if self._period_time_s == data.time:
+                layout = self._layout
+                position = out[layout.position]
+                if self._sensors.alters_positions:
+                    position = self._sensors.encoder_rad(position)
+                return JointState(
+                    time_s=float(data.time),
+                    position_rad=position,
+                    velocity_rad_s=out[layout.velocity],
+                    effort_nm=out[layout.torque],
+                    positive_work_j=self._work_j,  # the period's `total`: a new one each period
+                )
         views = self._views
         velocity = (self._qvel_view if views else data.qvel[self._dof_at]).copy()
         # The torque the physics check took at the end of the last advance, if nothing has
@@ -301,6 +339,7 @@ class TwinBackend(Backend):
     def _apply_gains(self) -> None:
         """Write each joint's kp/kv and damping, or none where its torque is off."""
         self._torque_now = None  # the damping changes the servo torque
+        self._period_state = None  # and so the last period's torque readout
         mask = self._torque_mask
         kp, kv = self._kp, self._kv
         electrics = self.electrics
@@ -350,6 +389,33 @@ class TwinBackend(Backend):
 
     def _advance(self, dt_s: float) -> None:
         steps = self._steps_per_period.get(dt_s) or self.steps_for(dt_s)
+        period = self._period
+        if period is None:
+            self._advance_in_python(steps, dt_s)
+            return
+        # The period in C (period_c): steps, work, readouts and the health scan in one call.
+        monitor, data, layout = self.physics_monitor, self.data, self._layout
+        scan = monitor is not None and monitor.scans_in_c
+        out = period.advance(steps, scan)
+        if out[layout.unstable]:
+            timestep = float(self.model.opt.timestep)
+            raise diverged_error(float(out[layout.time_before]), steps, timestep, data.time)
+        self._period_state = self._period_body = out
+        self._period_time_s = data.time
+        self._work_j = out[layout.total]
+        if monitor is not None or self.electrics is not None:
+            torque = out[layout.torque]  # read_state's effort too, unless changed since
+            if monitor is not None:
+                scanned = out[layout.scan] if scan else None
+                monitor.sample(data, dt_s, torque, out[layout.work], scanned)
+            if self.electrics is not None:
+                self._update_electrics(dt_s, torque)
+        if self._pacer is not None:
+            self._pacer.wait(dt_s)
+
+    def _advance_in_python(self, steps: int, dt_s: float) -> None:
+        """``_advance`` without the compiled period: the same physics and readouts, bit for bit
+        (tests/integration/twin/test_twin_period_c.py)."""
         self._step_check.start()
         work = self._step_integrating(steps)
         self._step_check.finish(steps)
@@ -365,13 +431,11 @@ class TwinBackend(Backend):
             self._pacer.wait(dt_s)
 
     def _step_integrating(self, steps: int) -> np.ndarray:
-        """``steps`` physics steps; returns each joint's positive work over them (N,) J
-        (``step_work_j``): in C (work_c), else one ``mj_step`` call per step keeping each
+        """``steps`` physics steps without the compiled period; returns each joint's positive
+        work over them (N,) J (``step_work_j``), one ``mj_step`` call per step keeping each
         step's actuator forces and joint speeds. The same physics as one
         ``mj_step(m, d, steps)`` call, bit for bit (MuJoCo loops over ``mj_step`` there too);
         the cost is in docs/benchmarks.md."""
-        if self._work_stepper is not None:
-            return self._work_stepper.advance(steps)
         model, data = self.model, self.data
         if self._step_force.shape[0] < steps:
             self._step_force = np.zeros((steps, self.joint_count))
@@ -468,6 +532,16 @@ class TwinBackend(Backend):
     def body_state(self) -> BodyState:
         """Centre of mass of the whole snake and the head's orientation."""
         self._require_connected()
+        out = self._period_body
+        if out is not None:  # the last period's readouts, if nothing has stepped since
+            self._period_body = None  # handed over once: no two body states share an array
+            if self._period_time_s == self.data.time:
+                layout = self._layout
+                return BodyState(
+                    com_m=out[layout.com],
+                    head_quat=out[layout.quat],
+                    head_gyro_rad_s=self._sensors.gyro_of(out[layout.angular], self.data),
+                )
         return BodyState(
             com_m=self._com_view.copy(),
             head_quat=self._quat_view.copy(),

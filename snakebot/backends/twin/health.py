@@ -155,18 +155,27 @@ class HealthMonitor:
         # The data sampled last and views into it (joint speeds, head orientation), made once.
         self._views: tuple[mujoco.MjData, np.ndarray, np.ndarray] | None = None
 
+    @property
+    def scans_in_c(self) -> bool:
+        """Whether this monitor scans MjData with the compiled scan (health_c), so a scan the
+        twin's compiled period made of the same data (``sample``'s ``scanned``) is its own."""
+        return type(self._scanner) is ContactScan
+
     def sample(
         self,
         data: mujoco.MjData,
         dt_s: float,
         force_nm: np.ndarray,
         work_j: np.ndarray | None = None,
+        scanned: np.ndarray | None = None,
     ) -> None:
         """Account one control period ending now; raise PhysicsHealthError past a hard limit.
 
         ``force_nm`` (N,) is each servo's output torque now, ``work_j`` (N,) each joint's
         positive work over the period's physics steps (None: torque times speed now times
-        ``dt_s``, the sampled estimate).
+        ``dt_s``, the sampled estimate). ``scanned`` (5,) is the compiled scan of ``data`` now
+        (``health_c.SCAN_FIELDS``, as the twin's compiled period makes it; only where
+        ``scans_in_c``); None: the monitor scans ``data`` itself.
         """
         limits = self.limits
         views = self._views
@@ -175,7 +184,12 @@ class HealthMonitor:
         _, qvel, head_quat = views
         self.cycles += 1
         self.time_s += dt_s
-        floor, other, _, clearance, speed = self._scanner.scan(data)
+        if scanned is None:
+            floor, other, _, clearance, speed = self._scanner.scan(data)
+        else:
+            floor, other, grounded, clearance, speed = scanned.tolist()
+            if grounded:
+                clearance = None
         if floor > self.max_floor_penetration_m:
             self.max_floor_penetration_m = floor
         if other > self.max_self_penetration_m:

@@ -52,7 +52,15 @@ class TwinSensors:
         mujoco.mj_objectVelocity(
             self._model, data, mujoco.mjtObj.mjOBJ_BODY, self._head, self._velocity, 0
         )
-        rate: np.ndarray = self._angular @ self._head_frame
+        return self.gyro_of(self._angular, data)
+
+    def gyro_of(self, angular_rad_s: np.ndarray, data: mujoco.MjData) -> np.ndarray:
+        """What the gyro reads (3,) rad/s for the head's angular velocity ``angular_rad_s``
+        (3,) in the world frame (``mj_objectVelocity``'s, of ``data`` now): turned into the
+        head's frame, plus gyro noise."""
+        if data is not self._data:
+            self._data, self._head_frame = data, data.xmat[self._head].reshape(3, 3)
+        rate: np.ndarray = angular_rad_s @ self._head_frame
         if self._gyro_noise:
             rate += self._rng.normal(0.0, self._gyro_noise, 3)
         return rate

@@ -36,6 +36,7 @@ __all__ = [
     "Capsules",
     "StepCheck",
     "as_slice",
+    "diverged_error",
     "divergence_time_s",
     "positive_power_w",
     "servo_torque_nm",
@@ -149,6 +150,17 @@ def divergence_time_s(
     return time_before_s + max(steps - after_reset, 0) * timestep_s
 
 
+def diverged_error(
+    time_before_s: float, steps: int, timestep_s: float, time_after_s: float
+) -> SimulationDivergedError:
+    """The error for an instability MuJoCo met inside ``mj_step(..., steps)`` begun at
+    ``time_before_s`` (``divergence_time_s`` says when)."""
+    return SimulationDivergedError(
+        divergence_time_s(time_before_s, steps, timestep_s, time_after_s),
+        "MuJoCo reported bad accelerations (state was reset)",
+    )
+
+
 class StepCheck:
     """The whole-physics-step check of one MjData: did the physics steps since ``start`` meet
     an instability (``unstable_count`` rose) or, with ``finite_positions``, leave a position
@@ -183,7 +195,4 @@ class StepCheck:
         diverged = self.count() != self._before
         if diverged or (self._finite and not np.isfinite(data.qpos).all()):
             timestep = float(self._model.opt.timestep)
-            raise SimulationDivergedError(
-                divergence_time_s(self._time_before_s, steps, timestep, float(data.time)),
-                "MuJoCo reported bad accelerations (state was reset)",
-            )
+            raise diverged_error(self._time_before_s, steps, timestep, float(data.time))

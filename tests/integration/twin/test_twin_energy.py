@@ -120,12 +120,12 @@ def test_a_run_counts_the_work_of_every_physics_step_of_its_scored_cycles() -> N
 
 def test_the_python_fallback_integrates_the_same_bits_as_the_c_loop() -> None:
     """Without a compiler the twin steps one mj_step per call and integrates with numpy
-    (readouts.step_work_j); the work and the state are the C loop's to the bit."""
+    (readouts.step_work_j); the work and the state are the compiled period's to the bit."""
     ends = []
     for compiled in (True, False):
         with TwinBackend(STIFF) as twin:
             if not compiled:
-                twin._work_stepper = None
+                twin._period = None
             for goal in commands(STIFF)[:30]:
                 twin.send_command(JointCommand(goal))
                 twin.advance(0.01)

@@ -67,3 +67,19 @@ def test_bad_construction_raises() -> None:
         SerpenoidGait(0)
     with pytest.raises(GaitError, match=r"serpenoid\.amplitude"):
         SerpenoidGait(4, amplitude=math.nan)
+
+
+@pytest.mark.parametrize(
+    "params",
+    [{}, {"omega": -2.5, "offset": 0.1}, {"amplitude": 1.1, "phase_lag": -0.9, "omega": 7.0}],
+)
+def test_the_control_loops_scalar_time_gives_the_bits_of_the_array_path(
+    params: dict[str, float],
+) -> None:
+    """The loop asks one float time a cycle (a shorter path); a replay or the batched engine
+    asks times (T,): the same floats, to the bit, at every time, zero and negative ones too."""
+    gait = SerpenoidGait(12, **params)
+    times = np.concatenate([[0.0, -0.0, -1.5], np.linspace(0.0, 40.0, 4001)])
+    rows = gait.targets(times)
+    for time_s, row in zip(times.tolist(), rows, strict=True):
+        assert gait.targets(time_s).tobytes() == row.tobytes(), time_s
